@@ -1,0 +1,1 @@
+//! pushlearn models (filled in by the learner work).

@@ -1,0 +1,1 @@
+//! Raw FFI bindings to ODE (filled in by the foundation work).

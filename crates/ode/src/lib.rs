@@ -1,0 +1,1 @@
+//! Safe wrapper over ode-sys (filled in by the foundation work).

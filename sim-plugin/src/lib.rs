@@ -1,0 +1,1 @@
+//! The thesis world and the simulator daemon.

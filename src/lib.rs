@@ -1,0 +1,1 @@
+//! pushlearn: wire types, client, learner daemon, experiments.
