@@ -157,7 +157,8 @@ pub struct Frame {
 pub struct Poses {
     /// The actuator (id [`ACTUATOR_ID`]).
     pub actuator: ObjectState,
-    /// Every block, keyed by id.
+    /// Every block, keyed by id (ascending; the gate model processes blocks
+    /// in descending id order, `gate-model.md` §1: iterate with `.rev()`).
     pub blocks: BTreeMap<u32, ObjectState>,
 }
 

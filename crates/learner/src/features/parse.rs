@@ -66,19 +66,21 @@ pub fn is_skipped(name: &str) -> bool {
 
 /// Yaw of an orientation quaternion `[x, y, z, w]`, unrounded
 /// (`features.md` §1 step 2): normalised first, 0 for the zero quaternion.
+/// Non-finite components give NaN (`parse_frame` rejects them before).
 #[must_use]
 pub fn quaternion_to_yaw(q: [f64; 4]) -> f64 {
     let [mut x, mut y, mut z, mut w] = q;
-    let mut norm = (x * x + y * y + z * z + w * w).sqrt();
-    if norm.is_infinite() {
-        // Squares of huge components overflow; pre-scaling only changes the
-        // path for such inputs, never for the unit quaternions the world sends.
-        let m = x.abs().max(y.abs()).max(z.abs()).max(w.abs());
-        (x, y, z, w) = (x / m, y / m, z / m, w / m);
-        norm = (x * x + y * y + z * z + w * w).sqrt();
-    }
-    if norm == 0.0 {
+    let largest = x.abs().max(y.abs()).max(z.abs()).max(w.abs());
+    if largest == 0.0 {
         return 0.0;
+    }
+    let mut norm = (x * x + y * y + z * z + w * w).sqrt();
+    if !norm.is_normal() {
+        // The squares overflowed or underflowed although the quaternion is not
+        // zero; pre-scaling changes the path only for such inputs, never for
+        // the unit quaternions the world sends.
+        (x, y, z, w) = (x / largest, y / largest, z / largest, w / largest);
+        norm = (x * x + y * y + z * z + w * w).sqrt();
     }
     (x, y, z, w) = (x / norm, y / norm, z / norm, w / norm);
     (2.0 * (x * y + w * z)).atan2(w * w + x * x - y * y - z * z)
@@ -236,9 +238,9 @@ mod tests {
 
     #[test]
     fn yaw_normalises_the_quaternion() {
-        // A scaled quaternion gives the same yaw as the unit one; without the
-        // normalisation the atan2 arguments would be scaled by 4 and 2.5²
-        // respectively, so this also pins the formula's form.
+        // The formula is homogeneous, so normalising changes the angle only in
+        // the last bits: what is pinned is the exact arithmetic (bit equality
+        // with the normalised formula) and that extreme scales still work.
         let [x, y, z, w] = yaw_q(0.7);
         let scaled = [2.5 * x, 2.5 * y, 2.5 * z, 2.5 * w];
         assert!((quaternion_to_yaw(scaled) - 0.7).abs() < 1e-12);
@@ -248,9 +250,11 @@ mod tests {
         let (x, y, z, w) = (0.1 / n, 0.2 / n, 0.3 / n, 0.9 / n);
         let expected = (2.0 * (x * y + w * z)).atan2(w * w + x * x - y * y - z * z);
         assert_eq!(quaternion_to_yaw(q), expected);
-        // Huge components do not overflow into a wrong yaw.
-        let huge = [0.0, 0.0, 1e300 * (0.35f64).sin(), 1e300 * (0.35f64).cos()];
-        assert!((quaternion_to_yaw(huge) - 0.7).abs() < 1e-12);
+        // Huge or tiny components do not overflow or underflow into a wrong yaw.
+        for scale in [1e300, 1e-300] {
+            let q = [0.0, 0.0, scale * (0.35f64).sin(), scale * (0.35f64).cos()];
+            assert!((quaternion_to_yaw(q) - 0.7).abs() < 1e-12, "{scale}");
+        }
     }
 
     #[test]
@@ -336,6 +340,15 @@ mod tests {
             ],
         };
         // "Actuator" is not the actuator, so it is a block with the actuator's id.
+        assert!(matches!(
+            parse_frame(&frame, ActuatorYaw::Keep),
+            Err(ParseError::UnknownBlock { id: 8, .. })
+        ));
+        // A name that merely contains "actuator" is not the actuator either.
+        let mut frame = one_block(0.0);
+        frame
+            .objects
+            .push(obs("actuator_old", 8, 0.0, 0.0, yaw_q(0.0)));
         assert!(matches!(
             parse_frame(&frame, ActuatorYaw::Keep),
             Err(ParseError::UnknownBlock { id: 8, .. })
