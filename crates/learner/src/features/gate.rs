@@ -140,7 +140,7 @@ mod tests {
         let phi = relative_features(&block, &act);
         assert_eq!(phi[3], 0.0);
         assert_eq!([phi[6], phi[7]], [0.0, 0.005]);
-        // In a block turned by π/2 the same displacement is rotated: +y → +x'... (R(θ)ᵀ).
+        // In a block turned by π/2 the same global +y displacement is local +x (R(θ)ᵀ v).
         let turned = TrackedObject {
             s: ObjectState::new(0.0, 0.5, FRAC_PI_2),
             s_prev: ObjectState::new(0.0, 0.5, FRAC_PI_2),
