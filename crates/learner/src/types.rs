@@ -1,0 +1,338 @@
+//! Types shared by every model, the daemon and the experiment driver.
+//!
+//! Nothing here knows about protobuf: the daemon converts wire messages into a
+//! [`Frame`] of [`Observation`]s, the models parse those (`features.md` §1) into
+//! object states, and everything a model hands back for scoring or display is a
+//! model-agnostic [`Poses`].
+
+use std::collections::BTreeMap;
+
+use nalgebra::Vector2;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+/// Id of the actuator sphere (`README.md` §4, `world.md` §3).
+pub const ACTUATOR_ID: u32 = 8;
+/// Id of the blue block, `blockA` (0.5 × 0.1 m).
+pub const BLUE_ID: u32 = 15;
+/// Id of the red block, `blockB` (0.3 × 0.3 m), only in the two-object scene.
+pub const RED_ID: u32 = 27;
+
+/// Model name of the actuator; `protocol.md` §4 identifies it by this exact name.
+pub const ACTUATOR_NAME: &str = "actuator";
+/// Model name of the blue block (id 15).
+pub const BLUE_NAME: &str = "blockA";
+/// Model name of the red block (id 27).
+pub const RED_NAME: &str = "blockB";
+
+/// The world's model name for an object id (`experiments.md` §2: SetPose
+/// commands address bodies by name).
+#[must_use]
+pub fn object_name(id: u32) -> Option<&'static str> {
+    match id {
+        ACTUATOR_ID => Some(ACTUATOR_NAME),
+        BLUE_ID => Some(BLUE_NAME),
+        RED_ID => Some(RED_NAME),
+        _ => None,
+    }
+}
+
+/// A primitive action: the actuator's planar velocity in m/s, global frame.
+/// It stays in force until replaced (`README.md` §4).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Action {
+    pub vx: f64,
+    pub vy: f64,
+}
+
+impl Action {
+    /// Standing still; also what a model without a target returns.
+    pub const ZERO: Action = Action { vx: 0.0, vy: 0.0 };
+
+    #[must_use]
+    pub const fn new(vx: f64, vy: f64) -> Self {
+        Self { vx, vy }
+    }
+
+    #[must_use]
+    pub fn to_vector(self) -> Vector2<f64> {
+        Vector2::new(self.vx, self.vy)
+    }
+
+    #[must_use]
+    pub fn from_vector(v: Vector2<f64>) -> Self {
+        Self { vx: v.x, vy: v.y }
+    }
+
+    /// Euclidean norm of (vx, vy).
+    #[must_use]
+    pub fn norm(self) -> f64 {
+        (self.vx * self.vx + self.vy * self.vy).sqrt()
+    }
+
+    #[must_use]
+    pub fn is_finite(self) -> bool {
+        self.vx.is_finite() && self.vy.is_finite()
+    }
+}
+
+/// The state `s = (x, y, θ)` of one object in the global frame.
+///
+/// Parsed states are 3-decimal rounded (`features.md` §1); predicted ones need
+/// not be. θ is never wrapped (`README.md` §5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ObjectState {
+    pub x: f64,
+    pub y: f64,
+    pub theta: f64,
+}
+
+impl ObjectState {
+    #[must_use]
+    pub const fn new(x: f64, y: f64, theta: f64) -> Self {
+        Self { x, y, theta }
+    }
+
+    /// `p = (x, y)`.
+    #[must_use]
+    pub fn position(&self) -> Vector2<f64> {
+        Vector2::new(self.x, self.y)
+    }
+
+    #[must_use]
+    pub fn to_array(&self) -> [f64; 3] {
+        [self.x, self.y, self.theta]
+    }
+
+    #[must_use]
+    pub const fn from_array(a: [f64; 3]) -> Self {
+        Self {
+            x: a[0],
+            y: a[1],
+            theta: a[2],
+        }
+    }
+
+    /// `|s − other|` over all three components with the raw angle difference:
+    /// the start-position check (`experiments.md` §2) and the gate model's
+    /// reached test (`planning.md` §2) deliberately do not wrap angles.
+    #[must_use]
+    pub fn distance_to(&self, other: &ObjectState) -> f64 {
+        let dx = self.x - other.x;
+        let dy = self.y - other.y;
+        let dt = self.theta - other.theta;
+        (dx * dx + dy * dy + dt * dt).sqrt()
+    }
+
+    #[must_use]
+    pub fn is_finite(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.theta.is_finite()
+    }
+}
+
+/// One body of a world-state message, as the daemon hands it to the learner
+/// (the protobuf `ModelState` minus what no learner reads: velocities, scale,
+/// type, `is_static`; `protocol.md` §4).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    pub name: String,
+    pub id: u32,
+    /// World-frame position (x, y, z) in metres; z is not used by the learner.
+    pub position: [f64; 3],
+    /// Orientation quaternion in the order (x, y, z, w), as in the wire schema.
+    pub orientation: [f64; 4],
+}
+
+/// The raw content of one world-state message: every body it lists, in
+/// message order, unfiltered (models parse it with `features::parse_frame`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    pub objects: Vec<Observation>,
+}
+
+/// Model-agnostic object states of a world state, real or predicted: what the
+/// experiment driver checks start positions against, records and scores
+/// (`experiments.md` §2, §7) and what shadows display.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Poses {
+    /// The actuator (id [`ACTUATOR_ID`]).
+    pub actuator: ObjectState,
+    /// Every block, keyed by id (ascending; the gate model processes blocks
+    /// in descending id order, `gate-model.md` §1: iterate with `.rev()`).
+    pub blocks: BTreeMap<u32, ObjectState>,
+}
+
+impl Poses {
+    /// State of the object with this id, the actuator included.
+    #[must_use]
+    pub fn get(&self, id: u32) -> Option<ObjectState> {
+        if id == ACTUATOR_ID {
+            Some(self.actuator)
+        } else {
+            self.blocks.get(&id).copied()
+        }
+    }
+
+    /// All objects, the actuator included, in ascending id order.
+    pub fn objects(&self) -> impl Iterator<Item = (u32, ObjectState)> + '_ {
+        // The actuator's id (8) is below every block id, but the merge must
+        // not rely on that for hand-built values.
+        let mut all: Vec<(u32, ObjectState)> = self.blocks.iter().map(|(&i, &s)| (i, s)).collect();
+        let at = all.partition_point(|(i, _)| *i < ACTUATOR_ID);
+        all.insert(at, (ACTUATOR_ID, self.actuator));
+        all.into_iter()
+    }
+}
+
+/// A Move-to-Target goal: a global pose for a block (`planning.md`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Target {
+    pub id: u32,
+    pub pose: ObjectState,
+}
+
+/// Why a [`Target`] cannot be pursued.
+#[derive(Clone, Debug, PartialEq, Error)]
+pub enum TargetError {
+    /// `planning.md` §6: the original raised an error for actuator targets.
+    #[error("targets for the actuator (id {ACTUATOR_ID}) are not supported")]
+    Actuator,
+    #[error("target pose for object {id} is not finite: {pose:?}")]
+    NonFinite { id: u32, pose: ObjectState },
+    /// The model does not know (or cannot plan for) this object.
+    #[error("the model cannot plan for object {id}")]
+    UnknownObject { id: u32 },
+}
+
+impl Target {
+    #[must_use]
+    pub const fn new(id: u32, pose: ObjectState) -> Self {
+        Self { id, pose }
+    }
+
+    /// The model-independent validity checks every `Model::set_target`
+    /// implementation should run first.
+    pub fn check(&self) -> Result<(), TargetError> {
+        if self.id == ACTUATOR_ID {
+            return Err(TargetError::Actuator);
+        }
+        if !self.pose.is_finite() {
+            return Err(TargetError::NonFinite {
+                id: self.id,
+                pose: self.pose,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// An object as the gate model tracks it: current state `s` and previous state
+/// `s_prev`, whose difference is the "velocity" feature (`features.md` §1 step 5,
+/// §3.1). How `s_prev` is maintained (including the stale-after-reset quirk) is
+/// the gate model's business (`gate-model.md` §2–§4).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrackedObject {
+    pub id: u32,
+    pub s: ObjectState,
+    pub s_prev: ObjectState,
+}
+
+impl TrackedObject {
+    /// A freshly parsed object: `s_prev` is a copy of `s` (zero displacement,
+    /// `features.md` §1 step 5).
+    #[must_use]
+    pub const fn fresh(id: u32, s: ObjectState) -> Self {
+        Self { id, s, s_prev: s }
+    }
+
+    /// `v(o) = o.s[0:2] − o.s_prev[0:2]` (`features.md` §3.1), metres per update.
+    #[must_use]
+    pub fn velocity(&self) -> Vector2<f64> {
+        Vector2::new(self.s.x - self.s_prev.x, self.s.y - self.s_prev.y)
+    }
+
+    /// `s_prev := s; s := new` — the in-place move of a record to a newly
+    /// observed state (`gate-model.md` §2, §3).
+    pub fn advance(&mut self, new: ObjectState) {
+        self.s_prev = self.s;
+        self.s = new;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_follow_the_world() {
+        assert_eq!(object_name(ACTUATOR_ID), Some("actuator"));
+        assert_eq!(object_name(BLUE_ID), Some("blockA"));
+        assert_eq!(object_name(RED_ID), Some("blockB"));
+        assert_eq!(object_name(9), None);
+        assert_eq!((ACTUATOR_ID, BLUE_ID, RED_ID), (8, 15, 27));
+    }
+
+    #[test]
+    // The literals are planning.md §6's example, not approximations of π.
+    #[allow(clippy::approx_constant)]
+    fn distance_to_does_not_wrap_angles() {
+        let a = ObjectState::new(0.0, 0.0, -3.14);
+        let b = ObjectState::new(0.0, 0.0, 3.1415);
+        assert!((a.distance_to(&b) - 6.2815).abs() < 1e-12);
+        let c = ObjectState::new(0.3, 0.4, 0.0);
+        assert!((c.distance_to(&ObjectState::default()) - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn poses_objects_are_in_id_order_and_get_finds_the_actuator() {
+        let mut blocks = BTreeMap::new();
+        blocks.insert(RED_ID, ObjectState::new(-0.6, 0.35, 0.0));
+        blocks.insert(BLUE_ID, ObjectState::new(0.0, 0.25, 0.0));
+        blocks.insert(3, ObjectState::new(1.0, 1.0, 1.0));
+        let poses = Poses {
+            actuator: ObjectState::new(0.1, 0.0, 0.0),
+            blocks,
+        };
+        let ids: Vec<u32> = poses.objects().map(|(i, _)| i).collect();
+        assert_eq!(ids, vec![3, 8, 15, 27]);
+        assert_eq!(poses.get(8), Some(ObjectState::new(0.1, 0.0, 0.0)));
+        assert_eq!(poses.get(15), Some(ObjectState::new(0.0, 0.25, 0.0)));
+        assert_eq!(poses.get(99), None);
+    }
+
+    #[test]
+    fn tracked_object_velocity_and_advance() {
+        let mut o = TrackedObject::fresh(BLUE_ID, ObjectState::new(0.0, 0.25, 0.0));
+        assert_eq!(o.velocity(), Vector2::zeros());
+        o.advance(ObjectState::new(0.001, 0.255, 0.01));
+        assert_eq!(o.s_prev, ObjectState::new(0.0, 0.25, 0.0));
+        let v = o.velocity();
+        assert!((v.x - 0.001).abs() < 1e-12 && (v.y - 0.005).abs() < 1e-12);
+    }
+
+    #[test]
+    fn target_check_rejects_actuator_and_non_finite() {
+        let ok = Target::new(BLUE_ID, ObjectState::new(0.6, 0.7, -2.1));
+        assert_eq!(ok.check(), Ok(()));
+        let act = Target::new(ACTUATOR_ID, ObjectState::default());
+        assert_eq!(act.check(), Err(TargetError::Actuator));
+        let nan = Target::new(BLUE_ID, ObjectState::new(f64::NAN, 0.0, 0.0));
+        assert!(matches!(
+            nan.check(),
+            Err(TargetError::NonFinite { id: 15, .. })
+        ));
+    }
+
+    #[test]
+    fn poses_round_trip_through_json() {
+        let mut blocks = BTreeMap::new();
+        blocks.insert(BLUE_ID, ObjectState::new(0.0, 0.25, 0.5));
+        let poses = Poses {
+            actuator: ObjectState::new(0.1, 0.0, 0.0),
+            blocks,
+        };
+        let json = serde_json::to_string(&poses).unwrap();
+        let back: Poses = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, poses);
+    }
+}
