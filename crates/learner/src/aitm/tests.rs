@@ -160,9 +160,11 @@ fn output_error_comparison_is_strict() {
     assert!(!inserts(&[0.001], &[0.0]));
     // |2 − 12| is exactly the threshold 10 of label 12.
     assert!(!inserts(&[2.0], &[12.0]));
-    // One unit of 0.001 off a 0.005 change, but a last bit above it: inserted.
-    assert!(0.005f64 - 0.004 > 0.001);
-    assert!(inserts(&[0.004], &[0.005]));
+    // One unit of 0.001 off a 3-decimal target: the last bit decides.
+    assert!(0.01f64 - 0.009 > 0.001);
+    assert!(inserts(&[0.01], &[0.009]));
+    assert!(0.009f64 - 0.008 < 0.001);
+    assert!(!inserts(&[0.008], &[0.009]));
 }
 
 #[test]
