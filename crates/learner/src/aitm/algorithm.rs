@@ -4,7 +4,7 @@ use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
 
-use super::distance::{lr_distance, lr_sq_norm, ranking_distance};
+use super::distance::{lr_distance, lr_sq_norm, pairwise_sq_sum, ranking_distance};
 use super::errors::AitmError;
 use super::hyperparams::{AitmConfig, QueryMode};
 
@@ -279,28 +279,21 @@ impl Aitm {
     ///
     /// Any faster search (spatial index) must return exactly this.
     pub(crate) fn rank_two(&self, x: &[f64]) -> Option<Ranking> {
-        fn closer(d: f64, current: Option<(usize, f64)>) -> bool {
-            match current {
-                None => true,
-                Some((_, c)) => d < c || (c.is_nan() && !d.is_nan()),
-            }
+        // The instances' input sizes get a loop with the dimension known at
+        // compile time (same arithmetic, unrolled).
+        match self.input_dim {
+            2 => self.rank_two_fixed::<2>(x),
+            8 => self.rank_two_fixed::<8>(x),
+            10 => self.rank_two_fixed::<10>(x),
+            n => rank_rows(
+                (0..self.len()).map(|i| pairwise_sq_sum(&self.w_in[i * n..(i + 1) * n], x)),
+            ),
         }
-        let n = self.input_dim;
-        let mut best: Option<(usize, f64)> = None;
-        let mut second: Option<(usize, f64)> = None;
-        for i in 0..self.len() {
-            let d = ranking_distance(&self.w_in[i * n..(i + 1) * n], x);
-            if closer(d, best) {
-                second = best;
-                best = Some((i, d));
-            } else if closer(d, second) {
-                second = Some((i, d));
-            }
-        }
-        best.map(|(winner, _)| Ranking {
-            winner,
-            second: second.map(|(s, _)| s),
-        })
+    }
+
+    fn rank_two_fixed<const N: usize>(&self, x: &[f64]) -> Option<Ranking> {
+        let x = &x[..N];
+        rank_rows(self.w_in.chunks_exact(N).map(|row| pairwise_sq_sum(row, x)))
     }
 
     fn check_input(&self, x: &[f64]) {
@@ -576,6 +569,43 @@ impl Aitm {
             self.neighbours[b].remove(&id_a);
         }
     }
+}
+
+/// The winner and second winner among rows given by their sums of squared
+/// differences in row order (aitm.md §2): distances are the square roots,
+/// compared exactly, ties to the earlier row, NaN after every number.
+#[inline(always)]
+fn rank_rows(sq_sums: impl Iterator<Item = f64>) -> Option<Ranking> {
+    /// Position, squared-distance sum and distance of a candidate.
+    type Candidate = (usize, f64, f64);
+    fn closer(d: f64, current: Option<Candidate>) -> bool {
+        match current {
+            None => true,
+            Some((_, _, c)) => d < c || (c.is_nan() && !d.is_nan()),
+        }
+    }
+    let mut best: Option<Candidate> = None;
+    let mut second: Option<Candidate> = None;
+    for (i, sum) in sq_sums.enumerate() {
+        // Exact shortcut: the square root is monotone, so a sum above the
+        // second winner's gives a distance at least as large, and an equal
+        // distance loses the tie to the earlier second winner. Only the
+        // remaining candidates need their square root.
+        if second.is_some_and(|(_, s, _)| sum > s) {
+            continue;
+        }
+        let d = sum.sqrt();
+        if closer(d, best) {
+            second = best;
+            best = Some((i, sum, d));
+        } else if closer(d, second) {
+            second = Some((i, sum, d));
+        }
+    }
+    best.map(|(winner, _, _)| Ranking {
+        winner,
+        second: second.map(|(s, _, _)| s),
+    })
 }
 
 /// ε_out of aitm.md §4 for a target output of norm `nu`: `10^floor(log10 ν)`,

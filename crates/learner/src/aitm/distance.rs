@@ -17,6 +17,7 @@ pub(crate) fn ranking_distance(a: &[f64], b: &[f64]) -> f64 {
 /// order. Above 128 components (not used by any instance) the slice is split
 /// as the array library did (first half rounded down to a multiple of 8) and
 /// both halves are summed recursively.
+#[inline]
 pub(crate) fn pairwise_sq_sum(a: &[f64], b: &[f64]) -> f64 {
     debug_assert_eq!(a.len(), b.len());
     let n = a.len().min(b.len());
