@@ -399,3 +399,52 @@ fn serde_round_trip_and_validation() {
     }));
     assert!(bad(&|v| v["config"]["eps_dif"] = serde_json::json!(-1.0)));
 }
+
+// ------------------------------------------------------------ properties
+
+mod properties {
+    use proptest::prelude::*;
+
+    use super::super::*;
+
+    fn grid() -> impl Strategy<Value = f64> {
+        (-30i32..=30).prop_map(|k| f64::from(k) / 1000.0)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        #[test]
+        fn queries_are_finite_and_round_trips_exact(
+            samples in prop::collection::vec(
+                (prop::collection::vec(grid(), 4), prop::collection::vec(grid(), 3)),
+                0..40,
+            ),
+            queries in prop::collection::vec(prop::collection::vec(grid(), 3), 1..8),
+        ) {
+            let mut model = InverseModel::new(AimConfig::hz100());
+            for (p, d) in &samples {
+                model.train(p, d);
+            }
+            prop_assert!(model.prototype_count() <= 6);
+            let text = serde_json::to_string(&model).expect("serialise");
+            let mut copy: InverseModel = serde_json::from_str(&text).expect("deserialise");
+            prop_assert_eq!(serde_json::to_string(&copy).expect("serialise"), text);
+            for d in &queries {
+                let answer = model.preconditions_for(d);
+                if let Some(p) = &answer {
+                    prop_assert_eq!(p.len(), 4);
+                    prop_assert!(p.iter().all(|v| v.is_finite()));
+                    prop_assert!(model.current_key().is_some());
+                }
+                let again = copy.preconditions_for(d);
+                prop_assert_eq!(
+                    answer.map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>()),
+                    again.map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+                );
+                prop_assert_eq!(model.current_key(), copy.current_key());
+                prop_assert_eq!(model.second_key(), copy.second_key());
+            }
+        }
+    }
+}

@@ -358,6 +358,8 @@ impl Aitm {
     }
 
     /// `exp(−|x − w_in(c)|² / σ²)` with the ranking distance (aitm.md §2, §3).
+    /// Follows the code, not the thesis, which prints `exp(‖x − w‖ / σ²)`
+    /// (§8).
     fn weight(&self, c: usize, x: &[f64]) -> f64 {
         let d = ranking_distance(self.w_in_row(c), x);
         let sigma = self.config.sigma();
@@ -609,7 +611,9 @@ fn rank_rows(sq_sums: impl Iterator<Item = f64>) -> Option<Ranking> {
 }
 
 /// ε_out of aitm.md §4 for a target output of norm `nu`: `10^floor(log10 ν)`,
-/// except 0.1 for norms in [1, 10) and 10⁻³ for a zero output.
+/// except 0.1 for norms in [1, 10) and 10⁻³ for a zero output. Follows the
+/// code, which applies the 0.1 case whenever `floor(log10 ν) = 0`; the thesis
+/// writes it for `log10 ν = 0` only (§8).
 pub(crate) fn insertion_threshold(nu: f64) -> f64 {
     let e10 = if nu != 0.0 {
         let e = nu.log10().floor();
