@@ -5,14 +5,20 @@
 //! * [`types`]: what the daemon and the experiment driver exchange with a
 //!   model (frames, object states, actions, poses, targets);
 //! * [`features`]: parsing and every feature computation of `features.md`;
+//! * [`aitm`]: the Adapted Instantaneous Topological Map (`aitm.md`), the
+//!   one memory-based regressor/classifier of both learners;
+//! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
 //! * [`model`]: the [`Model`] trait both learners implement.
 
+pub mod aim;
+pub mod aitm;
 pub mod features;
 pub mod model;
 pub mod types;
 
+pub use aitm::MapStats;
 pub use features::ParseError;
-pub use model::{stat_keys, MapCounts, Model, ModelStats};
+pub use model::{stat_keys, Model, ModelStats};
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,
     TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, RED_ID, RED_NAME,

@@ -5,6 +5,7 @@
 use std::collections::BTreeMap;
 use std::fmt::Debug;
 
+use crate::aitm::MapStats;
 use rand::Rng;
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -140,22 +141,11 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     fn stats(&self) -> ModelStats;
 }
 
-/// Counters of one AITM (`aitm.md`), as recorded after training.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct MapCounts {
-    /// Calls of the map's update.
-    pub update_calls: u64,
-    /// Nodes inserted (deletions are not subtracted).
-    pub inserts: u64,
-    /// Current number of nodes.
-    pub nodes: usize,
-}
-
 /// A model's statistics (`gate-model.md` §7, `interaction-model.md` §6).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ModelStats {
     /// Counters per map, keyed as in [`stat_keys`].
-    pub maps: BTreeMap<String, MapCounts>,
+    pub maps: BTreeMap<String, MapStats>,
     /// Scalar statistics (e.g. [`stat_keys::AC_COUNT`]).
     pub extra: BTreeMap<String, f64>,
     /// Descriptive values (e.g. an AC's changed-feature list "2,3,5" under
@@ -185,8 +175,8 @@ impl ModelStats {
     /// (not string) order — e.g. the ACs in id order, which the original's
     /// node-count analysis scanned (`experiments.md` §7.5).
     #[must_use]
-    pub fn indexed(&self, prefix: &str) -> Vec<(u64, &MapCounts)> {
-        let mut out: Vec<(u64, &MapCounts)> = self
+    pub fn indexed(&self, prefix: &str) -> Vec<(u64, &MapStats)> {
+        let mut out: Vec<(u64, &MapStats)> = self
             .maps
             .iter()
             .filter_map(|(k, v)| Some((k.strip_prefix(prefix)?.parse().ok()?, v)))
@@ -390,15 +380,15 @@ mod tests {
         for k in [10, 2, 0] {
             s.maps.insert(
                 format!("{}{k}", stat_keys::AC_PREFIX),
-                MapCounts {
+                MapStats {
                     update_calls: k,
                     inserts: 1,
                     nodes: 1,
                 },
             );
         }
-        s.maps.insert(stat_keys::ACS.into(), MapCounts::default());
-        s.maps.insert("ac/x".into(), MapCounts::default());
+        s.maps.insert(stat_keys::ACS.into(), MapStats::default());
+        s.maps.insert("ac/x".into(), MapStats::default());
         let ids: Vec<u64> = s
             .indexed(stat_keys::AC_PREFIX)
             .iter()
