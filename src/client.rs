@@ -51,12 +51,12 @@ pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(10);
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     /// TCP connect failed.
-    #[error("cannot connect to the world at {addr}: {source}")]
+    #[error("cannot connect to the world at {addr}: {reason}")]
     Connect {
         /// The address as given.
         addr: String,
-        /// The cause.
-        source: std::io::Error,
+        /// The cause (in the message, not a `source`, so it is printed once).
+        reason: std::io::Error,
     },
     /// Framing or transport failure.
     #[error(transparent)]
@@ -88,7 +88,7 @@ pub enum ClientError {
     },
     /// The command failed local validation and was not sent.
     #[error("invalid command, not sent: {0}")]
-    Invalid(#[from] InvalidCommand),
+    Invalid(InvalidCommand),
     /// The world broke the protocol (e.g. no `Hello` first).
     #[error("protocol violation by the world: {0}")]
     Protocol(String),
@@ -104,6 +104,12 @@ impl ClientError {
             ClientError::Refused { seq, .. } => Some(*seq),
             _ => None,
         }
+    }
+}
+
+impl From<InvalidCommand> for ClientError {
+    fn from(err: InvalidCommand) -> Self {
+        ClientError::Invalid(err)
     }
 }
 
@@ -212,9 +218,9 @@ impl SimClient {
             TcpStream::connect(addr),
         )
         .await?
-        .map_err(|source| ClientError::Connect {
+        .map_err(|reason| ClientError::Connect {
             addr: addr_text.clone(),
-            source,
+            reason,
         })?;
         // Commands are small and latency matters more than throughput.
         if let Err(err) = stream.set_nodelay(true) {

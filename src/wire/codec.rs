@@ -38,7 +38,7 @@ pub enum WireError {
     },
     /// A complete frame whose bytes are not a valid envelope.
     #[error("undecodable frame: {0}")]
-    Decode(#[from] prost::DecodeError),
+    Decode(prost::DecodeError),
     /// The peer closed the connection part-way through a frame.
     #[error("connection closed in the middle of a frame ({buffered} bytes of it were received)")]
     Truncated {
@@ -47,7 +47,21 @@ pub enum WireError {
     },
     /// The transport failed.
     #[error("i/o error: {0}")]
-    Io(#[from] io::Error),
+    Io(io::Error),
+}
+
+// Written out rather than `#[from]`: that would also make the cause the
+// error's `source`, and error-chain printers would show its text twice.
+impl From<prost::DecodeError> for WireError {
+    fn from(err: prost::DecodeError) -> Self {
+        WireError::Decode(err)
+    }
+}
+
+impl From<io::Error> for WireError {
+    fn from(err: io::Error) -> Self {
+        WireError::Io(err)
+    }
 }
 
 impl WireError {
