@@ -324,14 +324,10 @@ impl SimClient {
         self.pending_barriers.insert(barrier);
         let deadline = self.deadline();
         loop {
-            let message = within(
-                deadline,
-                self.timeout,
-                "the world's acknowledgement",
-                self.connection.read(),
-            )
-            .await?;
-            match payload_of(message?)? {
+            match self
+                .read_payload(deadline, "the world's acknowledgement")
+                .await?
+            {
                 server_message::Payload::Error(error) if error.seq == barrier => {
                     self.pending_barriers.remove(&barrier);
                     return Ok(());
@@ -401,22 +397,31 @@ impl SimClient {
         waiting_for: &'static str,
     ) -> Result<server_message::Payload, ClientError> {
         loop {
-            let message =
-                within(deadline, self.timeout, waiting_for, self.connection.read()).await?;
-            match payload_of(message?)? {
+            match self.read_payload(deadline, waiting_for).await? {
                 server_message::Payload::Error(error)
                     if self.pending_barriers.remove(&error.seq) => {}
                 payload => return Ok(payload),
             }
         }
     }
-}
 
-fn payload_of(message: Option<pb::ServerMessage>) -> Result<server_message::Payload, ClientError> {
-    message
-        .ok_or(ClientError::Closed)?
-        .payload
-        .ok_or_else(|| ClientError::Protocol("a ServerMessage without payload".into()))
+    /// The next message with a payload this client knows. A payload added by
+    /// a newer world decodes as "none" and is skipped (docs/protocol.md §6).
+    async fn read_payload(
+        &mut self,
+        deadline: Option<Instant>,
+        waiting_for: &'static str,
+    ) -> Result<server_message::Payload, ClientError> {
+        loop {
+            let message = within(deadline, self.timeout, waiting_for, self.connection.read())
+                .await??
+                .ok_or(ClientError::Closed)?;
+            match message.payload {
+                Some(payload) => return Ok(payload),
+                None => tracing::debug!("skipping a ServerMessage without a known payload"),
+            }
+        }
+    }
 }
 
 fn second_hello() -> ClientError {

@@ -356,3 +356,31 @@ async fn garbage_from_the_world_is_a_decode_error() {
         "{err:?}"
     );
 }
+
+#[tokio::test]
+async fn unknown_server_payloads_are_skipped() {
+    let hello: pb::ServerMessage = pb::Hello {
+        scene: "one_block".into(),
+        ..Default::default()
+    }
+    .into();
+    let state: pb::ServerMessage = pb::WorldState {
+        step: 10,
+        ..Default::default()
+    }
+    .into();
+    let mut script = encode_frame(&hello).expect("encode").to_vec();
+    // What a newer world's new payload looks like to this client: no payload.
+    script.extend_from_slice(&encode_frame(&pb::ServerMessage::default()).expect("encode"));
+    script.extend_from_slice(&encode_frame(&state).expect("encode"));
+    let addr = scripted_world(script).await;
+    let mut client = SimClient::connect(addr).await.expect("connect");
+    assert_eq!(
+        client
+            .next_state()
+            .await
+            .expect("the state after the unknown message")
+            .step,
+        10
+    );
+}
