@@ -222,10 +222,6 @@ impl SimClient {
             addr: addr_text.clone(),
             reason,
         })?;
-        // Commands are small and latency matters more than throughput.
-        if let Err(err) = stream.set_nodelay(true) {
-            tracing::debug!("cannot set TCP_NODELAY: {err}");
-        }
         let mut connection = ClientConnection::new(stream);
         let first = within(
             deadline,
@@ -234,12 +230,12 @@ impl SimClient {
             connection.read(),
         )
         .await??;
-        let hello = match first.and_then(|m| m.payload) {
-            Some(server_message::Payload::Hello(hello)) => hello,
-            Some(server_message::Payload::Error(error)) => return Err(world_error(error)),
-            Some(server_message::Payload::WorldState(_)) => {
+        let hello = match first.map(|m| m.payload) {
+            Some(Some(server_message::Payload::Hello(hello))) => hello,
+            Some(Some(server_message::Payload::Error(error))) => return Err(world_error(error)),
+            Some(_) => {
                 return Err(ClientError::Protocol(
-                    "the first message was a WorldState, not Hello".into(),
+                    "the first message was not Hello".into(),
                 ))
             }
             None => {
@@ -290,7 +286,7 @@ impl SimClient {
             kind = message.payload.as_ref().map_or("", Payload::kind),
             "send"
         );
-        self.connection.write(&message).await?;
+        self.write(&message).await?;
         Ok(message.seq)
     }
 
@@ -318,9 +314,7 @@ impl SimClient {
     /// meanwhile are discarded.
     pub async fn sync(&mut self) -> Result<(), ClientError> {
         let barrier = self.seqs.next_seq().ok_or(ClientError::SeqExhausted)?;
-        self.connection
-            .write(&pb::ClientMessage::barrier(barrier))
-            .await?;
+        self.write(&pb::ClientMessage::barrier(barrier)).await?;
         self.pending_barriers.insert(barrier);
         let deadline = self.deadline();
         loop {
@@ -383,6 +377,21 @@ impl SimClient {
     /// Flushes and closes the connection.
     pub async fn close(mut self) -> Result<(), ClientError> {
         self.connection.close().await?;
+        Ok(())
+    }
+
+    /// Writes within the timeout: a world that stops reading must not hang
+    /// the client. A frame is buffered whole, so a timed-out write leaves the
+    /// stream aligned.
+    async fn write(&mut self, message: &pb::ClientMessage) -> Result<(), ClientError> {
+        let deadline = self.deadline();
+        within(
+            deadline,
+            self.timeout,
+            "the world to read a command",
+            self.connection.write(message),
+        )
+        .await??;
         Ok(())
     }
 

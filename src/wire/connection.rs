@@ -40,6 +40,9 @@ impl<In: Message + Default, R: AsyncRead + Unpin> FrameReader<In, R> {
     /// cleanly between frames. After an error the reader is finished: the next
     /// call returns `Ok(None)`, because the byte stream can no longer be
     /// trusted to be aligned on frames.
+    ///
+    /// Cancel-safe: partial frames stay buffered in the reader, so `read` can
+    /// be one branch of a `tokio::select!` loop.
     pub async fn read(&mut self) -> Result<Option<In>, WireError> {
         self.frames.next().await.transpose()
     }
@@ -59,7 +62,9 @@ impl<Out: Message, W: AsyncWrite + Unpin> FrameWriter<Out, W> {
         }
     }
 
-    /// Writes and flushes one envelope.
+    /// Writes and flushes one envelope. Not cancel-safe: if the future is
+    /// dropped before the envelope was encoded it is not sent (once encoded it
+    /// is sent whole with the next write or close).
     pub async fn write(&mut self, message: &Out) -> Result<(), WireError> {
         self.frames.send(message).await
     }
@@ -78,8 +83,12 @@ pub struct Connection<In, Out, R, W> {
 }
 
 impl<In: Message + Default, Out: Message> Connection<In, Out, OwnedReadHalf, OwnedWriteHalf> {
-    /// Frames a TCP stream.
+    /// Frames a TCP stream, with Nagle's algorithm off: messages are small
+    /// and latency matters more than throughput.
     pub fn new(stream: TcpStream) -> Self {
+        if let Err(err) = stream.set_nodelay(true) {
+            tracing::debug!("cannot set TCP_NODELAY: {err}");
+        }
         let (reader, writer) = stream.into_split();
         Self::from_parts(reader, writer)
     }
