@@ -280,3 +280,14 @@ fn lockstep_script_is_deterministic() {
     );
     assert_eq!(first, run());
 }
+
+#[test]
+fn watch_on_a_quiet_world_explains_the_timeout() {
+    let world = BackgroundWorld::start(TimingMode::Lockstep);
+    let stderr = failed(&ctl(
+        world.addr,
+        &["--timeout", "0.3", "watch", "--count", "1"],
+    ));
+    assert!(stderr.contains("no world state arrived"), "{stderr}");
+    assert!(stderr.contains("timed out"), "{stderr}");
+}

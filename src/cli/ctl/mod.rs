@@ -13,7 +13,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use pushlearn::client::{seq_base_from_clock, ClientOptions, SimClient, DEFAULT_ADDR};
+use pushlearn::client::{seq_base_from_clock, ClientError, ClientOptions, SimClient, DEFAULT_ADDR};
 use pushlearn::wire::pb::client_message::Payload;
 
 use output::Output;
@@ -240,8 +240,6 @@ impl Session {
     }
 
     async fn watch(&mut self, count: Option<u64>) -> Result<()> {
-        const NO_STATES: &str =
-            "no world state arrived (a paused world, or a lock-step world without `advance`, publishes none)";
         let limit = self.sim.timeout();
         if count.is_none() {
             // An open-ended watch is a monitor: a quiet world is not an error.
@@ -250,17 +248,33 @@ impl Session {
         let mut shown = 0;
         if let Some(seq) = self.last_command.take() {
             if count != Some(0) {
-                let state = self.sim.wait_applied(seq).await.context(NO_STATES)?;
+                let state = self
+                    .sim
+                    .wait_applied(seq)
+                    .await
+                    .map_err(explain_quiet_world)?;
                 self.output.state(&state)?;
                 shown += 1;
             }
         }
         while count.is_none_or(|n| shown < n) {
-            let state = self.sim.next_state().await.context(NO_STATES)?;
+            let state = self.sim.next_state().await.map_err(explain_quiet_world)?;
             self.output.state(&state)?;
             shown += 1;
         }
         self.sim.set_timeout(limit);
         Ok(())
+    }
+}
+
+/// A timeout while watching usually means the world is not publishing; say
+/// why that happens rather than just "timed out".
+fn explain_quiet_world(err: ClientError) -> anyhow::Error {
+    let quiet = matches!(err, ClientError::Timeout { .. });
+    let err = anyhow::Error::from(err);
+    if quiet {
+        err.context("no world state arrived (a paused world, or a lock-step world without `advance`, publishes none)")
+    } else {
+        err
     }
 }
