@@ -1,1 +1,9 @@
 //! pushlearn: wire types, client, learner daemon, experiments.
+//!
+//! * [`wire`]: the protobuf schema (`proto/pushlearn.proto`), framing,
+//!   connections and command validation shared by the world daemon and its
+//!   clients;
+//! * [`client`]: an async client for the world daemon.
+
+pub mod client;
+pub mod wire;

@@ -1,1 +1,47 @@
-fn main() {}
+//! The `pushlearn` command line. Subcommands live in `cli/`; this file only
+//! parses arguments, sets up logging and turns errors into an exit status.
+
+mod cli;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use tracing_subscriber::EnvFilter;
+
+/// Memory-based online learning of object manipulation: tools around the
+/// pushlearn world daemon (`pushlearn-sim`).
+///
+/// Logging goes to stderr and is controlled by RUST_LOG (e.g. RUST_LOG=debug).
+#[derive(Debug, Parser)]
+#[command(name = "pushlearn", version, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Ctl(cli::ctl::CtlArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let result = match cli.command {
+        Command::Ctl(args) => cli::ctl::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        // `pushlearn ctl watch | head` closing the pipe is a normal way to stop.
+        Err(err) if cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,10 @@
+//! Subcommands of the `pushlearn` binary.
+
+pub mod ctl;
+
+/// Whether `err` comes from writing to a closed stdout pipe.
+pub fn is_broken_pipe(err: &anyhow::Error) -> bool {
+    err.chain()
+        .filter_map(|cause| cause.downcast_ref::<std::io::Error>())
+        .any(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+}

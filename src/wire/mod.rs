@@ -1,0 +1,26 @@
+//! The wire protocol between the world daemon and its clients.
+//!
+//! Every message is one frame: a 4-byte big-endian length followed by that
+//! many bytes of one protobuf envelope, [`pb::ClientMessage`] from client to
+//! world and [`pb::ServerMessage`] from world to client. `docs/protocol.md`
+//! describes the bytes and the semantics; this module is the Rust side of it:
+//!
+//! * [`pb`]: the generated message types;
+//! * [`codec`]: framing with a hard [`MAX_FRAME_SIZE`];
+//! * [`connection`]: typed reader/writer halves over any byte stream;
+//! * [`validate()`]: the state-independent checks a world runs on every
+//!   command on arrival (a client runs them before sending);
+//! * [`message`]: constructors such as [`pb::ClientMessage::move_`].
+
+pub mod codec;
+pub mod connection;
+pub mod message;
+pub mod pb;
+pub mod validate;
+
+pub use codec::{
+    encode_frame, FrameDecoder, FrameEncoder, WireError, LENGTH_PREFIX_SIZE, MAX_FRAME_SIZE,
+};
+pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
+pub use message::TimingMode;
+pub use validate::{validate, InvalidCommand};
