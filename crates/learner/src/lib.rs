@@ -8,10 +8,12 @@
 //! * [`aitm`]: the Adapted Instantaneous Topological Map (`aitm.md`), the
 //!   one memory-based regressor/classifier of both learners;
 //! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
-//! * [`model`]: the [`Model`] trait both learners implement.
+//! * [`model`]: the [`Model`] trait both learners implement;
+//! * [`eval`]: the push-task protocol on the learner's side and its metrics.
 
 pub mod aim;
 pub mod aitm;
+pub mod eval;
 pub mod features;
 pub mod model;
 pub mod types;
