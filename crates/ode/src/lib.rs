@@ -20,6 +20,8 @@
 //! quaternions are `[x, y, z, w]` in this API (ODE stores `[w, x, y, z]`; the
 //! conversion lives in one private module).
 
+#![warn(clippy::undocumented_unsafe_blocks)]
+
 mod arena;
 mod body;
 mod check;
