@@ -22,6 +22,17 @@ const BUILTINS: [(&str, &str); 2] = [
     ("two_blocks", include_str!("../scenes/two_blocks.toml")),
 ];
 
+// Plausible ranges for a table-top world (see `within`).
+const MAX_ACCELERATION: f64 = 1e3;
+const MIN_SIZE: f64 = 1e-4;
+const MAX_SIZE: f64 = 1e2;
+const MIN_MASS: f64 = 1e-6;
+const MAX_MASS: f64 = 1e6;
+const MIN_INERTIA: f64 = 1e-12;
+const MAX_INERTIA: f64 = 1e6;
+const MIN_POSITIVE: f64 = f64::MIN_POSITIVE;
+const MAX_STIFFNESS: f64 = 1e20;
+
 /// The default scene of every command.
 pub const DEFAULT_SCENE: &str = "one_block";
 
@@ -343,13 +354,16 @@ impl Scene {
         self.step_params()
             .validate()
             .map_err(|e| invalid("physics", e.to_string()))?;
+        for g in self.physics.gravity {
+            within("physics.gravity", g, -MAX_ACCELERATION, MAX_ACCELERATION)?;
+        }
         for (f, v) in [
             ("ground.mu1", self.ground.mu1),
             ("ground.mu2", self.ground.mu2),
         ] {
             non_negative(f, v)?;
         }
-        positive("ground.kp", self.ground.kp)?;
+        within("ground.kp", self.ground.kp, MIN_POSITIVE, MAX_STIFFNESS)?;
         non_negative("ground.kd", self.ground.kd)?;
         let d = &self.drive;
         finite("drive.z_clamp", d.z_clamp)?;
@@ -402,30 +416,52 @@ impl Scene {
             }
         }
         match b.shape {
-            ShapeSpec::Sphere { radius } => positive(&field("shape.radius"), radius)?,
+            ShapeSpec::Sphere { radius } => {
+                within(&field("shape.radius"), radius, MIN_SIZE, MAX_SIZE)?
+            }
             ShapeSpec::Box { size } => {
                 for s in size {
-                    positive(&field("shape.size"), s)?;
+                    within(&field("shape.size"), s, MIN_SIZE, MAX_SIZE)?;
                 }
             }
         }
-        positive(&field("mass"), b.mass)?;
+        within(&field("mass"), b.mass, MIN_MASS, MAX_MASS)?;
         for v in b.inertia {
-            positive(&field("inertia"), v)?;
+            within(&field("inertia"), v, MIN_INERTIA, MAX_INERTIA)?;
         }
         non_negative(&field("mu1"), b.mu1)?;
         non_negative(&field("mu2"), b.mu2)?;
-        positive(&field("kp"), b.kp)?;
+        within(&field("kp"), b.kp, MIN_POSITIVE, MAX_STIFFNESS)?;
         non_negative(&field("kd"), b.kd)?;
         for (f, v) in [
             ("start.x", b.start.x),
             ("start.y", b.start.y),
             ("start.z", b.start.z),
-            ("start.yaw", b.start.yaw),
         ] {
-            finite(&field(f), v)?;
+            within(
+                &field(f),
+                v,
+                -crate::world::MAX_POSITION,
+                crate::world::MAX_POSITION,
+            )?;
         }
+        finite(&field("start.yaw"), b.start.yaw)?;
         Ok(())
+    }
+}
+
+/// Checks that `v` lies in `[lo, hi]`. Scene values far outside what a
+/// table-top world can mean are refused: ODE aborts the process (it does not
+/// return an error) when such values make its state overflow.
+fn within(field: &str, v: f64, lo: f64, hi: f64) -> Result<(), SceneError> {
+    finite(field, v)?;
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must lie in [{lo:e}, {hi:e}], got {v}"),
+        ))
     }
 }
 
