@@ -23,9 +23,10 @@ pub struct SweepOptions {
 }
 
 impl SweepOptions {
-    /// x₀ = −0.35 + 0.035·i, i = 0…20 (`experiments.md`).
+    /// x₀ = −0.35 + 0.035·i, i = 0…20 (`experiments.md`), computed in
+    /// millimetres so that every start is the double nearest its decimal.
     pub fn thesis_starts() -> Vec<f64> {
-        (0..21).map(|i| -0.35 + 0.035 * f64::from(i)).collect()
+        (0..21).map(|i| f64::from(-350 + 35 * i) / 1000.0).collect()
     }
 }
 
