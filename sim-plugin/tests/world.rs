@@ -406,3 +406,13 @@ fn scene_without_actuator_is_refused() {
     let err = scene_error(&text);
     assert!(err.contains("actuator"), "{err}");
 }
+
+#[test]
+fn world_can_move_to_a_physics_thread() {
+    let mut w = world("one_block");
+    w.apply(mv(0.0, 0.5)).expect("valid");
+    let published = std::thread::spawn(move || step_n(&mut w, 100).len())
+        .join()
+        .expect("physics thread finishes");
+    assert_eq!(published, 10);
+}
