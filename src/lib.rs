@@ -3,7 +3,9 @@
 //! * [`wire`]: the protobuf schema (`proto/pushlearn.proto`), framing,
 //!   connections and command validation shared by the world daemon and its
 //!   clients;
-//! * [`client`]: an async client for the world daemon.
+//! * [`client`]: an async client for the world daemon;
+//! * [`frame`]: world states as the learner sees them.
 
 pub mod client;
+pub mod frame;
 pub mod wire;
