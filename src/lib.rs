@@ -4,8 +4,10 @@
 //!   connections and command validation shared by the world daemon and its
 //!   clients;
 //! * [`client`]: an async client for the world daemon;
-//! * [`frame`]: world states as the learner sees them.
+//! * [`frame`]: world states as the learner sees them;
+//! * [`experiment`]: the thesis's experiments over the sockets.
 
 pub mod client;
+pub mod experiment;
 pub mod frame;
 pub mod wire;
