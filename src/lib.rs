@@ -5,9 +5,13 @@
 //!   clients;
 //! * [`client`]: an async client for the world daemon;
 //! * [`frame`]: world states as the learner sees them;
-//! * [`experiment`]: the thesis's experiments over the sockets.
+//! * [`experiment`]: the thesis's experiments over the sockets;
+//! * [`models`]: the learners by name;
+//! * [`report`]: JSON documents and terminal tables beside the thesis's numbers.
 
 pub mod client;
 pub mod experiment;
 pub mod frame;
+pub mod models;
+pub mod report;
 pub mod wire;

@@ -428,7 +428,7 @@ pub(crate) mod test_support {
     }
 
     fn c_kind(c: &crate::wire::pb::SimControl) -> String {
-        Payload::Control(c.clone()).kind().to_owned()
+        Payload::Control(*c).kind().to_owned()
     }
 }
 
