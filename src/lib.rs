@@ -6,12 +6,14 @@
 //! * [`client`]: an async client for the world daemon;
 //! * [`frame`]: world states as the learner sees them;
 //! * [`experiment`]: the thesis's experiments over the sockets;
+//! * [`learn`]: the learner daemon;
 //! * [`models`]: the learners by name;
 //! * [`report`]: JSON documents and terminal tables beside the thesis's numbers.
 
 pub mod client;
 pub mod experiment;
 pub mod frame;
+pub mod learn;
 pub mod models;
 pub mod report;
 pub mod wire;

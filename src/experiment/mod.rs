@@ -7,6 +7,7 @@
 //!   realtime;
 //! * [`workers`]: one world process per worker, jobs spread over workers
 //!   and gathered back in job order;
+//! * [`run`]: whole experiments, from jobs to report documents;
 //! * [`seed`]: per-job seeds (§5); [`nodes`]: node statistics (§7.5).
 
 pub mod constant_feedback;
@@ -15,6 +16,7 @@ pub mod link;
 pub mod move_to_target;
 pub mod nodes;
 pub mod push_task;
+pub mod run;
 pub mod seed;
 pub mod workers;
 
