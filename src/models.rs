@@ -28,3 +28,33 @@ impl std::fmt::Display for ModelKind {
         f.write_str(self.as_str())
     }
 }
+
+/// Something to do with an untrained model of either kind: the one generic
+/// entry point that [`ModelKind::dispatch`] instantiates for each learner.
+pub trait WithModel {
+    /// The result.
+    type Output;
+    /// Runs with `untrained`.
+    fn run<M: learner::Model>(self, untrained: M) -> Self::Output;
+}
+
+impl ModelKind {
+    /// Calls `job` with an untrained model of this kind, configured for the
+    /// world's publish rate (10 Hz: the LOWFREQ thresholds of
+    /// `experiments.md` §1; anything else: the 100 Hz ones).
+    pub fn dispatch<W: WithModel>(self, publish_rate_hz: u32, job: W) -> W::Output {
+        let low = publish_rate_hz == crate::experiment::LOW_RATE_HZ;
+        match self {
+            ModelKind::Gate => job.run(learner::GateModel::new(if low {
+                learner::GateConfig::hz10()
+            } else {
+                learner::GateConfig::hz100()
+            })),
+            ModelKind::Interaction => job.run(learner::InteractionModel::new(if low {
+                learner::InteractionConfig::hz10()
+            } else {
+                learner::InteractionConfig::hz100()
+            })),
+        }
+    }
+}
