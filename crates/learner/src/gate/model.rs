@@ -261,7 +261,7 @@ impl GateModel {
 
 /// The hard-coded gate (`gate-model.md` §5, flag 32): contact within this
 /// step (`closing ≤ −distance`), or resting contact.
-fn hard_coded_gate(phi: &[f64; RELATIVE_FEATURES_DIM]) -> bool {
+pub(super) fn hard_coded_gate(phi: &[f64; RELATIVE_FEATURES_DIM]) -> bool {
     let (distance, closing) = (phi[2], phi[3]);
     if closing <= -distance {
         return true;
