@@ -12,7 +12,7 @@ use super::planner::{circle, exploration};
 use super::*;
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig, QueryMode};
-use crate::features::{local_change, relative_features, r3};
+use crate::features::{local_change, r3, relative_features};
 use crate::model::{stat_keys, Model};
 use crate::types::{
     Action, Frame, ObjectState, Observation, Poses, Target, TargetError, TrackedObject,
@@ -61,7 +61,14 @@ fn predictor_constant(delta: [f64; 3], inverse: InverseModel) -> Predictor {
 
 fn bits(p: &Poses) -> Vec<u64> {
     p.objects()
-        .flat_map(|(id, s)| [u64::from(id), s.x.to_bits(), s.y.to_bits(), s.theta.to_bits()])
+        .flat_map(|(id, s)| {
+            [
+                u64::from(id),
+                s.x.to_bits(),
+                s.y.to_bits(),
+                s.theta.to_bits(),
+            ]
+        })
         .collect()
 }
 
@@ -211,7 +218,10 @@ fn training_off_only_moves_the_states() {
     }
     assert_eq!(m.stats(), stats);
     let last = run[59].poses();
-    assert_eq!(m.block(BLUE_ID).map(|b| b.s), last.blocks.get(&BLUE_ID).copied());
+    assert_eq!(
+        m.block(BLUE_ID).map(|b| b.s),
+        last.blocks.get(&BLUE_ID).copied()
+    );
     assert_eq!(m.actuator().map(|a| a.s), Some(last.actuator));
     m.set_training(true);
     assert!(m.is_training());
@@ -329,7 +339,7 @@ fn the_predictor_is_used_only_when_the_gate_opens() {
 
 #[test]
 fn without_a_predictor_an_open_gate_changes_nothing() {
-    let mut m = GateModel::default();
+    let mut m = GateModel::new(GateConfig::hz100());
     m.gate = gate_always(1);
     let w = world((0.0, 0.17), &blue(0.0, 0.25, 0.0));
     let p = m.predict(&w, PUSH);
@@ -368,7 +378,7 @@ fn the_gate_sees_the_predicted_actuator_and_the_current_block() {
 
 #[test]
 fn an_unchanged_predicted_block_keeps_its_own_s_prev() {
-    let mut m = GateModel::default();
+    let mut m = GateModel::new(GateConfig::hz100());
     m.gate = gate_always(0);
     let w = GateWorld::new(
         tracked(ACTUATOR_ID, st(0.0, 0.0, 0.0), st(0.0, 0.0, 0.0)),
@@ -564,7 +574,10 @@ fn stats_count_updates_inserts_and_nodes_per_map() {
     let key = format!("{}15", stat_keys::PREDICTOR_PREFIX);
     let changed = s.maps[&key].update_calls;
     assert!(changed > 100 && changed < 298, "{changed}");
-    assert_eq!(s.maps[&key].nodes, m.predictor(BLUE_ID).unwrap().forward().len());
+    assert_eq!(
+        s.maps[&key].nodes,
+        m.predictor(BLUE_ID).unwrap().forward().len()
+    );
     assert!(s.labels.is_empty());
     assert_eq!(s.maps.len(), 3);
 }
@@ -586,7 +599,10 @@ fn parse_forces_the_actuator_yaw_to_zero_and_starts_fresh() {
     };
     let w = m.parse(&frame).unwrap();
     assert_eq!(w.actuator(), TrackedObject::fresh(8, st(0.0, 0.1, 0.0)));
-    assert_eq!(w.block(BLUE_ID), Some(TrackedObject::fresh(15, st(0.0, 0.25, 0.3))));
+    assert_eq!(
+        w.block(BLUE_ID),
+        Some(TrackedObject::fresh(15, st(0.0, 0.25, 0.3)))
+    );
     assert!(m.parse(&Frame::default()).is_err());
 }
 
@@ -647,12 +663,18 @@ fn a_restored_model_predicts_and_plans_bit_identically() {
     let (mut r1, mut r2) = (SplitMix(7), SplitMix(7));
     for _ in 0..5 {
         let (a, b) = (m.act(&mut r1), back.act(&mut r2));
-        assert_eq!((a.vx.to_bits(), a.vy.to_bits()), (b.vx.to_bits(), b.vy.to_bits()));
+        assert_eq!(
+            (a.vx.to_bits(), a.vy.to_bits()),
+            (b.vx.to_bits(), b.vy.to_bits())
+        );
     }
     // And learning continues identically.
     train(&mut m, &[0.15]);
     train(&mut back, &[0.15]);
-    assert_eq!(serde_json::to_string(&back).unwrap(), serde_json::to_string(&m).unwrap());
+    assert_eq!(
+        serde_json::to_string(&back).unwrap(),
+        serde_json::to_string(&m).unwrap()
+    );
 }
 
 #[test]
@@ -892,13 +914,13 @@ fn approach_circles_when_the_predicted_contact_would_hurt() {
 fn at_the_precondition_the_motion_is_scaled_or_passed_through() {
     // |δ| ≤ 0.01: perform v* = R(θ)·P[6:8].
     let cases = [
-        (0.005, (0.0, 0.3)),     // 100 Hz displacement: scaled to 0.3 m/s
-        (0.01, (0.0, 0.3)),      // band is strict at 0.01
-        (0.05, (0.0, 0.05)),     // 10 Hz displacement: passed through
-        (0.199, (0.0, 0.199)),   // inside the band
-        (0.2, (0.0, 0.3)),       // band is strict at 0.2
-        (0.0, (0.0, 0.0)),       // zero passes through
-        (-0.3, (0.0, -0.3)),     // larger: scaled
+        (0.005, (0.0, 0.3)),   // 100 Hz displacement: scaled to 0.3 m/s
+        (0.01, (0.0, 0.3)),    // band is strict at 0.01
+        (0.05, (0.0, 0.05)),   // 10 Hz displacement: passed through
+        (0.199, (0.0, 0.199)), // inside the band
+        (0.2, (0.0, 0.3)),     // band is strict at 0.2
+        (0.0, (0.0, 0.0)),     // zero passes through
+        (-0.3, (0.0, -0.3)),   // larger: scaled
     ];
     for (vy, want) in cases {
         let mut m = planning_model((0.0, 0.175), gate_always(0), [0.0; 3]);
