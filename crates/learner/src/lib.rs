@@ -10,10 +10,12 @@
 //! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
 //! * [`gate`]: the object-state model with gating function
 //!   (`gate-model.md`) and its planner (`planning.md` §2);
-//! * [`model`]: the [`Model`] trait both learners implement.
+//! * [`model`]: the [`Model`] trait both learners implement;
+//! * [`eval`]: the push-task protocol on the learner's side and its metrics.
 
 pub mod aim;
 pub mod aitm;
+pub mod eval;
 pub mod features;
 pub mod gate;
 pub mod model;
