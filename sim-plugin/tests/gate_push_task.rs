@@ -16,7 +16,8 @@ use learner::eval::{
 use learner::{stat_keys, Frame, GateModel, Model, ObjectState, Observation, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::{ActuatorMode, Command, Scene, Snapshot, World};
+use sim_plugin::sweep::driver_run;
+use sim_plugin::{Command, Scene, Snapshot, World};
 
 const FOLDS: u64 = 5;
 const TRAINING_RUNS: usize = 10;
@@ -39,49 +40,14 @@ fn frame(s: &Snapshot) -> Frame {
     }
 }
 
-fn next_message(world: &mut World) -> Snapshot {
-    loop {
-        if let Some(s) = world.step().expect("the push world stays finite") {
-            return s;
-        }
-    }
-}
-
-fn move_actuator(world: &mut World, vx: f64, vy: f64) {
-    world
-        .apply(Command::Actuator {
-            mode: ActuatorMode::Move,
-            velocity: [vx, vy, 0.0],
-        })
-        .expect("finite velocity");
-}
-
-/// The 151 messages of one push-task run as the driver meets them in
-/// lock-step (`experiments.md` §2, §2.1): `reset_world` (stop, Reset, one
-/// dropped message), `start_run` (SetPose of the actuator at (x0, 0), one
-/// dropped message), message 1 with the actuator still at rest, then the
-/// push action — which the driver sends after handling each message — for
-/// the remaining 150.
+/// The 151 messages of one push-task run from x0, as the driver meets them.
 fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
-    let z = world.scene().drive.z_clamp;
-    move_actuator(world, 0.0, 0.0);
-    world.apply(Command::Reset).expect("reset");
-    world.apply(Command::Unpause).expect("unpause");
-    next_message(world);
-    world
-        .apply(Command::SetPose {
-            name: "actuator".into(),
-            position: [x0, 0.0, z],
-            orientation: [0.0, 0.0, 0.0, 1.0],
-        })
-        .expect("valid pose");
-    next_message(world);
-    let mut frames = vec![frame(&next_message(world))];
-    move_actuator(world, PUSH_ACTION.vx, PUSH_ACTION.vy);
-    while frames.len() < MESSAGES_PER_RUN + 1 {
-        frames.push(frame(&next_message(world)));
-    }
-    frames
+    let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
+    driver_run(world, x0, action, MESSAGES_PER_RUN + 1)
+        .expect("the push world runs")
+        .iter()
+        .map(frame)
+        .collect()
 }
 
 /// `check_start_positions` of `experiments.md` §2 as an assertion: in
@@ -122,7 +88,10 @@ fn gate_model_push_task_after_ten_random_training_runs() {
         // 149 updates per training run (experiments.md §8); the actuator
         // model sees one input only and keeps its first two nodes
         // (gate-model.md §8, reference-results.md §4.2).
-        assert_eq!(map(stat_keys::GATE).update_calls, 149 * TRAINING_RUNS as u64);
+        assert_eq!(
+            map(stat_keys::GATE).update_calls,
+            149 * TRAINING_RUNS as u64
+        );
         assert_eq!(map(stat_keys::ACTUATOR).nodes, 2);
         let predictor = map(&format!("{}{BLUE_ID}", stat_keys::PREDICTOR_PREFIX));
         node_counts.push((
@@ -171,7 +140,30 @@ fn gate_model_push_task_after_ten_random_training_runs() {
         );
     }
 
-    assert!(s.block_pos.mean <= 0.08, "block position {}", s.block_pos.mean);
-    assert!(s.block_ori.mean <= 0.25, "block orientation {}", s.block_ori.mean);
+    assert!(
+        s.block_pos.mean <= 0.08,
+        "block position {}",
+        s.block_pos.mean
+    );
+    assert!(
+        s.block_ori.mean <= 0.25,
+        "block orientation {}",
+        s.block_ori.mean
+    );
     assert!(s.actuator.mean <= 0.005, "actuator {}", s.actuator.mean);
+}
+
+#[test]
+fn a_driver_run_starts_at_rest_and_then_pushes() {
+    let scene = Scene::builtin("one_block").expect("embedded scene");
+    let mut world = World::new(&scene).expect("world");
+    let frames = record_run(&mut world, 0.1);
+    assert_eq!(frames.len(), MESSAGES_PER_RUN + 1);
+    let model = GateModel::default();
+    let y = |k: usize| GateModel::poses(&model.parse(&frames[k]).expect("parses")).actuator;
+    assert_eq!(y(0), ObjectState::new(0.1, 0.0, 0.0));
+    // One message at 0.5 m/s and 100 Hz: 5 mm.
+    assert_eq!(y(1), ObjectState::new(0.1, 0.005, 0.0));
+    // Message 151 is 150 pushes after message 1.
+    assert!((y(MESSAGES_PER_RUN).y - 0.75).abs() < 0.005);
 }
