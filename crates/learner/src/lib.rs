@@ -8,16 +8,23 @@
 //! * [`aitm`]: the Adapted Instantaneous Topological Map (`aitm.md`), the
 //!   one memory-based regressor/classifier of both learners;
 //! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
-//! * [`model`]: the [`Model`] trait both learners implement.
+//! * [`model`]: the [`Model`] trait both learners implement;
+//! * [`interaction`]: the pairwise interaction-state model
+//!   (`interaction-model.md`);
+//! * [`planning`]: the model-independent parts of Move to Target
+//!   (`planning.md` §1, §4, §5).
 
 pub mod aim;
 pub mod aitm;
 pub mod features;
+pub mod interaction;
 pub mod model;
+pub mod planning;
 pub mod types;
 
 pub use aitm::MapStats;
 pub use features::ParseError;
+pub use interaction::{InteractionConfig, InteractionModel, InteractionParams, InteractionWorld};
 pub use model::{stat_keys, Model, ModelStats};
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,

@@ -79,6 +79,11 @@ impl InverseModel {
         &self.config
     }
 
+    /// Precondition dimension, fixed by the first training sample.
+    pub fn precondition_dim(&self) -> Option<usize> {
+        self.precondition_dim
+    }
+
     /// Number of prototypes created so far.
     pub fn prototype_count(&self) -> usize {
         self.prototypes.len()
