@@ -275,7 +275,7 @@ impl InteractionModel {
 /// "AC with the most nodes" (`experiments.md` §7.5, the thesis's
 /// definition; ties go to the lower id *(decision)*) and the original
 /// analysis script's two quirky AC columns, added to `extra`.
-fn ac_summary(acs: &[MapStats], extra: &mut BTreeMap<String, f64>) {
+pub(super) fn ac_summary(acs: &[MapStats], extra: &mut BTreeMap<String, f64>) {
     let Some((largest, stats)) = acs.iter().enumerate().rev().max_by_key(|(_, s)| s.nodes) else {
         return;
     };
