@@ -1,1 +1,20 @@
-//! The thesis world and the simulator daemon.
+//! The thesis world and the simulator.
+//!
+//! * [`scene`]: the world as data (TOML scene files, the embedded thesis
+//!   scenes);
+//! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
+//!   per-step actuator drive, commands, ghosts and publishing;
+//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10.
+
+pub mod scene;
+pub mod sweep;
+pub mod world;
+
+pub use scene::Scene;
+pub use sweep::{sweep, SweepOptions, SweepRow};
+pub use world::{
+    ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World, WorldError,
+};
+
+/// The top-level collision space kinds (for the hash-space regression test).
+pub use ode::SpaceKind;

@@ -9,6 +9,7 @@
 //!   one memory-based regressor/classifier of both learners;
 //! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
 //! * [`model`]: the [`Model`] trait both learners implement;
+//! * [`eval`]: the push-task protocol on the learner's side and its metrics;
 //! * [`interaction`]: the pairwise interaction-state model
 //!   (`interaction-model.md`);
 //! * [`planning`]: the model-independent parts of Move to Target
@@ -16,6 +17,7 @@
 
 pub mod aim;
 pub mod aitm;
+pub mod eval;
 pub mod features;
 pub mod interaction;
 pub mod model;

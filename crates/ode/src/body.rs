@@ -1,0 +1,231 @@
+//! Rigid bodies: handles, the builder, and read/write views.
+
+use std::marker::PhantomData;
+
+use ode_sys::dBodyID;
+
+use crate::arena::RawHandle;
+use crate::check::{check_finite3, check_positive, quat_from_ode, quat_to_ode};
+use crate::geom::GeomHandle;
+use crate::OdeError;
+
+/// Names one body of one [`World`](crate::World). Copyable; refused once the
+/// body is removed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyHandle(pub(crate) RawHandle);
+
+pub(crate) struct BodyEntry {
+    pub(crate) raw: dBodyID,
+    pub(crate) geoms: Vec<GeomHandle>,
+}
+
+/// Describes a body to create with [`World::insert_body`](crate::World::insert_body).
+///
+/// The centre of mass is the body origin and the inertia tensor is diagonal
+/// in the body frame, which covers boxes and spheres.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[must_use = "a builder does nothing until passed to World::insert_body"]
+pub struct BodyBuilder {
+    pub(crate) mass: f64,
+    pub(crate) inertia: [f64; 3],
+    pub(crate) position: [f64; 3],
+    pub(crate) orientation: [f64; 4],
+    pub(crate) linear_velocity: [f64; 3],
+    pub(crate) angular_velocity: [f64; 3],
+    pub(crate) gravity: bool,
+}
+
+impl BodyBuilder {
+    /// A body of `mass` kg and diagonal inertia `inertia` kg·m², at the
+    /// origin, unrotated, at rest, affected by gravity.
+    pub fn new(mass: f64, inertia: [f64; 3]) -> Self {
+        BodyBuilder {
+            mass,
+            inertia,
+            position: [0.0; 3],
+            orientation: [0.0, 0.0, 0.0, 1.0],
+            linear_velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+            gravity: true,
+        }
+    }
+
+    pub fn position(mut self, position: [f64; 3]) -> Self {
+        self.position = position;
+        self
+    }
+
+    /// Unit quaternion `[x, y, z, w]` (normalised on insertion).
+    pub fn orientation(mut self, orientation: [f64; 4]) -> Self {
+        self.orientation = orientation;
+        self
+    }
+
+    pub fn linear_velocity(mut self, v: [f64; 3]) -> Self {
+        self.linear_velocity = v;
+        self
+    }
+
+    pub fn angular_velocity(mut self, w: [f64; 3]) -> Self {
+        self.angular_velocity = w;
+        self
+    }
+
+    /// Whether the world's gravity acts on the body.
+    pub fn gravity(mut self, on: bool) -> Self {
+        self.gravity = on;
+        self
+    }
+
+    /// Everything ODE's `dMassCheck` and setters would abort on. Positive
+    /// diagonal moments make the tensor positive definite, which is all ODE
+    /// requires; the triangle inequality is deliberately not enforced (the
+    /// thesis's red block violates it and must be reproducible).
+    pub(crate) fn validate(&self) -> Result<[f64; 4], OdeError> {
+        check_positive("mass", self.mass)?;
+        self.inertia
+            .iter()
+            .try_for_each(|&i| check_positive("inertia", i))?;
+        check_finite3("position", self.position)?;
+        check_finite3("linear velocity", self.linear_velocity)?;
+        check_finite3("angular velocity", self.angular_velocity)?;
+        quat_to_ode(self.orientation)
+    }
+}
+
+/// Read-only view of a body, borrowed from its world.
+#[derive(Clone, Copy)]
+pub struct Body<'w> {
+    raw: dBodyID,
+    _world: PhantomData<&'w ()>,
+}
+
+/// Read-write view of a body, borrowed mutably from its world.
+pub struct BodyMut<'w> {
+    raw: dBodyID,
+    _world: PhantomData<&'w mut ()>,
+}
+
+fn read3(ptr: *const f64) -> [f64; 3] {
+    // SAFETY: callers pass a pointer ODE returned for a live body's dVector3
+    // (4 doubles, of which 3 are meaningful); it stays valid while the world
+    // is borrowed, and nothing mutates it during this read.
+    unsafe { [*ptr, *ptr.add(1), *ptr.add(2)] }
+}
+
+macro_rules! body_getters {
+    () => {
+        /// World-frame position of the centre of mass, m.
+        pub fn position(&self) -> [f64; 3] {
+            // SAFETY: `raw` is a live body (guaranteed by the world borrow).
+            read3(unsafe { ode_sys::dBodyGetPosition(self.raw) })
+        }
+
+        /// Unit quaternion `[x, y, z, w]`.
+        pub fn orientation(&self) -> [f64; 4] {
+            // SAFETY: `raw` is a live body; dBodyGetQuaternion returns a
+            // pointer to its 4-element quaternion.
+            let q = unsafe {
+                let p = ode_sys::dBodyGetQuaternion(self.raw);
+                [*p, *p.add(1), *p.add(2), *p.add(3)]
+            };
+            quat_from_ode(q)
+        }
+
+        /// World-frame linear velocity, m/s.
+        pub fn linear_velocity(&self) -> [f64; 3] {
+            // SAFETY: `raw` is a live body.
+            read3(unsafe { ode_sys::dBodyGetLinearVel(self.raw) })
+        }
+
+        /// World-frame angular velocity, rad/s.
+        pub fn angular_velocity(&self) -> [f64; 3] {
+            // SAFETY: `raw` is a live body.
+            read3(unsafe { ode_sys::dBodyGetAngularVel(self.raw) })
+        }
+
+        /// False while ODE's auto-disable has put the body to sleep.
+        pub fn is_enabled(&self) -> bool {
+            // SAFETY: `raw` is a live body.
+            unsafe { ode_sys::dBodyIsEnabled(self.raw) != 0 }
+        }
+    };
+}
+
+impl<'w> Body<'w> {
+    pub(crate) fn new(raw: dBodyID) -> Self {
+        Body {
+            raw,
+            _world: PhantomData,
+        }
+    }
+
+    body_getters!();
+}
+
+impl<'w> BodyMut<'w> {
+    pub(crate) fn new(raw: dBodyID) -> Self {
+        BodyMut {
+            raw,
+            _world: PhantomData,
+        }
+    }
+
+    body_getters!();
+
+    /// Moves the body (and its geoms) without touching its velocities.
+    pub fn set_position(&mut self, p: [f64; 3]) -> Result<(), OdeError> {
+        check_finite3("position", p)?;
+        // SAFETY: `raw` is a live body; the values are finite.
+        unsafe { ode_sys::dBodySetPosition(self.raw, p[0], p[1], p[2]) };
+        Ok(())
+    }
+
+    /// Sets the orientation from a quaternion `[x, y, z, w]` (normalised).
+    pub fn set_orientation(&mut self, q: [f64; 4]) -> Result<(), OdeError> {
+        let q = quat_to_ode(q)?;
+        // SAFETY: `raw` is a live body; `q` is a finite unit quaternion in
+        // ODE's order, 4 doubles as dBodySetQuaternion reads.
+        unsafe { ode_sys::dBodySetQuaternion(self.raw, q.as_ptr()) };
+        Ok(())
+    }
+
+    pub fn set_linear_velocity(&mut self, v: [f64; 3]) -> Result<(), OdeError> {
+        check_finite3("linear velocity", v)?;
+        // SAFETY: `raw` is a live body; the values are finite.
+        unsafe { ode_sys::dBodySetLinearVel(self.raw, v[0], v[1], v[2]) };
+        Ok(())
+    }
+
+    pub fn set_angular_velocity(&mut self, w: [f64; 3]) -> Result<(), OdeError> {
+        check_finite3("angular velocity", w)?;
+        // SAFETY: `raw` is a live body; the values are finite.
+        unsafe { ode_sys::dBodySetAngularVel(self.raw, w[0], w[1], w[2]) };
+        Ok(())
+    }
+
+    /// Wakes the body and restarts its auto-disable idle countdown.
+    pub fn enable(&mut self) {
+        // SAFETY: `raw` is a live body.
+        unsafe { ode_sys::dBodyEnable(self.raw) };
+    }
+
+    /// Puts the body's motion state back to what a freshly created body has:
+    /// zero velocities, forces and torques, awake, with an empty
+    /// auto-disable sample buffer. Pose is left alone. Needed for resets that
+    /// must reproduce a fresh world bit for bit.
+    pub fn reset_dynamics(&mut self) {
+        // SAFETY: `raw` is a live body; re-setting the sample count to its
+        // current (positive, validated at creation) value only reallocates
+        // and clears the body's own sample buffers.
+        unsafe {
+            ode_sys::dBodySetLinearVel(self.raw, 0.0, 0.0, 0.0);
+            ode_sys::dBodySetAngularVel(self.raw, 0.0, 0.0, 0.0);
+            ode_sys::dBodySetForce(self.raw, 0.0, 0.0, 0.0);
+            ode_sys::dBodySetTorque(self.raw, 0.0, 0.0, 0.0);
+            let samples = ode_sys::dBodyGetAutoDisableAverageSamplesCount(self.raw);
+            ode_sys::dBodySetAutoDisableAverageSamplesCount(self.raw, samples.max(0) as u32);
+            ode_sys::dBodyEnable(self.raw);
+        }
+    }
+}

@@ -1,0 +1,495 @@
+//! Scene files: the world as data (TOML, see `docs/world.md`).
+//!
+//! The thesis's scenes are embedded (`one_block`, the default, and
+//! `two_blocks`); [`Scene::load`] accepts either such a name or a path.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+/// Ids the learners key their tables by (`features.md`): these names must
+/// carry exactly these ids, and no other body may use them.
+pub const KNOWN_IDS: [(&str, u32); 3] = [("actuator", 8), ("blockA", 15), ("blockB", 27)];
+
+/// Name of the body the actuator commands drive.
+pub const ACTUATOR: &str = "actuator";
+
+/// Substring that marks a non-physical ghost pose (`protocol.md` §3).
+pub const GHOST_MARKER: &str = "Shadow";
+
+const BUILTINS: [(&str, &str); 2] = [
+    ("one_block", include_str!("../scenes/one_block.toml")),
+    ("two_blocks", include_str!("../scenes/two_blocks.toml")),
+];
+
+// Plausible ranges for a table-top world (see `within`).
+const MAX_ACCELERATION: f64 = 1e3;
+const MIN_SIZE: f64 = 1e-4;
+const MAX_SIZE: f64 = 1e2;
+const MIN_MASS: f64 = 1e-6;
+const MAX_MASS: f64 = 1e6;
+const MIN_INERTIA: f64 = 1e-12;
+const MAX_INERTIA: f64 = 1e6;
+const MIN_POSITIVE: f64 = f64::MIN_POSITIVE;
+const MAX_STIFFNESS: f64 = 1e20;
+
+/// The default scene of every command.
+pub const DEFAULT_SCENE: &str = "one_block";
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("unknown built-in scene `{0}` (built-ins: one_block, two_blocks)")]
+    UnknownBuiltin(String),
+    #[error("cannot read scene file {}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("invalid scene TOML: {0}")]
+    Parse(#[from] toml::de::Error),
+    #[error("invalid scene: `{field}` {problem}")]
+    Invalid { field: String, problem: String },
+}
+
+fn invalid(field: impl Into<String>, problem: impl Into<String>) -> SceneError {
+    SceneError::Invalid {
+        field: field.into(),
+        problem: problem.into(),
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub name: String,
+    /// World states per simulated second; must divide 1000.
+    #[serde(default = "default_publish_rate")]
+    pub publish_rate_hz: u32,
+    #[serde(default)]
+    pub physics: Physics,
+    #[serde(default)]
+    pub ground: Ground,
+    #[serde(default)]
+    pub drive: Drive,
+    /// Dynamic bodies, in the order they are published.
+    #[serde(rename = "body")]
+    pub bodies: Vec<BodySpec>,
+}
+
+fn default_publish_rate() -> u32 {
+    100
+}
+
+/// World-level solver settings (Gazebo 2.x defaults, `world.md` §2).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Physics {
+    pub gravity: [f64; 3],
+    /// Must be 0.001 s: publish intervals are counted in 1 ms steps.
+    pub step_size: f64,
+    pub quickstep_iterations: u32,
+    pub sor_w: f64,
+    pub erp: f64,
+    pub cfm: f64,
+    pub contact_max_correcting_vel: f64,
+    pub contact_surface_layer: f64,
+    pub linear_damping: f64,
+    pub angular_damping: f64,
+    /// Contact points per colliding geom pair.
+    pub max_contacts: u32,
+    pub auto_disable: AutoDisable,
+}
+
+impl Default for Physics {
+    fn default() -> Self {
+        let g = ode::StepParams::gazebo();
+        Physics {
+            gravity: g.gravity,
+            step_size: g.step_size,
+            quickstep_iterations: g.quickstep_iterations,
+            sor_w: g.sor_w,
+            erp: g.erp,
+            cfm: g.cfm,
+            contact_max_correcting_vel: g.contact_max_correcting_vel,
+            contact_surface_layer: g.contact_surface_layer,
+            linear_damping: g.linear_damping,
+            angular_damping: g.angular_damping,
+            max_contacts: g.max_contacts_per_pair as u32,
+            auto_disable: AutoDisable::default(),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct AutoDisable {
+    pub enabled: bool,
+    pub idle_time: f64,
+    pub idle_steps: u32,
+    pub linear_threshold: f64,
+    pub angular_threshold: f64,
+}
+
+impl Default for AutoDisable {
+    fn default() -> Self {
+        let a = ode::StepParams::gazebo().auto_disable;
+        AutoDisable {
+            enabled: a.enabled,
+            idle_time: a.idle_time,
+            idle_steps: a.idle_steps,
+            linear_threshold: a.linear_threshold,
+            angular_threshold: a.angular_threshold,
+        }
+    }
+}
+
+/// The static ground plane z = 0 (stock Gazebo surface).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Ground {
+    pub mu1: f64,
+    pub mu2: f64,
+    pub kp: f64,
+    pub kd: f64,
+}
+
+impl Default for Ground {
+    fn default() -> Self {
+        Ground {
+            mu1: 100.0,
+            mu2: 50.0,
+            kp: 1e12,
+            kd: 1.0,
+        }
+    }
+}
+
+/// How the actuator is driven every step (`world.md` §5).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Drive {
+    /// Height the actuator is held at while moving, m.
+    pub z_clamp: f64,
+    /// Centre of the movement bound, m.
+    pub bound_centre: [f64; 3],
+    /// Radius of the movement bound, m.
+    pub bound_radius: f64,
+    /// Commanded velocities are scaled down to this norm, m/s.
+    pub max_speed: f64,
+}
+
+impl Default for Drive {
+    fn default() -> Self {
+        Drive {
+            z_clamp: 0.03,
+            bound_centre: [0.0, 0.0, 1.0],
+            bound_radius: 2.5,
+            max_speed: 0.5,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    pub name: String,
+    pub id: u32,
+    pub shape: ShapeSpec,
+    /// kg.
+    pub mass: f64,
+    /// Diagonal of the body-frame inertia tensor about the centre, kg·m².
+    pub inertia: [f64; 3],
+    pub mu1: f64,
+    pub mu2: f64,
+    #[serde(default = "yes")]
+    pub gravity: bool,
+    pub start: StartPose,
+    /// Contact stiffness, N/m.
+    #[serde(default = "default_kp")]
+    pub kp: f64,
+    /// Contact damping, N·s/m.
+    #[serde(default = "default_kd")]
+    pub kd: f64,
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_kp() -> f64 {
+    1e12
+}
+fn default_kd() -> f64 {
+    1.0
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum ShapeSpec {
+    Sphere {
+        radius: f64,
+    },
+    /// Full edge lengths along x, y, z.
+    Box {
+        size: [f64; 3],
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartPose {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+    /// Rotation about +z, rad.
+    #[serde(default)]
+    pub yaw: f64,
+}
+
+impl StartPose {
+    pub fn position(&self) -> [f64; 3] {
+        [self.x, self.y, self.z]
+    }
+
+    /// `[x, y, z, w]`.
+    pub fn orientation(&self) -> [f64; 4] {
+        let h = self.yaw / 2.0;
+        [0.0, 0.0, h.sin(), h.cos()]
+    }
+}
+
+impl Scene {
+    /// The names of the embedded scenes.
+    pub fn builtin_names() -> impl Iterator<Item = &'static str> {
+        BUILTINS.iter().map(|(name, _)| *name)
+    }
+
+    /// One of the embedded scenes (`one_block`, `two_blocks`).
+    pub fn builtin(name: &str) -> Result<Scene, SceneError> {
+        let (_, text) = BUILTINS
+            .iter()
+            .find(|(n, _)| *n == name)
+            .ok_or_else(|| SceneError::UnknownBuiltin(name.to_owned()))?;
+        Scene::from_toml_str(text)
+    }
+
+    /// A built-in scene by name, otherwise a TOML file at that path.
+    pub fn load(name_or_path: &str) -> Result<Scene, SceneError> {
+        if BUILTINS.iter().any(|(n, _)| *n == name_or_path) {
+            return Scene::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() && !name_or_path.contains(['/', '.']) {
+            return Err(SceneError::UnknownBuiltin(name_or_path.to_owned()));
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Scene::from_toml_str(&text)
+    }
+
+    /// Parses and validates a scene.
+    pub fn from_toml_str(text: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text)?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    pub fn to_toml_string(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
+    }
+
+    /// Index of the body named `name`.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// The solver settings in the `ode` crate's form.
+    pub fn step_params(&self) -> ode::StepParams {
+        let p = &self.physics;
+        let a = &p.auto_disable;
+        ode::StepParams {
+            step_size: p.step_size,
+            gravity: p.gravity,
+            quickstep_iterations: p.quickstep_iterations,
+            sor_w: p.sor_w,
+            erp: p.erp,
+            cfm: p.cfm,
+            contact_max_correcting_vel: p.contact_max_correcting_vel,
+            contact_surface_layer: p.contact_surface_layer,
+            linear_damping: p.linear_damping,
+            angular_damping: p.angular_damping,
+            max_contacts_per_pair: p.max_contacts as usize,
+            auto_disable: ode::AutoDisable {
+                enabled: a.enabled,
+                linear_threshold: a.linear_threshold,
+                angular_threshold: a.angular_threshold,
+                idle_time: a.idle_time,
+                idle_steps: a.idle_steps,
+                average_samples: 1,
+            },
+        }
+    }
+
+    /// Checks everything a world needs beyond the file's syntax.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        if self.name.trim().is_empty() {
+            return Err(invalid("name", "must not be empty"));
+        }
+        if self.publish_rate_hz == 0 || 1000 % self.publish_rate_hz != 0 {
+            return Err(invalid(
+                "publish_rate_hz",
+                format!("must divide 1000, got {}", self.publish_rate_hz),
+            ));
+        }
+        if self.physics.step_size != 0.001 {
+            return Err(invalid(
+                "physics.step_size",
+                format!(
+                    "must be 0.001 (publish intervals count 1 ms steps), got {}",
+                    self.physics.step_size
+                ),
+            ));
+        }
+        self.step_params()
+            .validate()
+            .map_err(|e| invalid("physics", e.to_string()))?;
+        for g in self.physics.gravity {
+            within("physics.gravity", g, -MAX_ACCELERATION, MAX_ACCELERATION)?;
+        }
+        for (f, v) in [
+            ("ground.mu1", self.ground.mu1),
+            ("ground.mu2", self.ground.mu2),
+        ] {
+            non_negative(f, v)?;
+        }
+        within("ground.kp", self.ground.kp, MIN_POSITIVE, MAX_STIFFNESS)?;
+        non_negative("ground.kd", self.ground.kd)?;
+        let d = &self.drive;
+        finite("drive.z_clamp", d.z_clamp)?;
+        for c in d.bound_centre {
+            finite("drive.bound_centre", c)?;
+        }
+        positive("drive.bound_radius", d.bound_radius)?;
+        positive("drive.max_speed", d.max_speed)?;
+        if self.bodies.iter().filter(|b| b.name == ACTUATOR).count() != 1 {
+            return Err(invalid(
+                "body",
+                format!("exactly one body must be named `{ACTUATOR}`"),
+            ));
+        }
+        for (i, b) in self.bodies.iter().enumerate() {
+            self.validate_body(i, b)?;
+        }
+        Ok(())
+    }
+
+    fn validate_body(&self, i: usize, b: &BodySpec) -> Result<(), SceneError> {
+        let field = |f: &str| format!("body[{i}].{f}");
+        if b.name.is_empty() || b.name == "ground_plane" || b.name.contains(GHOST_MARKER) {
+            return Err(invalid(
+                field("name"),
+                format!(
+                    "`{}` is reserved (empty, `ground_plane` or containing `{GHOST_MARKER}`)",
+                    b.name
+                ),
+            ));
+        }
+        if self.bodies[..i].iter().any(|o| o.name == b.name) {
+            return Err(invalid(
+                field("name"),
+                format!("`{}` is used twice", b.name),
+            ));
+        }
+        if self.bodies[..i].iter().any(|o| o.id == b.id) {
+            return Err(invalid(field("id"), format!("{} is used twice", b.id)));
+        }
+        for (name, id) in KNOWN_IDS {
+            if (b.name == name) != (b.id == id) {
+                return Err(invalid(
+                    field("id"),
+                    format!(
+                        "`{name}` must have id {id} and no other body may use it (got `{}` with id {})",
+                        b.name, b.id
+                    ),
+                ));
+            }
+        }
+        match b.shape {
+            ShapeSpec::Sphere { radius } => {
+                within(&field("shape.radius"), radius, MIN_SIZE, MAX_SIZE)?
+            }
+            ShapeSpec::Box { size } => {
+                for s in size {
+                    within(&field("shape.size"), s, MIN_SIZE, MAX_SIZE)?;
+                }
+            }
+        }
+        within(&field("mass"), b.mass, MIN_MASS, MAX_MASS)?;
+        for v in b.inertia {
+            within(&field("inertia"), v, MIN_INERTIA, MAX_INERTIA)?;
+        }
+        non_negative(&field("mu1"), b.mu1)?;
+        non_negative(&field("mu2"), b.mu2)?;
+        within(&field("kp"), b.kp, MIN_POSITIVE, MAX_STIFFNESS)?;
+        non_negative(&field("kd"), b.kd)?;
+        for (f, v) in [
+            ("start.x", b.start.x),
+            ("start.y", b.start.y),
+            ("start.z", b.start.z),
+        ] {
+            within(
+                &field(f),
+                v,
+                -crate::world::MAX_POSITION,
+                crate::world::MAX_POSITION,
+            )?;
+        }
+        finite(&field("start.yaw"), b.start.yaw)?;
+        Ok(())
+    }
+}
+
+/// Checks that `v` lies in `[lo, hi]`. Scene values far outside what a
+/// table-top world can mean are refused: ODE aborts the process (it does not
+/// return an error) when such values make its state overflow.
+fn within(field: &str, v: f64, lo: f64, hi: f64) -> Result<(), SceneError> {
+    finite(field, v)?;
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must lie in [{lo:e}, {hi:e}], got {v}"),
+        ))
+    }
+}
+
+fn finite(field: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must be a finite number, got {v}")))
+    }
+}
+
+fn positive(field: &str, v: f64) -> Result<(), SceneError> {
+    finite(field, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(
+            field,
+            format!("must be greater than zero, got {v}"),
+        ))
+    }
+}
+
+fn non_negative(field: &str, v: f64) -> Result<(), SceneError> {
+    finite(field, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("must not be negative, got {v}")))
+    }
+}

@@ -1,0 +1,146 @@
+//! The thesis's calibration sweep (`world.md` §10): the push action from 21
+//! start positions along the start line, one run each.
+
+use serde::{Deserialize, Serialize};
+
+use crate::scene::{Scene, ACTUATOR};
+use crate::world::{ActuatorMode, Command, CommandError, StepError, World, WorldError};
+
+/// The body whose motion the sweep reports (the blue block).
+pub const BLUE_BLOCK: &str = "blockA";
+
+/// What to run; [`SweepOptions::default`] is the thesis's Push Task test.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepOptions {
+    /// Actuator start positions x₀ on the start line y = 0.
+    pub starts: Vec<f64>,
+    /// Commanded actuator velocity (vx, vy), m/s.
+    pub action: [f64; 2],
+    /// Messages per run.
+    pub messages: u32,
+    /// Publish rate, Hz.
+    pub rate_hz: u32,
+}
+
+impl SweepOptions {
+    /// x₀ = −0.35 + 0.035·i, i = 0…20 (`experiments.md`), computed in
+    /// millimetres so that every start is the double nearest its decimal.
+    pub fn thesis_starts() -> Vec<f64> {
+        (0..21).map(|i| f64::from(-350 + 35 * i) / 1000.0).collect()
+    }
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions {
+            starts: SweepOptions::thesis_starts(),
+            action: [0.0, 0.5],
+            messages: 150,
+            rate_hz: 100,
+        }
+    }
+}
+
+/// Outcome of one run, for the blue block (metres, radians).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SweepRow {
+    pub x0: f64,
+    /// 1-based number of the first message whose interval (the steps that
+    /// produced it) contained a step in which the collider reported the
+    /// actuator touching the blue block; `None` if it never did.
+    pub first_contact_message: Option<u32>,
+    pub block_x: f64,
+    pub block_y: f64,
+    /// Final yaw in (−π, π].
+    pub block_yaw: f64,
+    /// Planar distance between the block's start and final centre.
+    pub translation: f64,
+    /// Final yaw minus start yaw.
+    pub rotation: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    World(#[from] WorldError),
+    #[error("scene `{0}` has no body named `{BLUE_BLOCK}`")]
+    NoBlueBlock(String),
+    #[error("sweep command refused: {0}")]
+    Command(#[from] CommandError),
+    #[error(transparent)]
+    Step(#[from] StepError),
+}
+
+/// Runs the sweep on a fresh world of `scene`.
+pub fn sweep(scene: &Scene, options: &SweepOptions) -> Result<Vec<SweepRow>, SweepError> {
+    let mut world = World::new(scene)?;
+    sweep_world(&mut world, options)
+}
+
+/// Runs the sweep on an existing world (each run starts with a Reset, so
+/// the world's history does not matter).
+pub fn sweep_world(world: &mut World, options: &SweepOptions) -> Result<Vec<SweepRow>, SweepError> {
+    options
+        .starts
+        .iter()
+        .map(|&x0| run(world, options, x0))
+        .collect()
+}
+
+/// One run: the command sequence of the experiment driver (stop, reset,
+/// place the actuator, push), then `messages` publish intervals.
+pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRow, SweepError> {
+    let blue = world
+        .scene()
+        .body_index(BLUE_BLOCK)
+        .ok_or_else(|| SweepError::NoBlueBlock(world.scene().name.clone()))?;
+    let start = world.scene().bodies[blue].start;
+    let z = world.scene().drive.z_clamp;
+    for cmd in [
+        Command::SetPublishRate(options.rate_hz),
+        Command::Actuator {
+            mode: ActuatorMode::Move,
+            velocity: [0.0; 3],
+        },
+        Command::Reset,
+        Command::Unpause,
+        Command::SetPose {
+            name: ACTUATOR.into(),
+            position: [x0, 0.0, z],
+            orientation: [0.0, 0.0, 0.0, 1.0],
+        },
+        Command::Actuator {
+            mode: ActuatorMode::Move,
+            velocity: [options.action[0], options.action[1], 0.0],
+        },
+    ] {
+        world.apply(cmd)?;
+    }
+    let mut message = 0;
+    let mut first_contact = None;
+    let mut contact_in_interval = false;
+    let mut last = world.snapshot();
+    while message < options.messages {
+        let published = world.step()?;
+        contact_in_interval |= world.touched_last_step(ACTUATOR, BLUE_BLOCK);
+        if let Some(snapshot) = published {
+            message += 1;
+            if contact_in_interval && first_contact.is_none() {
+                first_contact = Some(message);
+            }
+            contact_in_interval = false;
+            last = snapshot;
+        }
+    }
+    let block = &last.bodies[blue];
+    let yaw = block.yaw();
+    Ok(SweepRow {
+        x0,
+        first_contact_message: first_contact,
+        block_x: block.position[0],
+        block_y: block.position[1],
+        block_yaw: yaw,
+        translation: (block.position[0] - start.x).hypot(block.position[1] - start.y),
+        rotation: yaw - start.yaw,
+    })
+}

@@ -1,0 +1,604 @@
+//! The thesis world (`world.md` §2–§7) on the `ode` wrapper.
+
+use ode::{
+    BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::scene::{Scene, ShapeSpec, ACTUATOR, GHOST_MARKER};
+
+/// Steps per simulated second; publish rates must divide it.
+const STEPS_PER_SECOND: u32 = 1000;
+
+/// Positions farther than this from the origin are refused: nothing in a
+/// table-top world lives there, and ODE's collision arithmetic is not meant
+/// for such magnitudes.
+pub const MAX_POSITION: f64 = 1000.0;
+
+/// Distinct ghost names kept at once; a client cannot grow the world's
+/// memory without bound.
+pub const MAX_GHOSTS: usize = 64;
+
+/// The actuator's stored command (`ActuatorCommand.cmd` of the protocol).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum ActuatorMode {
+    #[default]
+    Nothing,
+    Move,
+    Grab,
+    Release,
+}
+
+/// A client command, applied between steps.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Stores the actuator command; with `Move`, `velocity` (m/s, world
+    /// frame) is re-imposed every step until the next command.
+    Actuator {
+        mode: ActuatorMode,
+        velocity: [f64; 3],
+    },
+    Pause,
+    Unpause,
+    /// Every body to its start pose at rest, step counter and time to 0.
+    /// The stored actuator command is kept (`world.md` §6).
+    Reset,
+    /// Sets a body's pose (velocities untouched), or stores a ghost pose for
+    /// names containing `Shadow`.
+    SetPose {
+        name: String,
+        position: [f64; 3],
+        /// `[x, y, z, w]`, normalised on application.
+        orientation: [f64; 4],
+    },
+    /// Publish every `1000 / hz` steps.
+    SetPublishRate(u32),
+}
+
+/// Why a command was refused. The world is unchanged.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    #[error("{field} must be finite, got {value}")]
+    NotFinite { field: &'static str, value: f64 },
+    #[error("{field} component {value} is beyond ±{limit} m")]
+    TooFar {
+        field: &'static str,
+        value: f64,
+        limit: f64,
+    },
+    #[error("unknown body `{0}`")]
+    UnknownBody(String),
+    #[error("orientation of `{0}` is a quaternion of zero length")]
+    ZeroQuaternion(String),
+    #[error("publish rate {0} Hz does not divide 1000")]
+    BadPublishRate(u32),
+    #[error("too many ghost poses (at most {MAX_GHOSTS} names)")]
+    TooManyGhosts,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum WorldError {
+    #[error("scene: {0}")]
+    Scene(#[from] crate::scene::SceneError),
+    #[error("physics engine: {0}")]
+    Ode(#[from] OdeError),
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StepError {
+    #[error(
+        "physics blew up at step {step}: `{body}` reached a non-finite state; the world was reset"
+    )]
+    Diverged { step: u64, body: String },
+    #[error("physics engine: {0}")]
+    Ode(#[from] OdeError),
+}
+
+/// One body as published (`protocol.md` ModelState).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BodyState {
+    pub name: String,
+    pub id: u32,
+    pub is_static: bool,
+    pub position: [f64; 3],
+    /// Unit quaternion `[x, y, z, w]`.
+    pub orientation: [f64; 4],
+    /// World frame, m/s.
+    pub lin_vel: [f64; 3],
+    /// World frame, rad/s.
+    pub ang_vel: [f64; 3],
+}
+
+impl BodyState {
+    /// Rotation about +z in (−π, π], from the orientation quaternion.
+    pub fn yaw(&self) -> f64 {
+        let [x, y, z, w] = self.orientation;
+        (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+    }
+}
+
+/// The world's state at a step boundary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Snapshot {
+    /// Steps since the last reset.
+    pub step: u64,
+    /// Seconds since the last reset.
+    pub sim_time: f64,
+    /// Dynamic bodies in scene order.
+    pub bodies: Vec<BodyState>,
+    /// `*Shadow` poses set by SetPose, in the order first set; never physical.
+    pub ghosts: Vec<BodyState>,
+}
+
+impl Snapshot {
+    pub fn body(&self, name: &str) -> Option<&BodyState> {
+        self.bodies.iter().find(|b| b.name == name)
+    }
+}
+
+struct SimBody {
+    handle: BodyHandle,
+    name: String,
+    id: u32,
+    start_position: [f64; 3],
+    start_orientation: [f64; 4],
+}
+
+/// Contact surfaces for every pair of materials, indexed by geom tag
+/// (tag 0 is the ground, tag i + 1 the scene's body i).
+struct SurfaceTable {
+    materials: usize,
+    surfaces: Vec<Surface>,
+}
+
+impl SurfaceTable {
+    fn new(scene: &Scene) -> Result<SurfaceTable, OdeError> {
+        // (mu1, mu2, kp, kd) per tag.
+        let mut mats = vec![(
+            scene.ground.mu1,
+            scene.ground.mu2,
+            scene.ground.kp,
+            scene.ground.kd,
+        )];
+        mats.extend(scene.bodies.iter().map(|b| (b.mu1, b.mu2, b.kp, b.kd)));
+        let h = scene.physics.step_size;
+        let mut surfaces = Vec::with_capacity(mats.len() * mats.len());
+        for a in &mats {
+            for b in &mats {
+                surfaces.push(combine(*a, *b, h)?);
+            }
+        }
+        Ok(SurfaceTable {
+            materials: mats.len(),
+            surfaces,
+        })
+    }
+
+    fn get(&self, a: u32, b: u32) -> Option<Surface> {
+        let (a, b) = (a as usize, b as usize);
+        (a < self.materials && b < self.materials).then(|| self.surfaces[a * self.materials + b])
+    }
+}
+
+/// Gazebo 2.x's contact surface for two materials (`world.md` §4): friction
+/// by the minimum rule, softness from springs in series and dampers in
+/// parallel.
+fn combine(a: (f64, f64, f64, f64), b: (f64, f64, f64, f64), h: f64) -> Result<Surface, OdeError> {
+    let kp = 1.0 / (1.0 / a.2 + 1.0 / b.2);
+    let kd = a.3 + b.3;
+    SurfaceParams {
+        mode: ContactMode::APPROX1
+            | ContactMode::MU2
+            | ContactMode::SOFT_ERP
+            | ContactMode::SOFT_CFM
+            | ContactMode::BOUNCE
+            | ContactMode::SLIP1
+            | ContactMode::SLIP2,
+        mu: a.0.min(b.0),
+        mu2: a.1.min(b.1),
+        bounce: 0.0,
+        bounce_vel: 0.0,
+        soft_erp: h * kp / (h * kp + kd),
+        soft_cfm: 1.0 / (h * kp + kd),
+        slip1: 0.0,
+        slip2: 0.0,
+    }
+    .check()
+}
+
+/// The simulated thesis world: bodies from a [`Scene`], the actuator drive,
+/// commands, ghosts and publishing.
+pub struct World {
+    scene: Scene,
+    ode: ode::World,
+    bodies: Vec<SimBody>,
+    actuator: usize,
+    surfaces: SurfaceTable,
+    mode: ActuatorMode,
+    direction: [f64; 3],
+    paused: bool,
+    step_count: u64,
+    publish_every: u32,
+    ghosts: Vec<BodyState>,
+    /// Tag pairs (smaller first) the collider reported touching in the last
+    /// step.
+    touching: Vec<(u32, u32)>,
+}
+
+impl World {
+    /// Builds the world of `scene` with the top-level simple space the thesis
+    /// world needs.
+    pub fn new(scene: &Scene) -> Result<World, WorldError> {
+        World::with_space(scene, SpaceKind::Simple)
+    }
+
+    /// Like [`World::new`] with a chosen top-level space. Only the libode 0.16
+    /// hash-space regression test wants anything but [`SpaceKind::Simple`].
+    pub fn with_space(scene: &Scene, space: SpaceKind) -> Result<World, WorldError> {
+        scene.validate()?;
+        let mut ode = ode::World::new(scene.step_params(), space)?;
+        ode.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0).tag(0))?;
+        let mut bodies = Vec::with_capacity(scene.bodies.len());
+        for (i, spec) in scene.bodies.iter().enumerate() {
+            let handle = ode.insert_body(
+                BodyBuilder::new(spec.mass, spec.inertia)
+                    .position(spec.start.position())
+                    .orientation(spec.start.orientation())
+                    .gravity(spec.gravity),
+            )?;
+            let geom = match spec.shape {
+                ShapeSpec::Sphere { radius } => GeomBuilder::sphere(radius),
+                ShapeSpec::Box { size } => GeomBuilder::cuboid(size),
+            };
+            ode.insert_geom(geom.attached_to(handle).tag(i as u32 + 1))?;
+            bodies.push(SimBody {
+                handle,
+                name: spec.name.clone(),
+                id: spec.id,
+                start_position: spec.start.position(),
+                start_orientation: spec.start.orientation(),
+            });
+        }
+        let actuator =
+            scene
+                .body_index(ACTUATOR)
+                .ok_or_else(|| crate::scene::SceneError::Invalid {
+                    field: "body".into(),
+                    problem: format!("no body named `{ACTUATOR}`"),
+                })?;
+        let mut world = World {
+            surfaces: SurfaceTable::new(scene)?,
+            scene: scene.clone(),
+            ode,
+            bodies,
+            actuator,
+            mode: ActuatorMode::Nothing,
+            direction: [0.0; 3],
+            paused: false,
+            step_count: 0,
+            publish_every: STEPS_PER_SECOND / scene.publish_rate_hz,
+            ghosts: Vec::new(),
+            touching: Vec::new(),
+        };
+        // The same routine as every Reset, so that a fresh world and a reset
+        // one agree bit for bit (including ODE's internal geom order).
+        world.reset()?;
+        Ok(world)
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    pub fn is_paused(&self) -> bool {
+        self.paused
+    }
+
+    /// Physics steps since the last reset.
+    pub fn step_count(&self) -> u64 {
+        self.step_count
+    }
+
+    /// Simulated seconds since the last reset.
+    pub fn sim_time(&self) -> f64 {
+        self.step_count as f64 * self.scene.physics.step_size
+    }
+
+    /// Steps between two published states (1000 / rate).
+    pub fn publish_interval_steps(&self) -> u32 {
+        self.publish_every
+    }
+
+    /// The stored actuator command and velocity (after the speed clamp).
+    pub fn actuator_command(&self) -> (ActuatorMode, [f64; 3]) {
+        (self.mode, self.direction)
+    }
+
+    /// Whether the collider reported the bodies named `a` and `b` touching
+    /// in the last step (`ground_plane` names the ground).
+    pub fn touched_last_step(&self, a: &str, b: &str) -> bool {
+        let (Some(ta), Some(tb)) = (self.tag_of(a), self.tag_of(b)) else {
+            return false;
+        };
+        let key = (ta.min(tb), ta.max(tb));
+        self.touching.contains(&key)
+    }
+
+    fn tag_of(&self, name: &str) -> Option<u32> {
+        if name == "ground_plane" {
+            return Some(0);
+        }
+        self.scene.body_index(name).map(|i| i as u32 + 1)
+    }
+
+    /// Validates `cmd` completely, then applies it. On error nothing changed.
+    pub fn apply(&mut self, cmd: Command) -> Result<(), CommandError> {
+        match cmd {
+            Command::Actuator { mode, velocity } => {
+                check_finite("velocity", &velocity)?;
+                self.mode = mode;
+                self.direction = clamp_norm(velocity, self.scene.drive.max_speed);
+            }
+            Command::Pause => self.paused = true,
+            Command::Unpause => self.paused = false,
+            Command::Reset => {
+                // Only fails if the engine cannot set up a thread, which
+                // World::new already proved it can on this thread.
+                if let Err(e) = self.reset() {
+                    tracing::error!("reset failed: {e}");
+                }
+            }
+            Command::SetPose {
+                name,
+                position,
+                orientation,
+            } => self.set_pose(name, position, orientation)?,
+            Command::SetPublishRate(hz) => {
+                if hz == 0 || STEPS_PER_SECOND % hz != 0 {
+                    return Err(CommandError::BadPublishRate(hz));
+                }
+                self.publish_every = STEPS_PER_SECOND / hz;
+            }
+        }
+        Ok(())
+    }
+
+    fn set_pose(
+        &mut self,
+        name: String,
+        position: [f64; 3],
+        orientation: [f64; 4],
+    ) -> Result<(), CommandError> {
+        check_finite("position", &position)?;
+        check_finite("orientation", &orientation)?;
+        if let Some(&value) = position.iter().find(|v| v.abs() > MAX_POSITION) {
+            return Err(CommandError::TooFar {
+                field: "position",
+                value,
+                limit: MAX_POSITION,
+            });
+        }
+        let Some(unit) = normalise(orientation) else {
+            return Err(CommandError::ZeroQuaternion(name));
+        };
+        if name.contains(GHOST_MARKER) {
+            return self.set_ghost(name, position, unit);
+        }
+        let Some(i) = self.scene.body_index(&name) else {
+            return Err(CommandError::UnknownBody(name));
+        };
+        let handle = self.bodies[i].handle;
+        let set = self.ode.body_mut(handle).and_then(|mut b| {
+            b.set_position(position)?;
+            b.set_orientation(unit)?;
+            // A sleeping body moved into the air would otherwise hang there.
+            b.enable();
+            Ok(())
+        });
+        // Every value was checked above, so the engine cannot refuse it.
+        if let Err(e) = set {
+            tracing::error!("SetPose `{name}` refused by the engine: {e}");
+        }
+        Ok(())
+    }
+
+    fn set_ghost(
+        &mut self,
+        name: String,
+        position: [f64; 3],
+        orientation: [f64; 4],
+    ) -> Result<(), CommandError> {
+        let id = name
+            .split(GHOST_MARKER)
+            .next()
+            .and_then(|base| self.bodies.iter().find(|b| b.name == base))
+            .map_or(0, |b| b.id);
+        let state = BodyState {
+            name,
+            id,
+            is_static: true,
+            position,
+            orientation,
+            lin_vel: [0.0; 3],
+            ang_vel: [0.0; 3],
+        };
+        if let Some(g) = self.ghosts.iter_mut().find(|g| g.name == state.name) {
+            *g = state;
+        } else if self.ghosts.len() >= MAX_GHOSTS {
+            return Err(CommandError::TooManyGhosts);
+        } else {
+            self.ghosts.push(state);
+        }
+        Ok(())
+    }
+
+    fn reset(&mut self) -> Result<(), OdeError> {
+        for b in &self.bodies {
+            let mut body = self.ode.body_mut(b.handle)?;
+            body.set_position(b.start_position)?;
+            body.set_orientation(b.start_orientation)?;
+            body.reset_dynamics();
+        }
+        // QuickStep's row shuffling draws from this stream: seeding it at
+        // every reset makes runs reproducible (`world.md` §12).
+        self.ode.set_rand_seed(0);
+        self.step_count = 0;
+        self.ghosts.clear();
+        self.touching.clear();
+        Ok(())
+    }
+
+    /// One 1 ms physics step (nothing while paused). Returns the snapshot
+    /// when a publish is due: after every N-th step since the last reset.
+    pub fn step(&mut self) -> Result<Option<Snapshot>, StepError> {
+        if self.paused {
+            return Ok(None);
+        }
+        self.drive_actuator()?;
+        let surfaces = &self.surfaces;
+        let touching = &mut self.touching;
+        touching.clear();
+        self.ode.step(|pair| {
+            let (a, b) = (pair.first.tag, pair.second.tag);
+            let key = (a.min(b), a.max(b));
+            if !touching.contains(&key) {
+                touching.push(key);
+            }
+            surfaces.get(a, b)
+        })?;
+        self.step_count += 1;
+        if let Some(bad) = self.bodies.iter().find(|b| {
+            self.ode.body(b.handle).map_or(true, |body| {
+                !(body.position().iter())
+                    .chain(&body.orientation())
+                    .chain(&body.linear_velocity())
+                    .chain(&body.angular_velocity())
+                    .all(|v| v.is_finite())
+            })
+        }) {
+            let err = StepError::Diverged {
+                step: self.step_count,
+                body: bad.name.clone(),
+            };
+            tracing::error!("{err}");
+            self.reset()?;
+            return Err(err);
+        }
+        if self.step_count % u64::from(self.publish_every) == 0 {
+            Ok(Some(self.snapshot()))
+        } else {
+            Ok(None)
+        }
+    }
+
+    /// `world.md` §5, steps 1–3, in that order.
+    fn drive_actuator(&mut self) -> Result<(), OdeError> {
+        let drive = &self.scene.drive;
+        let mut body = self.ode.body_mut(self.bodies[self.actuator].handle)?;
+        // The explicit wake-up keeps auto-disable from freezing the actuator.
+        body.enable();
+        let p = body.position();
+        let ahead: f64 = (0..3)
+            .map(|k| (p[k] + self.direction[k] - drive.bound_centre[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if ahead > drive.bound_radius {
+            self.direction = [0.0; 3];
+            body.set_linear_velocity([0.0; 3])?;
+        }
+        body.set_angular_velocity([0.0; 3])?;
+        if self.mode == ActuatorMode::Move {
+            body.set_linear_velocity(self.direction)?;
+            body.set_position([p[0], p[1], drive.z_clamp])?;
+        }
+        Ok(())
+    }
+
+    /// The current state of every dynamic body and ghost.
+    pub fn snapshot(&self) -> Snapshot {
+        let bodies = self
+            .bodies
+            .iter()
+            .filter_map(|b| {
+                let body = self.ode.body(b.handle).ok()?;
+                Some(BodyState {
+                    name: b.name.clone(),
+                    id: b.id,
+                    is_static: false,
+                    position: body.position(),
+                    orientation: body.orientation(),
+                    lin_vel: body.linear_velocity(),
+                    ang_vel: body.angular_velocity(),
+                })
+            })
+            .collect();
+        Snapshot {
+            step: self.step_count,
+            sim_time: self.sim_time(),
+            bodies,
+            ghosts: self.ghosts.clone(),
+        }
+    }
+}
+
+fn check_finite(field: &'static str, values: &[f64]) -> Result<(), CommandError> {
+    match values.iter().find(|v| !v.is_finite()) {
+        Some(&value) => Err(CommandError::NotFinite { field, value }),
+        None => Ok(()),
+    }
+}
+
+/// Scales `v` down to norm `max` if it is longer (without overflowing for
+/// huge components).
+fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
+    let largest = v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return v;
+    }
+    let norm = largest * v.iter().map(|x| (x / largest).powi(2)).sum::<f64>().sqrt();
+    if norm > max {
+        v.map(|x| x / norm * max)
+    } else {
+        v
+    }
+}
+
+/// Unit quaternion, or `None` for a zero one.
+fn normalise(q: [f64; 4]) -> Option<[f64; 4]> {
+    let largest = q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return None;
+    }
+    let scaled = q.map(|x| x / largest);
+    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Some(scaled.map(|x| x / norm))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speed_clamp_keeps_direction() {
+        assert_eq!(clamp_norm([0.0, 0.5, 0.0], 0.5), [0.0, 0.5, 0.0]);
+        assert_eq!(clamp_norm([0.0, 0.0, 0.0], 0.5), [0.0; 3]);
+        let v = clamp_norm([3.0, 4.0, 0.0], 0.5);
+        assert!((v[0] - 0.3).abs() < 1e-15 && (v[1] - 0.4).abs() < 1e-15);
+        let huge = clamp_norm([1e300, 1e300, 0.0], 0.5);
+        assert!((huge[0] - 0.5 / 2f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn gazebo_softness_for_two_default_surfaces() {
+        let s = combine((0.9, 0.9, 1e12, 1.0), (0.01, 0.02, 1e12, 1.0), 0.001).unwrap();
+        let p = s.params();
+        assert_eq!((p.mu, p.mu2), (0.01, 0.02));
+        let (kp, kd) = (5e11, 2.0);
+        assert_eq!(p.soft_erp, 0.001 * kp / (0.001 * kp + kd));
+        assert_eq!(p.soft_cfm, 1.0 / (0.001 * kp + kd));
+        assert_eq!(
+            p.mode.bits(),
+            0x7000 | 0x1 | 0x4 | 0x8 | 0x10 | 0x100 | 0x200
+        );
+    }
+}
