@@ -13,8 +13,7 @@ use learner::eval::{test_on_run, test_positions, train_on_run, CurveSummary, Pos
 use learner::{stat_keys, Frame, InteractionModel, Model, Observation, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::scene::ACTUATOR;
-use sim_plugin::world::ActuatorMode;
+use sim_plugin::push_run::record_push_run;
 use sim_plugin::{Command, Scene, Snapshot, World};
 
 const FOLDS: u64 = 5;
@@ -38,50 +37,14 @@ fn frame(snapshot: &Snapshot) -> Frame {
     }
 }
 
-fn next_message(world: &mut World) -> Snapshot {
-    loop {
-        if let Some(s) = world.step().expect("the thesis world steps") {
-            return s;
-        }
-    }
-}
-
-fn command(world: &mut World, cmd: Command) {
-    world.apply(cmd).expect("the driver's commands are valid");
-}
-
-fn velocity(v: [f64; 2]) -> Command {
-    Command::Actuator {
-        mode: ActuatorMode::Move,
-        velocity: [v[0], v[1], 0.0],
-    }
-}
-
-/// One push-task run as the driver sees it (`experiments.md` §2, §3): stop
-/// and reset (the next message is dropped), place the actuator at (x0, 0)
-/// (the next message is dropped again), then message 1 with everything at
-/// rest; the push is commanded after each processed message, so it is in
-/// force from message 2 on. Lock-step: no latency.
+/// One push-task run of the in-process world: 150 processed messages and
+/// the 151st that ends it.
 fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
-    command(world, velocity([0.0, 0.0]));
-    command(world, Command::Reset);
-    next_message(world);
-    let z = world.scene().drive.z_clamp;
-    command(
-        world,
-        Command::SetPose {
-            name: ACTUATOR.into(),
-            position: [x0, 0.0, z],
-            orientation: [0.0, 0.0, 0.0, 1.0],
-        },
-    );
-    next_message(world);
-    let mut frames = Vec::with_capacity(RUN_MESSAGES);
-    for _ in 0..RUN_MESSAGES {
-        frames.push(frame(&next_message(world)));
-        command(world, velocity([PUSH_ACTION.vx, PUSH_ACTION.vy]));
-    }
-    frames
+    record_push_run(world, x0, [PUSH_ACTION.vx, PUSH_ACTION.vy], RUN_MESSAGES)
+        .expect("the thesis world runs the push task")
+        .iter()
+        .map(frame)
+        .collect()
 }
 
 struct FoldResult {
@@ -94,7 +57,9 @@ struct FoldResult {
 fn push_task_after_ten_random_training_runs() {
     let scene = Scene::builtin("one_block").expect("embedded scene parses");
     let mut world = World::new(&scene).expect("the thesis world builds");
-    command(&mut world, Command::SetPublishRate(PUBLISH_HZ));
+    world
+        .apply(Command::SetPublishRate(PUBLISH_HZ))
+        .expect("100 Hz divides 1000");
 
     // The world is deterministic in lock-step, so every fold sees the same
     // test runs.
