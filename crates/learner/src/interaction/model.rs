@@ -439,6 +439,10 @@ impl TryFrom<InteractionModelState> for InteractionModel {
         {
             return Err(Bad("selector dimensions or kind"));
         }
+        // The AITM never deletes its last two nodes: trained ⇔ non-empty.
+        if s.selector_trained == s.selector.is_empty() {
+            return Err(Bad("selector trained flag contradicts its nodes"));
+        }
         let valid_label = |v: f64| v.fract() == 0.0 && v >= 0.0 && v < s.acs.len() as f64;
         if !s
             .selector

@@ -882,6 +882,10 @@ fn inconsistent_snapshots_are_rejected() {
         "cannot plan for",
     );
     reject(
+        &|v| v["selector_trained"] = serde_json::json!(false),
+        "trained flag",
+    );
+    reject(
         &|v| v["config"]["eps_noise"] = serde_json::json!(-1.0),
         "eps_noise",
     );
@@ -897,4 +901,7 @@ fn a_fresh_model_is_untrained() {
     assert!(m.current_states().is_empty() && m.target().is_none());
     assert_eq!(m.selector().input_dim(), 10);
     assert!(m.selector().config().is_classifier());
+    let json = serde_json::to_string(&m).expect("serialise");
+    let back: InteractionModel = serde_json::from_str(&json).expect("an untrained snapshot");
+    assert_eq!(back, m);
 }
