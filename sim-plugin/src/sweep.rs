@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, ACTUATOR};
-use crate::world::{ActuatorMode, Command, CommandError, Snapshot, StepError, World, WorldError};
+use crate::world::{ActuatorMode, Command, CommandError, StepError, World, WorldError};
 
 /// The body whose motion the sweep reports (the blue block).
 pub const BLUE_BLOCK: &str = "blockA";
@@ -143,56 +143,4 @@ pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRo
         translation: (block.position[0] - start.x).hypot(block.position[1] - start.y),
         rotation: yaw - start.yaw,
     })
-}
-
-/// The messages of one push-task run as the experiment driver receives them
-/// in lock-step (`experiments.md` §2, §2.1), for trace-driven learner tests
-/// and benchmarks: `reset_world` (stop, Reset, one dropped message),
-/// `start_run` (SetPose of the actuator at (x0, 0), one dropped message),
-/// then message 1 with the actuator still at rest and `messages − 1` more
-/// under `action`, which the driver sends after handling message 1 (a
-/// constant action stays in force). Returns the `messages` snapshots.
-pub fn driver_run(
-    world: &mut World,
-    x0: f64,
-    action: [f64; 2],
-    messages: usize,
-) -> Result<Vec<Snapshot>, SweepError> {
-    let z = world.scene().drive.z_clamp;
-    let stop = Command::Actuator {
-        mode: ActuatorMode::Move,
-        velocity: [0.0; 3],
-    };
-    for cmd in [stop, Command::Reset, Command::Unpause] {
-        world.apply(cmd)?;
-    }
-    next_message(world)?;
-    world.apply(Command::SetPose {
-        name: ACTUATOR.into(),
-        position: [x0, 0.0, z],
-        orientation: [0.0, 0.0, 0.0, 1.0],
-    })?;
-    next_message(world)?;
-    let mut out = Vec::with_capacity(messages);
-    if messages == 0 {
-        return Ok(out);
-    }
-    out.push(next_message(world)?);
-    world.apply(Command::Actuator {
-        mode: ActuatorMode::Move,
-        velocity: [action[0], action[1], 0.0],
-    })?;
-    while out.len() < messages {
-        out.push(next_message(world)?);
-    }
-    Ok(out)
-}
-
-/// Steps until the next publish (a paused world is unpaused by the caller).
-fn next_message(world: &mut World) -> Result<Snapshot, SweepError> {
-    loop {
-        if let Some(s) = world.step()? {
-            return Ok(s);
-        }
-    }
 }

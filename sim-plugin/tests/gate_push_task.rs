@@ -16,7 +16,7 @@ use learner::eval::{
 use learner::{stat_keys, Frame, GateModel, Model, ObjectState, Observation, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::sweep::driver_run;
+use sim_plugin::push_run::record_push_run;
 use sim_plugin::{Command, Scene, Snapshot, World};
 
 const FOLDS: u64 = 5;
@@ -43,7 +43,7 @@ fn frame(s: &Snapshot) -> Frame {
 /// The 151 messages of one push-task run from x0, as the driver meets them.
 fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
     let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
-    driver_run(world, x0, action, MESSAGES_PER_RUN + 1)
+    record_push_run(world, x0, action, MESSAGES_PER_RUN + 1)
         .expect("the push world runs")
         .iter()
         .map(frame)
@@ -151,19 +151,4 @@ fn gate_model_push_task_after_ten_random_training_runs() {
         s.block_ori.mean
     );
     assert!(s.actuator.mean <= 0.005, "actuator {}", s.actuator.mean);
-}
-
-#[test]
-fn a_driver_run_starts_at_rest_and_then_pushes() {
-    let scene = Scene::builtin("one_block").expect("embedded scene");
-    let mut world = World::new(&scene).expect("world");
-    let frames = record_run(&mut world, 0.1);
-    assert_eq!(frames.len(), MESSAGES_PER_RUN + 1);
-    let model = GateModel::default();
-    let y = |k: usize| GateModel::poses(&model.parse(&frames[k]).expect("parses")).actuator;
-    assert_eq!(y(0), ObjectState::new(0.1, 0.0, 0.0));
-    // One message at 0.5 m/s and 100 Hz: 5 mm.
-    assert_eq!(y(1), ObjectState::new(0.1, 0.005, 0.0));
-    // Message 151 is 150 pushes after message 1.
-    assert!((y(MESSAGES_PER_RUN).y - 0.75).abs() < 0.005);
 }

@@ -18,10 +18,10 @@ mod world;
 #[cfg(test)]
 mod tests;
 
+pub use crate::planning::{
+    APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
+};
 pub use model::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
 pub use params::{flags, GateConfig, GateError, GateParams, FLAG_PREDICTION_BOOST};
-pub use planner::{
-    APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, PASS_MAX,
-    PASS_MIN, REACHED,
-};
+pub use planner::{PASS_MAX, PASS_MIN};
 pub use world::GateWorld;

@@ -8,12 +8,12 @@ use nalgebra::Vector2;
 use rand::RngExt;
 
 use super::model::hard_coded_gate;
-use super::planner::{circle, exploration};
 use super::*;
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig, QueryMode};
 use crate::features::{local_change, r3, relative_features};
 use crate::model::{stat_keys, Model};
+use crate::planning::{circle, exploration};
 use crate::types::{
     Action, Frame, ObjectState, Observation, Poses, Target, TargetError, TrackedObject,
     ACTUATOR_ID, BLUE_ID, RED_ID,

@@ -5,7 +5,7 @@
 //! the budget is 20 ms per message (`experiments.md` §6).
 //!
 //! Data: push-task runs recorded from the in-process world
-//! (`sim_plugin::sweep::driver_run`), 30 training runs at seeded random
+//! (`sim_plugin::push_run::record_push_run`), 30 training runs at seeded random
 //! starts (`experiments.md` §3, §5) trained as the driver does
 //! (`learner::eval::train_on_run`), and the 21 test runs.
 //!
@@ -26,7 +26,7 @@ use learner::eval::{self, MESSAGES_PER_RUN, PUSH_ACTION};
 use learner::{Frame, GateModel, GateWorld, Model, Observation};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::sweep::driver_run;
+use sim_plugin::push_run::record_push_run;
 use sim_plugin::{Scene, Snapshot, World};
 
 const TRAINING_RUNS: [usize; 4] = [1, 3, 10, 30];
@@ -48,7 +48,7 @@ fn frame(s: &Snapshot) -> Frame {
 
 fn record(world: &mut World, x0: f64) -> Vec<Frame> {
     let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
-    driver_run(world, x0, action, MESSAGES_PER_RUN + 1)
+    record_push_run(world, x0, action, MESSAGES_PER_RUN + 1)
         .expect("the push world runs")
         .iter()
         .map(frame)
