@@ -35,7 +35,7 @@ pub trait WithModel {
     /// The result.
     type Output;
     /// Runs with `untrained`.
-    fn run<M: learner::Model>(self, untrained: M) -> Self::Output;
+    fn run<M: learner::Model + 'static>(self, untrained: M) -> Self::Output;
 }
 
 impl ModelKind {

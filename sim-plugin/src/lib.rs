@@ -4,8 +4,10 @@
 //!   scenes);
 //! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
 //!   per-step actuator drive, commands, ghosts and publishing;
-//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10.
+//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10;
+//! * [`push_run`]: push-task runs as the experiment driver records them.
 
+pub mod push_run;
 pub mod scene;
 pub mod sweep;
 pub mod world;

@@ -153,7 +153,10 @@ pub fn parse_numbers(text: &str, n: usize) -> Result<Vec<f64>, String> {
     if v.len() == n {
         Ok(v)
     } else {
-        Err(format!("expected {n} comma-separated numbers, got {}", v.len()))
+        Err(format!(
+            "expected {n} comma-separated numbers, got {}",
+            v.len()
+        ))
     }
 }
 
@@ -285,7 +288,7 @@ struct Push<'a> {
 
 impl WithModel for Push<'_> {
     type Output = Result<report::PushReport>;
-    fn run<M: Model>(self, untrained: M) -> Self::Output {
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::push_task(
             untrained,
             self.variant,
@@ -303,7 +306,7 @@ struct Feedback<'a> {
 
 impl WithModel for Feedback<'_> {
     type Output = Result<report::FeedbackReport>;
-    fn run<M: Model>(self, untrained: M) -> Self::Output {
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::constant_feedback(untrained, self.plan)?)
     }
 }
@@ -318,7 +321,7 @@ struct MoveToTarget<'a> {
 
 impl WithModel for MoveToTarget<'_> {
     type Output = Result<report::MttReport>;
-    fn run<M: Model>(self, untrained: M) -> Self::Output {
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::move_to_target(
             untrained,
             self.targets,

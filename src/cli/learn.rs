@@ -111,7 +111,7 @@ struct Daemon<'a> {
 impl<'a> WithModel for Daemon<'a> {
     type Output = std::pin::Pin<Box<dyn std::future::Future<Output = Result<()>> + 'a>>;
 
-    fn run<M: Model>(self, untrained: M) -> Self::Output {
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         let Daemon {
             mut client,
             policy,
@@ -145,10 +145,17 @@ impl<'a> WithModel for Daemon<'a> {
             if matches!(policy, Policy::Target(_)) {
                 println!(
                     "target {}",
-                    if learner.reached() { "reached" } else { "not reached" }
+                    if learner.reached() {
+                        "reached"
+                    } else {
+                        "not reached"
+                    }
                 );
             }
-            println!("model: {}", serde_json::to_string(&learner.model().stats())?);
+            println!(
+                "model: {}",
+                serde_json::to_string(&learner.model().stats())?
+            );
             client.close().await?;
             Ok(())
         })

@@ -8,18 +8,29 @@
 //! * [`aitm`]: the Adapted Instantaneous Topological Map (`aitm.md`), the
 //!   one memory-based regressor/classifier of both learners;
 //! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
+//! * [`gate`]: the object-state model with gating function
+//!   (`gate-model.md`) and its planner (`planning.md` §2);
 //! * [`model`]: the [`Model`] trait both learners implement;
-//! * [`eval`]: the push-task protocol on the learner's side and its metrics.
+//! * [`eval`]: the push-task protocol on the learner's side and its metrics;
+//! * [`interaction`]: the pairwise interaction-state model
+//!   (`interaction-model.md`);
+//! * [`planning`]: the model-independent parts of Move to Target
+//!   (`planning.md` §1, §4, §5).
 
 pub mod aim;
 pub mod aitm;
 pub mod eval;
 pub mod features;
+pub mod gate;
+pub mod interaction;
 pub mod model;
+pub mod planning;
 pub mod types;
 
 pub use aitm::MapStats;
 pub use features::ParseError;
+pub use gate::{GateConfig, GateModel, GateParams, GateWorld};
+pub use interaction::{InteractionConfig, InteractionModel, InteractionParams, InteractionWorld};
 pub use model::{stat_keys, Model, ModelStats};
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,

@@ -168,6 +168,20 @@ pub mod stat_keys {
     pub const AC_PREFIX: &str = "ac/";
     /// Interaction model: number of Abstract Collections.
     pub const AC_COUNT: &str = "ac_count";
+    /// Interaction model: id of the AC with the most nodes (the thesis's
+    /// "AC" columns, `experiments.md` §7.5; ties to the lower id).
+    pub const AC_LARGEST_ID: &str = "ac_largest_id";
+    /// Interaction model: update count of the AC with the most nodes.
+    pub const AC_LARGEST_UPDATES: &str = "ac_largest_updates";
+    /// Interaction model: node count of the AC with the most nodes.
+    pub const AC_LARGEST_NODES: &str = "ac_largest_nodes";
+    /// Interaction model, original analysis script's quirk (§7.5): the
+    /// maximum update count over all ACs.
+    pub const AC_SCRIPT_UPDATES: &str = "ac_script_updates";
+    /// Interaction model, original analysis script's quirk (§7.5): the node
+    /// count of the last AC, in id order, whose update count exceeded the
+    /// running value.
+    pub const AC_SCRIPT_NODES: &str = "ac_script_nodes";
 }
 
 impl ModelStats {

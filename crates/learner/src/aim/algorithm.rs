@@ -79,6 +79,12 @@ impl InverseModel {
         &self.config
     }
 
+    /// The precondition dimension, fixed by the first training sample
+    /// (`None` before it).
+    pub fn precondition_dim(&self) -> Option<usize> {
+        self.precondition_dim
+    }
+
     /// Number of prototypes created so far.
     pub fn prototype_count(&self) -> usize {
         self.prototypes.len()

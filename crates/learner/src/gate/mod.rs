@@ -1,0 +1,27 @@
+//! The object-state model with gating function, "gate model"
+//! (`spec/gate-model.md`), and its Move-to-Target planner (`planning.md` §2,
+//! §4, §5).
+//!
+//! * [`GateModel`]: the [`Model`](crate::Model) implementation — actuator
+//!   forward model, the gate classifier shared by all blocks, per-block
+//!   forward and inverse models;
+//! * [`GateWorld`]: its world state, whose blocks are records with identity
+//!   (`gate-model.md` §4.1);
+//! * [`GateParams`] / [`GateConfig`]: rate-dependent thresholds, prediction
+//!   boost and the hard-coded variants of `gate-model.md` §5.
+
+mod model;
+mod params;
+mod planner;
+mod world;
+
+#[cfg(test)]
+mod tests;
+
+pub use crate::planning::{
+    APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
+};
+pub use model::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
+pub use params::{flags, GateConfig, GateError, GateParams, FLAG_PREDICTION_BOOST};
+pub use planner::{PASS_MAX, PASS_MIN};
+pub use world::GateWorld;

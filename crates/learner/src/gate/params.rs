@@ -1,0 +1,254 @@
+//! Gate model configuration (`gate-model.md` §1, §5; `experiments.md` §1):
+//! unchecked [`GateParams`], validated once into [`GateConfig`].
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::aim::{AimConfig, AimError, AimParams};
+use crate::features::DEFAULT_PREDICTION_BOOST;
+
+/// The boost of configuration flag 64 (`gate-model.md` §5).
+pub const FLAG_PREDICTION_BOOST: f64 = 1.5;
+
+/// Configuration bits of the original (`experiments.md` §1) that concern the
+/// gate model.
+pub mod flags {
+    /// Velocity features from the message: not specified, refused.
+    pub const USE_DYNS: u32 = 1;
+    /// 10 Hz thresholds.
+    pub const LOWFREQ: u32 = 2;
+    /// Driver only (training start range).
+    pub const ALLOWMISSPOSITIONS: u32 = 4;
+    /// Driver only (fixed first training runs).
+    pub const FIXFIRSTTHREETRAININGRUNS: u32 = 8;
+    /// Hard-coded actuator forward model.
+    pub const HARDCODEDACT: u32 = 16;
+    /// Hard-coded gate.
+    pub const HARDCODEDGATE: u32 = 32;
+    /// Prediction boost 1.5.
+    pub const USINGPREDICTIONBOOST: u32 = 64;
+    /// Every bit the original defined.
+    pub const ALL: u32 = 127;
+}
+
+/// Why a gate model configuration or a deserialised gate model was rejected.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum GateError {
+    /// The prediction boost must be finite and positive.
+    #[error("prediction boost must be finite and positive (got {0})")]
+    InvalidBoost(f64),
+    /// The inverse models' thresholds are invalid.
+    #[error("inverse model parameters: {0}")]
+    Aim(#[from] AimError),
+    /// Flag 1 (velocity features) was never used for a result and is not
+    /// specified (`features.md` §8); unknown bits are refused as well.
+    #[error("configuration number {0}: unsupported or unknown bits {1:#x}")]
+    UnsupportedFlags(u32, u32),
+    /// A deserialised model violates an invariant.
+    #[error("inconsistent gate model state: {0}")]
+    InconsistentState(&'static str),
+}
+
+/// Unchecked gate model parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GateParams {
+    /// Thresholds of the per-block inverse models (`inverse-model.md` §1);
+    /// the only rate-dependent part of the gate model.
+    pub aim: AimParams,
+    /// Factor on predicted block changes (`gate-model.md` §5): 1.0 in every
+    /// reported result, 1.5 with flag 64.
+    pub prediction_boost: f64,
+    /// Flag 16: the actuator moves `0.01 · a` per message and its forward
+    /// model is never trained (`gate-model.md` §5).
+    pub hard_coded_actuator: bool,
+    /// Flag 32: a geometric rule replaces the learned gate, which is then
+    /// never trained (`gate-model.md` §5).
+    pub hard_coded_gate: bool,
+}
+
+impl GateParams {
+    /// The evaluated configuration (0): 100 Hz, learned actuator and gate,
+    /// boost 1.0.
+    pub fn hz100() -> Self {
+        Self {
+            aim: AimParams::hz100(),
+            prediction_boost: DEFAULT_PREDICTION_BOOST,
+            hard_coded_actuator: false,
+            hard_coded_gate: false,
+        }
+    }
+
+    /// As [`GateParams::hz100`] with the 10 Hz inverse-model thresholds
+    /// (configuration 2).
+    pub fn hz10() -> Self {
+        Self {
+            aim: AimParams::hz10(),
+            ..Self::hz100()
+        }
+    }
+
+    /// The parameters of one of the original's configuration numbers
+    /// (`experiments.md` §1). Driver-only bits (4, 8) are accepted and have
+    /// no effect here; bit 1 (velocity features) and undefined bits are
+    /// refused.
+    pub fn from_config_number(number: u32) -> Result<Self, GateError> {
+        let bad = (number & flags::USE_DYNS) | (number & !flags::ALL);
+        if bad != 0 {
+            return Err(GateError::UnsupportedFlags(number, bad));
+        }
+        let base = if number & flags::LOWFREQ != 0 {
+            Self::hz10()
+        } else {
+            Self::hz100()
+        };
+        Ok(Self {
+            prediction_boost: if number & flags::USINGPREDICTIONBOOST != 0 {
+                FLAG_PREDICTION_BOOST
+            } else {
+                DEFAULT_PREDICTION_BOOST
+            },
+            hard_coded_actuator: number & flags::HARDCODEDACT != 0,
+            hard_coded_gate: number & flags::HARDCODEDGATE != 0,
+            ..base
+        })
+    }
+
+    /// Validates the parameters once.
+    pub fn check(self) -> Result<GateConfig, GateError> {
+        let aim = self.aim.check()?;
+        if !(self.prediction_boost.is_finite() && self.prediction_boost > 0.0) {
+            return Err(GateError::InvalidBoost(self.prediction_boost));
+        }
+        Ok(GateConfig { params: self, aim })
+    }
+}
+
+impl Default for GateParams {
+    fn default() -> Self {
+        Self::hz100()
+    }
+}
+
+/// Validated gate model parameters. Deserialising re-validates.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "GateParams", into = "GateParams")]
+pub struct GateConfig {
+    params: GateParams,
+    /// `params.aim`, checked.
+    aim: AimConfig,
+}
+
+impl TryFrom<GateParams> for GateConfig {
+    type Error = GateError;
+
+    fn try_from(params: GateParams) -> Result<Self, Self::Error> {
+        params.check()
+    }
+}
+
+impl From<GateConfig> for GateParams {
+    fn from(config: GateConfig) -> Self {
+        config.params
+    }
+}
+
+impl Default for GateConfig {
+    fn default() -> Self {
+        Self::hz100()
+    }
+}
+
+impl GateConfig {
+    /// Checked [`GateParams::hz100`] (valid constants, no check needed).
+    pub fn hz100() -> Self {
+        Self {
+            params: GateParams::hz100(),
+            aim: AimConfig::hz100(),
+        }
+    }
+
+    /// Checked [`GateParams::hz10`].
+    pub fn hz10() -> Self {
+        Self {
+            params: GateParams::hz10(),
+            aim: AimConfig::hz10(),
+        }
+    }
+
+    /// The validated parameters.
+    pub fn params(&self) -> &GateParams {
+        &self.params
+    }
+
+    /// The per-block inverse models' configuration.
+    pub fn aim(&self) -> AimConfig {
+        self.aim
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets() {
+        let p = *GateConfig::hz100().params();
+        assert_eq!(p.aim, AimParams::hz100());
+        assert_eq!(p.prediction_boost, 1.0);
+        assert!(!p.hard_coded_actuator && !p.hard_coded_gate);
+        assert_eq!(GateConfig::hz10().params().aim, AimParams::hz10());
+        assert_eq!(GateParams::hz100().check(), Ok(GateConfig::hz100()));
+        assert_eq!(GateConfig::default(), GateConfig::hz100());
+        assert_eq!(GateConfig::hz10().aim(), AimConfig::hz10());
+        assert_eq!(GateParams::hz10().check(), Ok(GateConfig::hz10()));
+    }
+
+    #[test]
+    fn configuration_numbers() {
+        assert_eq!(GateParams::from_config_number(0), Ok(GateParams::hz100()));
+        // Driver-only bits change nothing in the model.
+        assert_eq!(GateParams::from_config_number(8), Ok(GateParams::hz100()));
+        assert_eq!(GateParams::from_config_number(4), Ok(GateParams::hz100()));
+        assert_eq!(GateParams::from_config_number(2), Ok(GateParams::hz10()));
+        let p = GateParams::from_config_number(2 | 16 | 32 | 64).unwrap();
+        assert_eq!(p.aim, AimParams::hz10());
+        assert_eq!(p.prediction_boost, 1.5);
+        assert!(p.hard_coded_actuator && p.hard_coded_gate);
+        assert_eq!(
+            GateParams::from_config_number(1 | 8),
+            Err(GateError::UnsupportedFlags(9, 1))
+        );
+        assert_eq!(
+            GateParams::from_config_number(128),
+            Err(GateError::UnsupportedFlags(128, 128))
+        );
+    }
+
+    #[test]
+    fn rejects_invalid_values() {
+        for boost in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let p = GateParams {
+                prediction_boost: boost,
+                ..GateParams::hz100()
+            };
+            assert!(
+                matches!(p.check(), Err(GateError::InvalidBoost(_))),
+                "{boost}"
+            );
+        }
+        let p = GateParams {
+            aim: AimParams {
+                eps_dif: -1.0,
+                ..AimParams::hz100()
+            },
+            ..GateParams::hz100()
+        };
+        assert!(matches!(p.check(), Err(GateError::Aim(_))));
+        let json = serde_json::to_string(&GateConfig::hz100()).unwrap();
+        let back: GateConfig = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, GateConfig::hz100());
+        let bad = json.replace("\"prediction_boost\":1.0", "\"prediction_boost\":-1.0");
+        assert_ne!(bad, json);
+        assert!(serde_json::from_str::<GateConfig>(&bad).is_err());
+    }
+}

@@ -1,0 +1,82 @@
+//! Move to Target with the gate model: `get_action()` (`planning.md` §2),
+//! circling (§4) and the exploration fallback (§5).
+
+use nalgebra::Vector2;
+use rand::Rng;
+
+use super::model::GateModel;
+use crate::features::{global_point, global_vec, local_change, relative_features};
+use crate::planning::{
+    circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
+};
+use crate::types::{Action, TrackedObject};
+
+/// The precondition's motion passes through unscaled strictly inside
+/// (`PASS_MIN`, `PASS_MAX`) or when it is zero.
+pub const PASS_MIN: f64 = 0.01;
+/// See [`PASS_MIN`].
+pub const PASS_MAX: f64 = 0.2;
+
+impl GateModel {
+    /// `get_action()` of `planning.md` §2, from the model's actuator and its
+    /// record of the target block.
+    pub(super) fn get_action(&mut self, rng: &mut dyn Rng) -> Action {
+        let Some(target) = self.target else {
+            return Action::ZERO;
+        };
+        // set_target and deserialisation guarantee both; (0, 0) otherwise.
+        let (Some(act), Some(b)) = (self.actuator, self.block(target.id)) else {
+            return Action::ZERO;
+        };
+        let goal = target.pose;
+        if b.s.distance_to(&goal) < REACHED {
+            self.target = None;
+            return Action::ZERO;
+        }
+        let d = local_change(&b.s, &goal);
+        let pre = self
+            .predictors
+            .get_mut(&b.id)
+            .and_then(|p| p.inverse.preconditions_for(&d));
+        let Some(pre) = pre else {
+            return exploration(b.s.position() - act.s.position(), rng);
+        };
+        let q = Vector2::new(pre[4], pre[5]);
+        let p_star = global_point(b.s.theta, b.s.position(), q);
+        let v_star = global_vec(b.s.theta, Vector2::new(pre[6], pre[7]));
+        let delta = p_star - act.s.position();
+        let dn = norm2(delta);
+        if dn > EPS_CLOSE {
+            return circle_gate(&b, &act, q);
+        }
+        if dn > EPS_CLOSE_ENOUGH {
+            let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
+            // planning.md §2: the gate as a safety check on the straight move.
+            let a_hat = self.predict_actuator(&act, u);
+            let phi = relative_features(&b, &a_hat);
+            if !self.influences(&phi) {
+                return u;
+            }
+            let b_hat = self.predictor_state(&b, &phi).unwrap_or(b.s);
+            if b_hat.distance_to(&goal) > b.s.distance_to(&goal) {
+                return circle_gate(&b, &act, q);
+            }
+            return u;
+        }
+        let n = norm2(v_star);
+        // planning.md §2: at 10 Hz the raw displacement passes through.
+        if n == 0.0 || (PASS_MIN < n && n < PASS_MAX) {
+            return Action::from_vector(v_star);
+        }
+        Action::from_vector(scaled(v_star, APPROACH_SPEED))
+    }
+}
+
+/// `circle_gate(B, Act, q)` (`planning.md` §4): the distance and the
+/// actuator's angle come from `φ(B, Act)`, `r` is the global vector from the
+/// block to the actuator.
+fn circle_gate(b: &TrackedObject, act: &TrackedObject, q: Vector2<f64>) -> Action {
+    let phi = relative_features(b, act);
+    let r = act.s.position() - b.s.position();
+    circle(phi[2], r, phi[5].atan2(phi[4]), q)
+}
