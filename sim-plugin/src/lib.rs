@@ -4,16 +4,19 @@
 //!   scenes);
 //! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
 //!   per-step actuator drive, commands, ghosts and publishing;
-//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10.
+//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10;
+//! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
+//!   (`docs/protocol.md`).
 
 pub mod scene;
+pub mod server;
 pub mod sweep;
 pub mod world;
 
 pub use scene::Scene;
 pub use sweep::{sweep, SweepOptions, SweepRow};
 pub use world::{
-    ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World, WorldError,
+    check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World, WorldError,
 };
 
 /// The top-level collision space kinds (for the hash-space regression test).
