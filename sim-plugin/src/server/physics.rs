@@ -162,9 +162,11 @@ impl Physics {
             }
             if self.world.is_paused() {
                 // Nothing to pace while paused: sleep until a command comes.
-                match self.inbox.recv() {
-                    Ok(message) if self.handle_now(message) == Flow::Continue => {}
-                    Ok(_) | Err(_) => return Ok(()),
+                let Ok(message) = self.inbox.recv() else {
+                    return Ok(());
+                };
+                if self.handle_now(message) == Flow::Stop {
+                    return Ok(());
                 }
                 deadline = Instant::now();
                 continue;
