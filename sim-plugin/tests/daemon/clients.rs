@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use pushlearn::client::{ClientError, SimClient};
-use pushlearn::wire::pb::client_message::Payload;
+use pushlearn::wire::pb::{self, client_message::Payload};
 use sim_plugin::server::Config;
 use tokio::io::AsyncReadExt;
 use tokio::net::{TcpSocket, TcpStream};
@@ -159,6 +159,17 @@ async fn lockstep_never_waits_for_a_slow_reader() {
     .await;
     let _stuck = stuck_client(&server).await;
     let mut driver = connect(&server).await;
+    // 64 ghosts make each state about 8 kB, so that 2000 of them are far
+    // more than the kernel's socket buffers take.
+    driver
+        .command(Payload::set_poses((0..64).map(|i| {
+            (
+                format!("g{i}Shadow"),
+                pb::Pose::from_position_yaw([0.0, 0.0, 0.05], 0.0),
+            )
+        })))
+        .await
+        .expect("ghosts");
     for advance in 1..=2000u64 {
         let state = driver
             .command_and_wait_applied(Payload::advance())

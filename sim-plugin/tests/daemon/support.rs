@@ -179,3 +179,12 @@ pub fn position(state: &pb::WorldState, name: &str) -> [f64; 3] {
         .unwrap_or_else(|| panic!("no {name} in the state"));
     [p.x, p.y, p.z]
 }
+
+/// Asserts that two positions agree within a micrometre: a resting block
+/// still settles into the ground by tiny amounts.
+pub fn assert_near(actual: [f64; 3], expected: [f64; 3]) {
+    assert!(
+        actual.iter().zip(&expected).all(|(a, e)| (a - e).abs() < 1e-6),
+        "{actual:?} is not {expected:?}"
+    );
+}
