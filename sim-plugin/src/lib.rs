@@ -16,7 +16,8 @@ pub mod world;
 pub use scene::Scene;
 pub use sweep::{sweep, SweepOptions, SweepRow};
 pub use world::{
-    check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World, WorldError,
+    check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World,
+    WorldError,
 };
 
 /// The top-level collision space kinds (for the hash-space regression test).

@@ -19,7 +19,9 @@ pub enum InvalidCommand {
     #[error("missing payload: a ClientMessage must carry actuator, control or set_pose")]
     MissingPayload,
     /// `control` without an action.
-    #[error("control: no action (expected pause, reset, publish_rate_hz, advance or latency_seed)")]
+    #[error(
+        "control: no action (expected pause, reset, publish_rate_hz, advance or latency_seed)"
+    )]
     MissingControlAction,
     /// `reset = false` or `advance = false`: a flag whose only meaning is true.
     #[error("{action}: must be true (false has no meaning)")]

@@ -40,7 +40,8 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Cmd {
     /// Serve the world to TCP clients (the default): publish world states, accept commands.
-    #[command(long_about = "Serve the world to TCP clients (docs/protocol.md).\n\n\
+    #[command(
+        long_about = "Serve the world to TCP clients (docs/protocol.md).\n\n\
                       Prints one line `listening on ADDRESS:PORT` to stdout once it accepts \
                       connections, then logs to stderr (RUST_LOG sets the level, default info). \
                       Every client gets a Hello, then every published WorldState; commands from \
@@ -49,7 +50,8 @@ enum Cmd {
         after_help = "Examples:\n  \
             pushlearn-sim                                   realtime, 127.0.0.1:11345\n  \
             pushlearn-sim serve --mode lockstep --port 0    lock-step on a free port\n  \
-            pushlearn-sim serve --mode lockstep --latency-max 5 --latency-seed 7")]
+            pushlearn-sim serve --mode lockstep --latency-max 5 --latency-seed 7"
+    )]
     Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
     /// 150 messages at 100 Hz each, and report the blue block's outcome.
@@ -223,8 +225,7 @@ async fn shutdown_signal() -> anyhow::Result<()> {
     #[cfg(unix)]
     {
         use tokio::signal::unix::{signal, SignalKind};
-        let mut terminate =
-            signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
+        let mut terminate = signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
         tokio::select! {
             ctrl_c = tokio::signal::ctrl_c() => ctrl_c.context("cannot listen for SIGINT")?,
             _ = terminate.recv() => {}

@@ -209,10 +209,7 @@ mod tests {
         assert!(is_move(pb::ClientMessage::move_(1, 0.0, 0.5)));
         assert!(!is_move(pb::ClientMessage::reset(1)));
         assert!(!is_move(pb::ClientMessage::set_pose(
-            1,
-            "actuator",
-            [0.0; 3],
-            0.0
+            1, "actuator", [0.0; 3], 0.0
         )));
         let mut nothing = pb::ClientMessage::move_(1, 0.0, 0.0);
         if let Some(Payload::Actuator(a)) = &mut nothing.payload {
@@ -270,7 +267,10 @@ mod tests {
             ghosts: vec![ghost],
         };
         let state = world_state(&snapshot, 7, 3);
-        assert_eq!((state.step, state.publish_seq, state.applied_seq), (20, 7, 3));
+        assert_eq!(
+            (state.step, state.publish_seq, state.applied_seq),
+            (20, 7, 3)
+        );
         let names: Vec<_> = state.models().iter().map(|m| m.name.as_str()).collect();
         assert_eq!(names, ["blockA", "blockAShadow"]);
         let a = &state.models()[0];

@@ -182,11 +182,7 @@ impl Gate {
             seq: message.seq,
             op,
         };
-        if mirror
-            .physics
-            .send(ToPhysics::Command(accepted))
-            .is_err()
-        {
+        if mirror.physics.send(ToPhysics::Command(accepted)).is_err() {
             self.queued.fetch_sub(1, Ordering::AcqRel);
             return Err(Refusal::Stopping);
         }
@@ -209,13 +205,14 @@ impl Gate {
             Op::World(commands) => {
                 let mut new_ghosts = HashSet::new();
                 for name in commands.iter().filter_map(ghost_name) {
-                    if !mirror.ghosts.contains(name) && new_ghosts.insert(name) {
-                        if mirror.ghosts.len() + new_ghosts.len() > MAX_GHOSTS {
-                            return Err(Refusal::World {
-                                command: format!("set_pose: body '{name}'"),
-                                error: CommandError::TooManyGhosts,
-                            });
-                        }
+                    if !mirror.ghosts.contains(name)
+                        && new_ghosts.insert(name)
+                        && mirror.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
+                    {
+                        return Err(Refusal::World {
+                            command: format!("set_pose: body '{name}'"),
+                            error: CommandError::TooManyGhosts,
+                        });
                     }
                 }
                 Ok(())

@@ -42,7 +42,6 @@ use tokio_util::task::TaskTracker;
 use crate::scene::Scene;
 use crate::world::{CommandError, WorldError};
 
-
 /// The port of the original Gazebo world, kept as the default.
 pub const DEFAULT_PORT: u16 = 11345;
 

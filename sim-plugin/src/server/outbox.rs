@@ -261,7 +261,10 @@ mod tests {
     async fn a_full_queue_drops_its_oldest_states_but_never_replies() {
         let out = outbox(3, Duration::from_secs(60));
         let now = Instant::now();
-        assert_eq!(out.push_reply(pb::ServerMessage::error(1, "x")), Pushed::Queued);
+        assert_eq!(
+            out.push_reply(pb::ServerMessage::error(1, "x")),
+            Pushed::Queued
+        );
         assert_eq!(out.push_state(&state(10), now), Pushed::Queued);
         assert_eq!(out.push_state(&state(20), now), Pushed::Queued);
         assert_eq!(out.push_state(&state(30), now), Pushed::DroppedOldest);
@@ -289,14 +292,20 @@ mod tests {
         let later = start + 2 * limit;
         assert_eq!(out.push_state(&state(30), later), Pushed::Queued);
         assert_eq!(out.push_state(&state(40), later), Pushed::DroppedOldest);
-        assert_eq!(out.push_state(&state(50), later + limit), Pushed::DroppedOldest);
+        assert_eq!(
+            out.push_state(&state(50), later + limit),
+            Pushed::DroppedOldest
+        );
         assert!(!out.disconnect.is_cancelled());
         assert_eq!(
             out.push_state(&state(60), later + 2 * limit),
             Pushed::TooSlow
         );
         assert!(out.disconnect.is_cancelled() && out.was_too_slow());
-        assert_eq!(out.push_reply(pb::ServerMessage::error(1, "x")), Pushed::Closed);
+        assert_eq!(
+            out.push_reply(pb::ServerMessage::error(1, "x")),
+            Pushed::Closed
+        );
     }
 
     #[tokio::test]

@@ -122,11 +122,11 @@ async fn invalid_commands_are_answered_with_their_seq_and_change_nothing() {
             pb::ClientMessage::set_pose(5, "blockA", [1e6, 0.25, 0.05], 0.0),
             "set_pose: body 'blockA': position component 1000000 is beyond ±1000 m",
         ),
+        (with_action(6, Action::Reset(false)), "reset: must be true"),
         (
-            with_action(6, Action::Reset(false)),
-            "reset: must be true",
+            zero_quaternion,
+            "set_pose: body 'blockA' orientation has zero length",
         ),
-        (zero_quaternion, "set_pose: body 'blockA' orientation has zero length"),
         (
             pb::ClientMessage::latency_seed(8, 1),
             "latency_seed: this world does not emulate latency",

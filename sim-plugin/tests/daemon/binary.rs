@@ -63,7 +63,10 @@ fn wait(child: &mut Child) -> std::process::ExitStatus {
 fn the_binary_serves_on_a_free_port_and_stops_cleanly_on_sigterm() {
     // A bare `pushlearn-sim` is `pushlearn-sim serve`.
     let (mut child, addr) = spawn(&["--port", "0", "--mode", "lockstep", "--rate", "10"]);
-    assert!(addr.ip().is_loopback(), "binds 127.0.0.1 by default: {addr}");
+    assert!(
+        addr.ip().is_loopback(),
+        "binds 127.0.0.1 by default: {addr}"
+    );
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -71,7 +74,10 @@ fn the_binary_serves_on_a_free_port_and_stops_cleanly_on_sigterm() {
     runtime.block_on(async {
         let mut client = SimClient::connect(addr).await.expect("connect");
         assert_eq!(client.hello().timing(), Ok(TimingMode::Lockstep));
-        client.command(Payload::move_(0.0, 0.5)).await.expect("move");
+        client
+            .command(Payload::move_(0.0, 0.5))
+            .await
+            .expect("move");
         let state = client
             .command_and_wait_applied(Payload::advance())
             .await

@@ -30,7 +30,10 @@ async fn every_subscriber_gets_every_state_and_any_client_commands() {
                 .expect("advance"),
         );
     }
-    assert!(position(&driven[4], "actuator")[1] > 0.02, "the move applied");
+    assert!(
+        position(&driven[4], "actuator")[1] > 0.02,
+        "the move applied"
+    );
     for watcher in &mut watchers {
         let mut seen = Vec::new();
         for _ in 0..5 {
@@ -104,10 +107,7 @@ async fn clients_beyond_max_clients_are_told_and_closed_until_one_leaves() {
 async fn stuck_client(server: &sim_plugin::server::ServerHandle) -> TcpStream {
     let socket = TcpSocket::new_v4().expect("socket");
     socket.set_recv_buffer_size(4096).expect("SO_RCVBUF");
-    socket
-        .connect(server.local_addr())
-        .await
-        .expect("connect")
+    socket.connect(server.local_addr()).await.expect("connect")
 }
 
 #[tokio::test]
@@ -139,7 +139,11 @@ async fn a_client_that_stops_reading_is_dropped_and_nobody_waits_for_it() {
     assert!(stats.states_dropped > 0, "{stats:?}");
     // What the stuck client had not read is still there, then the end.
     let mut rest = Vec::new();
-    let end = within("the end of the stuck connection", stuck.read_to_end(&mut rest)).await;
+    let end = within(
+        "the end of the stuck connection",
+        stuck.read_to_end(&mut rest),
+    )
+    .await;
     if let Err(err) = end {
         assert_eq!(err.kind(), std::io::ErrorKind::ConnectionReset, "{err}");
     }

@@ -54,7 +54,10 @@ async fn move_and_set_pose_act_exactly_as_in_process() {
         .command(Payload::set_pose("actuator", [x0, 0.0, 0.03], 0.0))
         .await
         .expect("set_pose");
-    client.command(Payload::move_(0.0, 0.5)).await.expect("move");
+    client
+        .command(Payload::move_(0.0, 0.5))
+        .await
+        .expect("move");
     world
         .apply(Command::SetPose {
             name: "actuator".into(),
@@ -89,14 +92,20 @@ async fn move_and_set_pose_act_exactly_as_in_process() {
 async fn reset_restores_the_start_and_restarts_the_step_count_not_publish_seq() {
     let server = start(lockstep()).await;
     let mut client = connect(&server).await;
-    client.command(Payload::move_(0.5, 0.0)).await.expect("move");
+    client
+        .command(Payload::move_(0.5, 0.0))
+        .await
+        .expect("move");
     for _ in 0..3 {
         client
             .command_and_wait_applied(Payload::advance())
             .await
             .expect("advance");
     }
-    client.command(Payload::move_(0.0, 0.0)).await.expect("stop");
+    client
+        .command(Payload::move_(0.0, 0.0))
+        .await
+        .expect("stop");
     client.command(Payload::reset()).await.expect("reset");
     let state = client
         .command_and_wait_applied(Payload::advance())

@@ -148,7 +148,10 @@ async fn commands_keep_their_order_behind_a_delayed_move() {
     // its start pose with the old velocity.
     let server = start(with_latency(5, 7)).await;
     let mut client = connect(&server).await;
-    client.command(Payload::move_(0.0, 0.5)).await.expect("move");
+    client
+        .command(Payload::move_(0.0, 0.5))
+        .await
+        .expect("move");
     for _ in 0..3 {
         client
             .command_and_wait_applied(Payload::advance())
@@ -156,14 +159,20 @@ async fn commands_keep_their_order_behind_a_delayed_move() {
             .expect("advance");
     }
     for _ in 0..8 {
-        client.command(Payload::move_(0.0, 0.0)).await.expect("stop");
+        client
+            .command(Payload::move_(0.0, 0.0))
+            .await
+            .expect("stop");
         client.command(Payload::reset()).await.expect("reset");
         let state = client
             .command_and_wait_applied(Payload::advance())
             .await
             .expect("advance");
         assert_eq!(position(&state, "actuator")[..2], [0.0, 0.0]);
-        client.command(Payload::move_(0.0, 0.5)).await.expect("move");
+        client
+            .command(Payload::move_(0.0, 0.5))
+            .await
+            .expect("move");
         client
             .command_and_wait_applied(Payload::advance())
             .await

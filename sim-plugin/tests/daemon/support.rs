@@ -48,7 +48,9 @@ pub fn realtime(steps_per_second: u32) -> Config {
 
 pub async fn start(config: Config) -> ServerHandle {
     let listener = TcpListener::bind("127.0.0.1:0").await.expect("bind");
-    Server::start(listener, config).await.expect("server starts")
+    Server::start(listener, config)
+        .await
+        .expect("server starts")
 }
 
 pub async fn connect(server: &ServerHandle) -> SimClient {
@@ -184,7 +186,10 @@ pub fn position(state: &pb::WorldState, name: &str) -> [f64; 3] {
 /// still settles into the ground by tiny amounts.
 pub fn assert_near(actual: [f64; 3], expected: [f64; 3]) {
     assert!(
-        actual.iter().zip(&expected).all(|(a, e)| (a - e).abs() < 1e-6),
+        actual
+            .iter()
+            .zip(&expected)
+            .all(|(a, e)| (a - e).abs() < 1e-6),
         "{actual:?} is not {expected:?}"
     );
 }
