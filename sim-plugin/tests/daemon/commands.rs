@@ -1,6 +1,6 @@
 //! Every command's effect, seen by a client over the socket.
 
-use pushlearn::client::ClientError;
+use pushlearn::client::{ClientError, ClientOptions, SimClient};
 use pushlearn::wire::pb::client_message::Payload;
 use pushlearn::wire::TimingMode;
 use sim_plugin::server::Config;
@@ -305,4 +305,45 @@ async fn a_refusal_answers_its_own_command_only() {
         }
         other => panic!("expected a refusal, got {other:?}"),
     }
+}
+
+#[tokio::test]
+async fn invalid_commands_are_refused_by_the_client_and_never_sent() {
+    let server = start(lockstep()).await;
+    let mut client = connect(&server).await;
+    let err = client
+        .send(Payload::move_(f64::NAN, 0.0))
+        .await
+        .expect_err("NaN must be refused locally");
+    assert!(matches!(err, ClientError::Invalid(_)), "{err:?}");
+    assert!(
+        err.to_string().contains("actuator: direction.x is NaN"),
+        "{err}"
+    );
+    client.sync().await.expect("barrier");
+    assert_eq!(
+        server.stats().refused_commands,
+        1,
+        "only the barrier reached the daemon"
+    );
+}
+
+#[tokio::test]
+async fn waiting_for_a_state_from_a_paused_world_times_out() {
+    let server = start(realtime(FAST)).await;
+    let options = ClientOptions {
+        timeout: Some(std::time::Duration::from_millis(300)),
+        first_seq: 1,
+    };
+    let mut client = SimClient::connect_with(server.local_addr(), options)
+        .await
+        .expect("connect");
+    client.command(Payload::pause()).await.expect("pause");
+    // Drain what was published before the pause took effect.
+    while client.next_state().await.is_ok() {}
+    let err = client
+        .next_state()
+        .await
+        .expect_err("a paused world publishes nothing");
+    assert!(matches!(err, ClientError::Timeout { .. }), "{err:?}");
 }
