@@ -147,6 +147,12 @@ impl Config {
             }
         };
         positive(self.max_clients, "the maximum number of clients")?;
+        if self.max_clients > Semaphore::MAX_PERMITS {
+            return Err(ServerError::Config(format!(
+                "at most {} clients are possible",
+                Semaphore::MAX_PERMITS
+            )));
+        }
         positive(self.client_queue, "the client queue length")?;
         if self.slow_client_limit.is_zero() {
             return Err(ServerError::Config(

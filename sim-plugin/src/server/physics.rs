@@ -40,6 +40,9 @@ pub(super) fn spawn(
     let thread = std::thread::Builder::new()
         .name("physics".into())
         .spawn(move || {
+            // Whatever ends the physics, a panic included, ends the daemon:
+            // a server whose world is gone must not go on accepting clients.
+            let _stop_daemon = CancelOnDrop(shutdown);
             // The world is built here: ODE's per-thread data then belongs to
             // the thread that steps it.
             let physics = match Physics::new(&config, inbox, shared) {
@@ -55,10 +58,17 @@ pub(super) fn spawn(
             if let Err(err) = &result {
                 tracing::error!("the physics stopped: {err}");
             }
-            shutdown.cancel();
             result.map_err(|err| err.to_string())
         })?;
     Ok(thread)
+}
+
+struct CancelOnDrop(CancellationToken);
+
+impl Drop for CancelOnDrop {
+    fn drop(&mut self) {
+        self.0.cancel();
+    }
 }
 
 /// Lock-step latency emulation: Moves wait for their drawn step offset.
@@ -313,5 +323,79 @@ impl Physics {
             }
             Err(err) => Err(err),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ActuatorMode;
+
+    fn accepted(seq: u64, command: Command) -> Accepted {
+        Accepted {
+            client: 1,
+            seq,
+            op: Op::World(vec![command]),
+        }
+    }
+
+    #[test]
+    fn moves_draw_delays_and_nothing_overtakes_an_earlier_command() {
+        let mut delays = Delays::new(Latency {
+            max_steps: 5,
+            seed: 3,
+        });
+        for seq in 1..=60 {
+            let command = if seq % 3 == 0 {
+                Command::Reset
+            } else {
+                Command::Actuator {
+                    mode: ActuatorMode::Move,
+                    velocity: [0.0; 3],
+                }
+            };
+            delays.schedule(accepted(seq, command));
+        }
+        let offsets: Vec<u32> = delays.pending.iter().map(|(offset, _)| *offset).collect();
+        assert!(offsets.windows(2).all(|w| w[0] <= w[1]), "{offsets:?}");
+        assert!(offsets.iter().all(|&o| o <= 5), "{offsets:?}");
+        assert!(offsets.iter().any(|&o| o > 0), "{offsets:?}");
+        for (i, (offset, scheduled)) in delays.pending.iter().enumerate().skip(1) {
+            if !scheduled.op.is_move() {
+                assert_eq!(
+                    *offset,
+                    offsets[i - 1],
+                    "a Reset waits for the Move before it"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn reseeding_repeats_the_delays() {
+        let draw = |delays: &mut Delays| -> Vec<u32> {
+            delays.pending.clear();
+            for seq in 1..=20 {
+                delays.schedule(accepted(
+                    seq,
+                    Command::Actuator {
+                        mode: ActuatorMode::Move,
+                        velocity: [0.0; 3],
+                    },
+                ));
+            }
+            delays.pending.iter().map(|(offset, _)| *offset).collect()
+        };
+        let mut delays = Delays::new(Latency {
+            max_steps: 1000,
+            seed: 9,
+        });
+        let first = draw(&mut delays);
+        delays.schedule(Accepted {
+            client: 1,
+            seq: 21,
+            op: Op::LatencySeed(9),
+        });
+        assert_eq!(draw(&mut delays), first);
     }
 }
