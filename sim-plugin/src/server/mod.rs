@@ -262,7 +262,8 @@ impl Shared {
                 Counters::add(&self.counters.slow_disconnects, 1);
                 tracing::warn!(
                     peer = %outbox.peer(),
-                    "disconnecting a client that does not read: its queue stayed full for more than {:?}",
+                    "disconnecting a client that does not read: its queue stayed full for more \
+                     than {:?}, or its unread answers exceed twice the queue",
                     self.slow_client_limit
                 );
             }
