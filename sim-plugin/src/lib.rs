@@ -6,16 +6,20 @@
 //!   per-step actuator drive, commands, ghosts and publishing;
 //! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
+//! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
+//!   (`docs/protocol.md`).
 
 pub mod push_run;
 pub mod scene;
+pub mod server;
 pub mod sweep;
 pub mod world;
 
 pub use scene::Scene;
 pub use sweep::{sweep, SweepOptions, SweepRow};
 pub use world::{
-    ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World, WorldError,
+    check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World,
+    WorldError,
 };
 
 /// The top-level collision space kinds (for the hash-space regression test).

@@ -333,9 +333,9 @@ impl World {
 
     /// Validates `cmd` completely, then applies it. On error nothing changed.
     pub fn apply(&mut self, cmd: Command) -> Result<(), CommandError> {
+        check_command(&self.scene, &cmd)?;
         match cmd {
             Command::Actuator { mode, velocity } => {
-                check_finite("velocity", &velocity)?;
                 self.mode = mode;
                 self.direction = clamp_norm(velocity, self.scene.drive.max_speed);
             }
@@ -353,31 +353,18 @@ impl World {
                 position,
                 orientation,
             } => self.set_pose(name, position, orientation)?,
-            Command::SetPublishRate(hz) => {
-                if hz == 0 || STEPS_PER_SECOND % hz != 0 {
-                    return Err(CommandError::BadPublishRate(hz));
-                }
-                self.publish_every = STEPS_PER_SECOND / hz;
-            }
+            Command::SetPublishRate(hz) => self.publish_every = STEPS_PER_SECOND / hz,
         }
         Ok(())
     }
 
+    /// `name`, `position` and `orientation` passed [`check_command`].
     fn set_pose(
         &mut self,
         name: String,
         position: [f64; 3],
         orientation: [f64; 4],
     ) -> Result<(), CommandError> {
-        check_finite("position", &position)?;
-        check_finite("orientation", &orientation)?;
-        if let Some(&value) = position.iter().find(|v| v.abs() > MAX_POSITION) {
-            return Err(CommandError::TooFar {
-                field: "position",
-                value,
-                limit: MAX_POSITION,
-            });
-        }
         let Some(unit) = normalise(orientation) else {
             return Err(CommandError::ZeroQuaternion(name));
         };
@@ -537,6 +524,45 @@ impl World {
             sim_time: self.sim_time(),
             bodies,
             ghosts: self.ghosts.clone(),
+        }
+    }
+}
+
+/// The checks of [`World::apply`] that need only the scene, not the world's
+/// state (everything but the ghost limit): a daemon runs them when a command
+/// arrives, long before the physics thread applies it.
+pub fn check_command(scene: &Scene, cmd: &Command) -> Result<(), CommandError> {
+    match cmd {
+        Command::Actuator { velocity, .. } => check_finite("velocity", velocity),
+        Command::Pause | Command::Unpause | Command::Reset => Ok(()),
+        Command::SetPose {
+            name,
+            position,
+            orientation,
+        } => {
+            check_finite("position", position)?;
+            check_finite("orientation", orientation)?;
+            if let Some(&value) = position.iter().find(|v| v.abs() > MAX_POSITION) {
+                return Err(CommandError::TooFar {
+                    field: "position",
+                    value,
+                    limit: MAX_POSITION,
+                });
+            }
+            if normalise(*orientation).is_none() {
+                return Err(CommandError::ZeroQuaternion(name.clone()));
+            }
+            if !name.contains(GHOST_MARKER) && scene.body_index(name).is_none() {
+                return Err(CommandError::UnknownBody(name.clone()));
+            }
+            Ok(())
+        }
+        Command::SetPublishRate(hz) => {
+            if *hz == 0 || STEPS_PER_SECOND % hz != 0 {
+                Err(CommandError::BadPublishRate(*hz))
+            } else {
+                Ok(())
+            }
         }
     }
 }

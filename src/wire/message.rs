@@ -83,6 +83,13 @@ impl Payload {
         Self::control(Action::Advance(true))
     }
 
+    /// Lock-step mode with latency emulation: reseed the generator that
+    /// draws each Move's delay, so that a run's delays do not depend on what
+    /// the world did before it.
+    pub fn latency_seed(seed: u64) -> Self {
+        Self::control(Action::LatencySeed(seed))
+    }
+
     /// Set one body's pose: position `[x, y, z]` and `yaw` about the z axis.
     pub fn set_pose(name: impl Into<String>, position: [f64; 3], yaw: f64) -> Self {
         Self::set_poses([(name.into(), pb::Pose::from_position_yaw(position, yaw))])
@@ -123,6 +130,7 @@ impl Payload {
                 Some(Action::Reset(_)) => "reset",
                 Some(Action::PublishRateHz(_)) => "publish_rate",
                 Some(Action::Advance(_)) => "advance",
+                Some(Action::LatencySeed(_)) => "latency_seed",
                 None => "control",
             },
             Payload::SetPose(_) => "set_pose",
@@ -172,6 +180,11 @@ impl pb::ClientMessage {
     /// See [`Payload::advance`].
     pub fn advance(seq: u64) -> Self {
         Self::new(seq, Payload::advance())
+    }
+
+    /// See [`Payload::latency_seed`].
+    pub fn latency_seed(seq: u64, seed: u64) -> Self {
+        Self::new(seq, Payload::latency_seed(seed))
     }
 
     /// A message without payload. The world refuses it at once with an
@@ -344,6 +357,10 @@ mod tests {
             action(pb::ClientMessage::advance(1)),
             Some(Action::Advance(true))
         );
+        assert_eq!(
+            action(pb::ClientMessage::latency_seed(1, 42)),
+            Some(Action::LatencySeed(42))
+        );
     }
 
     #[test]
@@ -364,6 +381,7 @@ mod tests {
     fn kinds_name_the_command() {
         assert_eq!(Payload::move_(0.0, 0.0).kind(), "move");
         assert_eq!(Payload::unpause().kind(), "unpause");
+        assert_eq!(Payload::latency_seed(7).kind(), "latency_seed");
         assert_eq!(
             Payload::set_pose("blockA", [0.0; 3], 0.0).kind(),
             "set_pose"

@@ -19,7 +19,9 @@ pub enum InvalidCommand {
     #[error("missing payload: a ClientMessage must carry actuator, control or set_pose")]
     MissingPayload,
     /// `control` without an action.
-    #[error("control: no action (expected pause, reset, publish_rate_hz or advance)")]
+    #[error(
+        "control: no action (expected pause, reset, publish_rate_hz, advance or latency_seed)"
+    )]
     MissingControlAction,
     /// `reset = false` or `advance = false`: a flag whose only meaning is true.
     #[error("{action}: must be true (false has no meaning)")]
@@ -81,6 +83,10 @@ pub enum InvalidCommand {
     /// World-dependent: Advance sent while the world is paused.
     #[error("advance: the world is paused; unpause it first")]
     AdvanceWhilePaused,
+    /// World-dependent: `latency_seed` sent to a world without latency
+    /// emulation (which only exists in lock-step mode).
+    #[error("latency_seed: this world does not emulate latency (it needs lockstep mode with a latency maximum)")]
+    LatencySeedWithoutLatency,
 }
 
 impl InvalidCommand {
@@ -131,7 +137,7 @@ fn validate_control(control: &pb::SimControl) -> Result<(), InvalidCommand> {
         Some(Action::PublishRateHz(hz)) if hz == 0 || 1000 % hz != 0 => {
             Err(InvalidCommand::BadPublishRate(hz))
         }
-        Some(Action::PublishRateHz(_)) => Ok(()),
+        Some(Action::PublishRateHz(_) | Action::LatencySeed(_)) => Ok(()),
     }
 }
 
@@ -259,6 +265,8 @@ mod tests {
             ClientMessage::publish_rate(1, 1000),
             ClientMessage::publish_rate(1, 1),
             ClientMessage::advance(1),
+            ClientMessage::latency_seed(1, 0),
+            ClientMessage::latency_seed(1, u64::MAX),
         ] {
             assert_eq!(validate(&message), Ok(()), "{message:?}");
         }

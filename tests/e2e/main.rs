@@ -1,9 +1,10 @@
 //! End-to-end tests over localhost sockets, compiled as one test binary.
 //!
-//! Until `pushlearn-sim` exists, the world on the other end is
-//! [`fake_world::FakeWorld`], which speaks the real protocol.
+//! The world on the other end is the real daemon, `pushlearn-sim`, run as a
+//! child process ([`daemon::Daemon`]); it must have been built
+//! (`cargo build -p sim-plugin`; `cargo test --workspace` does it).
 
-mod fake_world;
+mod daemon;
 mod process;
 
 mod client;

@@ -1,13 +1,12 @@
 //! The Python example client: its generated module must match the schema,
-//! and the script must work against a world.
+//! and the script must work against the real daemon.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use pushlearn::wire::pb::{self, actuator_command::Command as Actuator, client_message::Payload};
-use pushlearn::wire::TimingMode;
+use pushlearn::wire::pb;
 
-use crate::fake_world::BackgroundWorld;
+use crate::daemon::{self, Daemon};
 use crate::process::{run, text};
 
 fn example_dir() -> PathBuf {
@@ -87,16 +86,18 @@ fn python3() -> Option<Command> {
     }
 }
 
-fn run_client_against(timing: TimingMode) {
+/// Runs `client.py` against a daemon started with `args`; returns the
+/// blue block's final `(x, y, yaw)` as printed (4 decimals).
+fn run_client_against(args: &[&str]) -> Option<[String; 3]> {
     let Some(mut python) = python3() else {
         eprintln!("SKIPPED: python3 is not installed, so examples/python/client.py was not run");
-        return;
+        return None;
     };
-    let world = BackgroundWorld::start(timing);
+    let daemon = Daemon::start(args);
     python
         .arg(example_dir().join("client.py"))
         .arg("--port")
-        .arg(world.addr.port().to_string());
+        .arg(daemon.addr.port().to_string());
     let output = run(python);
     let stderr = text(&output.stderr);
     assert!(
@@ -110,51 +111,52 @@ fn run_client_against(timing: TimingMode) {
         "client.py failed ({:?})\nstdout:\n{stdout}\nstderr:\n{stderr}",
         output.status
     );
-
-    let applied = world.applied();
-    let mut commands = applied
-        .iter()
-        .filter_map(|m| m.payload.as_ref())
-        .filter(|p| p.kind() != "advance");
-    assert_eq!(commands.next(), Some(&Payload::reset()));
-    assert_eq!(
-        commands.next(),
-        Some(&Payload::set_pose("actuator", [0.0, 0.0, 0.03], 0.0))
-    );
-    match commands.next() {
-        Some(Payload::Actuator(a)) => {
-            assert_eq!(a.cmd(), Actuator::Move);
-            assert_eq!(a.direction, Some(pb::Vector3d::new(0.0, 0.5, 0.0)));
-        }
-        other => panic!("expected the move command third, got {other:?}"),
-    }
-    assert_eq!(commands.next(), None);
-    let seqs: Vec<u64> = applied.iter().map(|m| m.seq).collect();
-    assert!(seqs.windows(2).all(|w| w[0] < w[1]), "{seqs:?}");
-
     let last = stdout.lines().last().unwrap_or_default();
-    assert!(
-        last.starts_with("blockA (blue block) after 150 states:"),
-        "{stdout}"
-    );
-    assert!(
-        last.contains("x=0.0000 y=0.2500 z=0.0500 yaw=0.0000"),
-        "{stdout}"
-    );
-    if timing == TimingMode::Lockstep {
-        let advances = applied
-            .iter()
-            .filter(|m| m.payload.as_ref().is_some_and(|p| p.kind() == "advance"));
-        assert_eq!(advances.count(), 150);
-    }
+    let pose = last
+        .strip_prefix("blockA (blue block) after 150 states: ")
+        .unwrap_or_else(|| panic!("unexpected output:\n{stdout}"));
+    let value = |key: &str| {
+        pose.split_whitespace()
+            .find_map(|field| field.strip_prefix(key))
+            .unwrap_or_else(|| panic!("no {key} in {last}"))
+            .to_owned()
+    };
+    Some([value("x="), value("y="), value("yaw=")])
 }
 
 #[test]
-fn client_py_runs_against_a_realtime_world() {
-    run_client_against(TimingMode::Realtime);
+fn client_py_in_lockstep_reproduces_the_calibration_push() {
+    let Some(printed) = run_client_against(&["--mode", "lockstep"]) else {
+        return;
+    };
+    // The script's run (reset, actuator at x0 = 0, Move (0, 0.5), 150
+    // states at 100 Hz) is the sweep's run from x0 = 0, bit for bit.
+    let sweep = daemon::run(&["sweep", "--json"]);
+    assert!(sweep.status.success(), "{}", text(&sweep.stderr));
+    let rows: Vec<serde_json::Value> =
+        serde_json::from_slice(&sweep.stdout).expect("the sweep's JSON");
+    let centre = rows
+        .iter()
+        .find(|row| row["x0"] == 0.0)
+        .expect("a run from x0 = 0");
+    let expected = ["block_x", "block_y", "block_yaw"]
+        .map(|key| format!("{:.4}", centre[key].as_f64().expect("a number")));
+    assert_eq!(printed, expected);
 }
 
 #[test]
-fn client_py_runs_against_a_lockstep_world() {
-    run_client_against(TimingMode::Lockstep);
+fn client_py_in_realtime_pushes_the_block() {
+    let Some([x, y, _]) = run_client_against(&["--mode", "realtime", "--real-time-rate", "2000"])
+    else {
+        return;
+    };
+    let (x, y): (f64, f64) = (
+        x.parse().expect("x is a number"),
+        y.parse().expect("y is a number"),
+    );
+    // Where exactly depends on when the commands arrived, within an interval.
+    assert!(
+        x.abs() < 0.05 && y > 0.55,
+        "pushed forward from (0, 0.25): ({x}, {y})"
+    );
 }

@@ -1,14 +1,21 @@
-//! `pushlearn-sim`: the thesis world on ODE.
+//! `pushlearn-sim`: the thesis world on ODE, as a daemon (`serve`, also what
+//! a bare `pushlearn-sim` does) or for the calibration sweep.
 //!
-//! Each subcommand lives in its own function; the daemon is meant to join as
-//! one more variant of [`Cmd`] (`serve`) with its own `run_*` function.
+//! Each subcommand lives in its own function; the daemon itself is
+//! [`sim_plugin::server`].
 
 use std::io::Write;
+use std::net::IpAddr;
 use std::process::ExitCode;
+use std::time::Duration;
 
-use anyhow::Context;
-use clap::{Args, Parser, Subcommand};
+use anyhow::{bail, Context};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use sim_plugin::scene::DEFAULT_SCENE;
+use sim_plugin::server::{
+    Config, Latency, Server, Timing, DEFAULT_CLIENT_QUEUE, DEFAULT_MAX_CLIENTS, DEFAULT_PORT,
+    DEFAULT_REAL_TIME_RATE,
+};
 use sim_plugin::{Scene, SweepOptions, SweepRow};
 
 #[derive(Debug, Parser)]
@@ -19,15 +26,33 @@ use sim_plugin::{Scene, SweepOptions, SweepRow};
     long_about = "The thesis's table-top pushing world on ODE (Debian's libode, double precision): \
                   an actuator sphere driven by velocity commands pushes blocks on a plane in 1 ms steps.\n\n\
                   Scenes are TOML files or the embedded `one_block` (default) and `two_blocks`; \
-                  see docs/world.md for the format."
+                  see docs/world.md for the format.\n\n\
+                  Without a subcommand, `pushlearn-sim [OPTIONS]` is `pushlearn-sim serve [OPTIONS]`.",
+    args_conflicts_with_subcommands = true
 )]
 struct Cli {
     #[command(subcommand)]
-    command: Cmd,
+    command: Option<Cmd>,
+    #[command(flatten)]
+    serve: ServeArgs,
 }
 
 #[derive(Debug, Subcommand)]
 enum Cmd {
+    /// Serve the world to TCP clients (the default): publish world states, accept commands.
+    #[command(
+        long_about = "Serve the world to TCP clients (docs/protocol.md).\n\n\
+                      Prints one line `listening on ADDRESS:PORT` to stdout once it accepts \
+                      connections, then logs to stderr (RUST_LOG sets the level, default info). \
+                      Every client gets a Hello, then every published WorldState; commands from \
+                      any client are checked on arrival and applied at the next step boundary. \
+                      Stops cleanly on SIGINT (Ctrl-C) or SIGTERM.",
+        after_help = "Examples:\n  \
+            pushlearn-sim                                   realtime, 127.0.0.1:11345\n  \
+            pushlearn-sim serve --mode lockstep --port 0    lock-step on a free port\n  \
+            pushlearn-sim serve --mode lockstep --latency-max 5 --latency-seed 7"
+    )]
+    Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
     /// 150 messages at 100 Hz each, and report the blue block's outcome.
     #[command(long_about = "Run the thesis's calibration sweep (world.md §10).\n\n\
@@ -37,6 +62,66 @@ enum Cmd {
                       whose interval contained an actuator–block contact, its final x, y and yaw, \
                       its translation from the start and its rotation.")]
     Sweep(SweepArgs),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Mode {
+    /// Step continuously, paced by --real-time-rate (the thesis's setting).
+    Realtime,
+    /// After each publish, wait for a client's Advance (reproducible runs).
+    Lockstep,
+}
+
+#[derive(Debug, Args)]
+struct ServeArgs {
+    /// Built-in scene name (`one_block`, `two_blocks`) or path to a scene TOML file.
+    #[arg(long, value_name = "NAME_OR_FILE", default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// Address to listen on. Anything but a loopback address exposes an
+    /// unauthenticated control port to the network.
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+    bind: IpAddr,
+    /// TCP port; 0 picks a free one (read it from the `listening on` line).
+    #[arg(long, value_name = "P", default_value_t = DEFAULT_PORT)]
+    port: u16,
+    /// Timing mode (docs/protocol.md §5).
+    #[arg(long, value_enum, default_value_t = Mode::Realtime)]
+    mode: Mode,
+    /// Realtime mode: physics steps of 1 ms per wall-clock second (500 = real-time
+    /// factor 0.5, as in the thesis); 0 steps as fast as possible.
+    #[arg(long, value_name = "STEPS_PER_S", default_value_t = DEFAULT_REAL_TIME_RATE)]
+    real_time_rate: u32,
+    /// World states per simulated second; must divide 1000 (the thesis used 100
+    /// and 10). [default: the scene's, 100 for the built-in scenes]
+    #[arg(long, value_name = "HZ")]
+    rate: Option<u32>,
+    /// Lock-step latency emulation: each Move takes effect after a uniformly
+    /// drawn 0..=L steps of the next interval (the thesis saw up to about 5).
+    /// Off unless given; needs --mode lockstep.
+    #[arg(long, value_name = "L")]
+    latency_max: Option<u32>,
+    /// Seed of the latency emulation's generator (clients can reseed it with
+    /// the latency_seed command). [default: 0]
+    #[arg(long, value_name = "S", requires = "latency_max")]
+    latency_seed: Option<u64>,
+    /// Clients served at once; one more gets an Error and is closed.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_CLIENTS)]
+    max_clients: usize,
+    /// Messages each client's outgoing queue holds; when it is full the oldest
+    /// state is dropped (and counted).
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_CLIENT_QUEUE)]
+    client_queue: usize,
+    /// A client whose queue stays full this long is disconnected.
+    #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = parse_seconds)]
+    slow_client_timeout: Duration,
+}
+
+fn parse_seconds(text: &str) -> Result<Duration, String> {
+    text.parse::<f64>()
+        .ok()
+        .and_then(|s| Duration::try_from_secs_f64(s).ok())
+        .filter(|d| !d.is_zero())
+        .ok_or_else(|| format!("expected a positive number of seconds, found '{text}'"))
 }
 
 #[derive(Debug, Args)]
@@ -51,16 +136,24 @@ struct SweepArgs {
 }
 
 fn main() -> ExitCode {
+    let cli = Cli::parse();
+    // A daemon reports its clients coming and going; a one-shot command only
+    // its problems.
+    let default_level = match cli.command {
+        None | Some(Cmd::Serve(_)) => "info",
+        Some(Cmd::Sweep(_)) => "warn",
+    };
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level)),
         )
         .with_writer(std::io::stderr)
         .init();
-    let cli = Cli::parse();
     let result = match cli.command {
-        Cmd::Sweep(args) => run_sweep(&args),
+        None => run_serve(&cli.serve),
+        Some(Cmd::Serve(args)) => run_serve(&args),
+        Some(Cmd::Sweep(args)) => run_sweep(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -69,6 +162,80 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn serve_config(args: &ServeArgs) -> anyhow::Result<Config> {
+    let scene =
+        Scene::load(&args.scene).with_context(|| format!("loading scene `{}`", args.scene))?;
+    let timing = match (args.mode, args.latency_max) {
+        (Mode::Realtime, Some(_)) => {
+            bail!("--latency-max emulates latency in lock-step mode; add --mode lockstep")
+        }
+        (Mode::Realtime, None) => Timing::Realtime {
+            steps_per_second: args.real_time_rate,
+        },
+        (Mode::Lockstep, latency) => Timing::Lockstep {
+            latency: latency.map(|max_steps| Latency {
+                max_steps,
+                seed: args.latency_seed.unwrap_or(0),
+            }),
+        },
+    };
+    Ok(Config {
+        timing,
+        publish_rate_hz: args.rate,
+        max_clients: args.max_clients,
+        client_queue: args.client_queue,
+        slow_client_limit: args.slow_client_timeout,
+        ..Config::new(scene)
+    })
+}
+
+fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
+    let config = serve_config(args)?;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")?;
+    runtime.block_on(async {
+        let listener = tokio::net::TcpListener::bind((args.bind, args.port))
+            .await
+            .with_context(|| format!("cannot listen on {}:{}", args.bind, args.port))?;
+        let server = Server::start(listener, config).await?;
+        // The one line on stdout, for scripts and tests that start the daemon
+        // on port 0 and need to know where it is.
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "listening on {}", server.local_addr())?;
+        out.flush()?;
+        drop(out);
+        tokio::select! {
+            signal = shutdown_signal() => {
+                signal?;
+                tracing::info!("shutting down");
+            }
+            () = server.stopped() => {}
+        }
+        server.shutdown().await?;
+        Ok(())
+    })
+}
+
+/// SIGINT (Ctrl-C) or SIGTERM.
+async fn shutdown_signal() -> anyhow::Result<()> {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{signal, SignalKind};
+        let mut terminate = signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
+        tokio::select! {
+            ctrl_c = tokio::signal::ctrl_c() => ctrl_c.context("cannot listen for SIGINT")?,
+            _ = terminate.recv() => {}
+        }
+    }
+    #[cfg(not(unix))]
+    tokio::signal::ctrl_c()
+        .await
+        .context("cannot listen for Ctrl-C")?;
+    Ok(())
 }
 
 fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {

@@ -1,0 +1,256 @@
+//! Every command's checks on arrival, and the order in which accepted
+//! commands reach the world.
+//!
+//! A command is checked completely before it is accepted, so that an invalid
+//! one is answered at once and the world never sees it (`protocol.md` §3):
+//! first the message-only checks of [`pushlearn::wire::validate`], then the
+//! scene's (body names, positions), then those that depend on the commands
+//! accepted before it (pause state, ghost count). The last kind is answered
+//! from a mirror of exactly the state the world will be in once it has
+//! applied everything accepted so far; the physics thread never changes
+//! that state on its own (a divergence reset keeps pause and clears ghosts,
+//! which only makes the mirror's ghost count err on the safe side).
+//!
+//! Checking against the mirror and handing the command to the physics
+//! thread happen under one lock, so the order of acceptance is the order of
+//! application, across all clients.
+
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicU32, AtomicUsize, Ordering};
+use std::sync::mpsc::Sender;
+use std::sync::{Mutex, MutexGuard, PoisonError};
+
+use pushlearn::wire::pb;
+use pushlearn::wire::{validate, InvalidCommand};
+
+use super::{convert, Config, Timing, MAX_QUEUED_COMMANDS};
+use crate::scene::{Scene, GHOST_MARKER};
+use crate::world::{Command, CommandError, MAX_GHOSTS};
+
+/// Identifies a connection for answers the physics thread sends it.
+pub(super) type ClientId = u64;
+
+/// A command that passed every check, on its way to the physics thread.
+#[derive(Debug)]
+pub(super) struct Accepted {
+    pub client: ClientId,
+    pub seq: u64,
+    pub op: Op,
+}
+
+/// What an accepted `ClientMessage` asks of the world.
+#[derive(Debug)]
+pub(super) enum Op {
+    /// Commands of the world, applied together at one step boundary (a
+    /// `set_pose` may name several bodies).
+    World(Vec<Command>),
+    /// Lock-step: run to the next publish.
+    Advance,
+    /// Lock-step with latency emulation: reseed the delay generator.
+    LatencySeed(u64),
+}
+
+impl Op {
+    /// A Move: what latency emulation delays.
+    pub fn is_move(&self) -> bool {
+        matches!(
+            self,
+            Op::World(commands) if matches!(
+                commands.as_slice(),
+                [Command::Actuator { mode: crate::ActuatorMode::Move, .. }]
+            )
+        )
+    }
+}
+
+/// What the physics thread receives.
+#[derive(Debug)]
+pub(super) enum ToPhysics {
+    Command(Accepted),
+    Stop,
+}
+
+/// Why a command was not accepted. The text is what the `Error` carries.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(super) enum Refusal {
+    /// The wire's checks, including the world-dependent ones it words.
+    #[error(transparent)]
+    Invalid(#[from] InvalidCommand),
+    /// The world's own checks (e.g. a position beyond its bounds).
+    #[error("{command}: {error}")]
+    World {
+        /// The command and body, e.g. `set_pose: body 'blockA'`.
+        command: String,
+        error: CommandError,
+    },
+    /// Too many accepted commands wait for the physics thread.
+    #[error("busy: {MAX_QUEUED_COMMANDS} accepted commands are waiting to be applied; advance the world before sending more")]
+    Busy,
+    /// The physics thread has stopped.
+    #[error("the world is shutting down")]
+    Stopping,
+}
+
+impl Refusal {
+    /// The `Error` answering command `seq`.
+    pub fn reply(&self, seq: u64) -> pb::ServerMessage {
+        pb::ServerMessage::error(seq, self.to_string())
+    }
+
+    /// The refusal of an empty message, which clients send on purpose as a
+    /// round-trip barrier: not worth more than a debug line.
+    pub fn is_barrier(&self) -> bool {
+        matches!(self, Refusal::Invalid(InvalidCommand::MissingPayload))
+    }
+}
+
+/// The world's state as of every accepted command, where checks need it.
+#[derive(Debug)]
+struct Mirror {
+    paused: bool,
+    ghosts: HashSet<String>,
+    physics: Sender<ToPhysics>,
+}
+
+/// The arrival checks and the channel to the physics thread.
+#[derive(Debug)]
+pub(super) struct Gate {
+    scene: Scene,
+    timing: Timing,
+    /// Current publish rate, for the Hello of new connections.
+    publish_rate: AtomicU32,
+    /// Accepted commands not yet taken by the physics thread.
+    queued: AtomicUsize,
+    mirror: Mutex<Mirror>,
+}
+
+impl Gate {
+    pub fn new(config: &Config, physics: Sender<ToPhysics>) -> Gate {
+        Gate {
+            scene: config.scene.clone(),
+            timing: config.timing,
+            publish_rate: AtomicU32::new(
+                config
+                    .publish_rate_hz
+                    .unwrap_or(config.scene.publish_rate_hz),
+            ),
+            queued: AtomicUsize::new(0),
+            mirror: Mutex::new(Mirror {
+                paused: false,
+                ghosts: HashSet::new(),
+                physics,
+            }),
+        }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Mirror> {
+        // A panic elsewhere while holding the lock leaves plain data behind
+        // that is still consistent (every update is a single assignment).
+        self.mirror.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// The first message of every connection.
+    pub fn hello(&self) -> pb::Hello {
+        convert::hello(
+            &self.scene,
+            self.publish_rate.load(Ordering::Relaxed),
+            self.timing.mode(),
+        )
+    }
+
+    /// The physics thread applied a new publish rate.
+    pub fn set_publish_rate(&self, hz: u32) {
+        self.publish_rate.store(hz, Ordering::Relaxed);
+    }
+
+    /// Checks `message` from `client` and, if it passes, hands it to the
+    /// physics thread behind everything accepted before it.
+    pub fn admit(&self, client: ClientId, message: &pb::ClientMessage) -> Result<(), Refusal> {
+        validate(message)?;
+        let op = convert::operation(message, &self.scene)?;
+        let mut mirror = self.lock();
+        self.check_state(&mirror, &op)?;
+        if self.queued.load(Ordering::Acquire) >= MAX_QUEUED_COMMANDS {
+            return Err(Refusal::Busy);
+        }
+        note(&mut mirror, &op);
+        // Counted before sending so the physics thread never takes more
+        // than was counted.
+        self.queued.fetch_add(1, Ordering::AcqRel);
+        let accepted = Accepted {
+            client,
+            seq: message.seq,
+            op,
+        };
+        if mirror.physics.send(ToPhysics::Command(accepted)).is_err() {
+            self.queued.fetch_sub(1, Ordering::AcqRel);
+            return Err(Refusal::Stopping);
+        }
+        Ok(())
+    }
+
+    fn check_state(&self, mirror: &Mirror, op: &Op) -> Result<(), Refusal> {
+        match op {
+            Op::Advance => match self.timing {
+                Timing::Realtime { .. } => Err(InvalidCommand::AdvanceInRealtime.into()),
+                Timing::Lockstep { .. } if mirror.paused => {
+                    Err(InvalidCommand::AdvanceWhilePaused.into())
+                }
+                Timing::Lockstep { .. } => Ok(()),
+            },
+            Op::LatencySeed(_) if self.timing.latency().is_none() => {
+                Err(InvalidCommand::LatencySeedWithoutLatency.into())
+            }
+            Op::LatencySeed(_) => Ok(()),
+            Op::World(commands) => {
+                let mut new_ghosts = HashSet::new();
+                for name in commands.iter().filter_map(ghost_name) {
+                    if !mirror.ghosts.contains(name)
+                        && new_ghosts.insert(name)
+                        && mirror.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
+                    {
+                        return Err(Refusal::World {
+                            command: format!("set_pose: body '{name}'"),
+                            error: CommandError::TooManyGhosts,
+                        });
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The physics thread took `n` accepted commands off the channel.
+    pub fn taken(&self, n: usize) {
+        self.queued.fetch_sub(n, Ordering::AcqRel);
+    }
+
+    /// Asks the physics thread to stop after what it is doing.
+    pub fn stop_physics(&self) {
+        // Already gone is fine: it is stopping anyway.
+        let _ = self.lock().physics.send(ToPhysics::Stop);
+    }
+}
+
+/// Updates the mirror for an accepted `op`, as the world will change.
+fn note(mirror: &mut Mirror, op: &Op) {
+    let Op::World(commands) = op else { return };
+    for command in commands {
+        match command {
+            Command::Pause => mirror.paused = true,
+            Command::Unpause => mirror.paused = false,
+            Command::Reset => mirror.ghosts.clear(),
+            Command::SetPose { name, .. } if name.contains(GHOST_MARKER) => {
+                mirror.ghosts.insert(name.clone());
+            }
+            Command::Actuator { .. } | Command::SetPose { .. } | Command::SetPublishRate(_) => {}
+        }
+    }
+}
+
+fn ghost_name(command: &Command) -> Option<&str> {
+    match command {
+        Command::SetPose { name, .. } if name.contains(GHOST_MARKER) => Some(name),
+        _ => None,
+    }
+}

@@ -1,0 +1,11 @@
+//! The `pushlearn-sim` daemon over real localhost sockets: in-process
+//! servers bound to 127.0.0.1:0, and the binary itself. One test binary,
+//! since linking each file separately costs minutes on two cores.
+
+mod support;
+
+mod bad_input;
+mod binary;
+mod clients;
+mod commands;
+mod lockstep;
