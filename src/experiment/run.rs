@@ -52,9 +52,11 @@ impl Plan {
     /// the job's latency seed, so that the world's jitter does not depend on
     /// earlier jobs or on which worker runs the job (`experiments.md` §5).
     fn job_setup(&self, latency_seed: u64) -> Vec<Payload> {
-        // SimControl.latency_seed reaches main with the daemon.
-        let _ = latency_seed;
-        Vec::new()
+        if self.mode.jitter() {
+            vec![Payload::latency_seed(latency_seed)]
+        } else {
+            Vec::new()
+        }
     }
 }
 
