@@ -10,7 +10,7 @@ use learner::{Model, ObjectState};
 use pushlearn::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
 use pushlearn::experiment::push_task::Variant;
 use pushlearn::experiment::run::{self, Plan};
-use pushlearn::experiment::workers::{find_sim_binary, WorldSource};
+use pushlearn::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
 use pushlearn::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
 use pushlearn::models::{ModelKind, WithModel};
 use pushlearn::report::{self, table};
@@ -204,8 +204,42 @@ fn progress(len: usize, what: &str) -> ProgressBar {
     bar
 }
 
+/// On Ctrl-C or SIGTERM: kill the world processes, then exit. (An
+/// interrupted program does not unwind, so the processes' own clean-up would
+/// not run.)
+fn end_worlds_on_signal() {
+    std::thread::spawn(|| {
+        let Ok(runtime) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        runtime.block_on(async {
+            let mut terminate =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+            let terminated = async {
+                match terminate.as_mut() {
+                    Some(signal) => {
+                        signal.recv().await;
+                    }
+                    None => std::future::pending::<()>().await,
+                }
+            };
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                () = terminated => {}
+            }
+        });
+        kill_all_worlds();
+        eprintln!("interrupted; the world processes were stopped");
+        std::process::exit(130);
+    });
+}
+
 /// Runs `pushlearn experiment`.
 pub fn run(args: ExperimentArgs) -> Result<()> {
+    end_worlds_on_signal();
     match args.command {
         ExperimentCommand::PushTask(args) => push_task(&args),
         ExperimentCommand::MoveToTarget(args) => move_to_target(&args),

@@ -13,7 +13,7 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::{mpsc, Arc, Mutex, Weak};
 use std::time::Duration;
 
 use super::link::{Pacing, WorldLink};
@@ -43,7 +43,6 @@ pub fn find_sim_binary(explicit: Option<&Path>) -> Result<PathBuf, ExperimentErr
             })
         };
     }
-    let mut looked = Vec::new();
     let beside = std::env::current_exe()
         .ok()
         .and_then(|exe| exe.parent().map(|dir| dir.join(SIM_BIN)));
@@ -54,17 +53,13 @@ pub fn find_sim_binary(explicit: Option<&Path>) -> Result<PathBuf, ExperimentErr
                 .collect::<Vec<_>>()
         })
         .unwrap_or_default();
-    for candidate in beside.into_iter().chain(on_path) {
-        if candidate.is_file() {
-            return Ok(candidate);
-        }
-        looked.push(candidate.display().to_string());
+    if let Some(found) = beside.iter().chain(&on_path).find(|p| p.is_file()) {
+        return Ok(found.clone());
     }
     Err(ExperimentError::SimNotFound {
-        looked: if looked.is_empty() {
-            "next to this executable and on PATH".into()
-        } else {
-            looked.join(", ")
+        looked: match beside {
+            Some(path) => format!("{} and on PATH", path.display()),
+            None => "on PATH".into(),
         },
     })
 }
@@ -77,10 +72,33 @@ pub fn serve_command(bin: &Path, args: &[String]) -> Command {
     command
 }
 
+/// Every live world process of this program, so that a signal handler can
+/// end them before the program exits (see [`kill_all_worlds`]).
+static LIVE: Mutex<Vec<Weak<Mutex<Child>>>> = Mutex::new(Vec::new());
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Kills every world process still running. For signal handlers: a program
+/// that is interrupted does not unwind, so the processes' `Drop` never runs.
+pub fn kill_all_worlds() {
+    let live = std::mem::take(&mut *lock(&LIVE));
+    kill_each(&live);
+}
+
+fn kill_each(children: &[Weak<Mutex<Child>>]) {
+    for child in children.iter().filter_map(Weak::upgrade) {
+        let mut child = lock(&child);
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+}
+
 /// A world daemon child process, killed when dropped.
 #[derive(Debug)]
 pub struct SimProcess {
-    child: Child,
+    child: Arc<Mutex<Child>>,
     addr: String,
 }
 
@@ -125,6 +143,12 @@ impl SimProcess {
             watch(Box::new(pipe), "stderr");
         }
         drop(found);
+        let child = Arc::new(Mutex::new(child));
+        {
+            let mut live = lock(&LIVE);
+            live.retain(|w| w.strong_count() > 0);
+            live.push(Arc::downgrade(&child));
+        }
         let mut process = SimProcess {
             child,
             addr: String::new(),
@@ -137,9 +161,10 @@ impl SimProcess {
             }
             Err(_) => {
                 // Both pipes closed (the child is gone) or it stayed silent.
-                let status = process.child.try_wait().ok().flatten().or_else(|| {
+                let exited = || lock(&process.child).try_wait().ok().flatten();
+                let status = exited().or_else(|| {
                     std::thread::sleep(Duration::from_millis(50));
-                    process.child.try_wait().ok().flatten()
+                    exited()
                 });
                 Err(ExperimentError::Spawn {
                     command: description,
@@ -161,8 +186,9 @@ impl SimProcess {
 
 impl Drop for SimProcess {
     fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        let mut child = lock(&self.child);
+        let _ = child.kill();
+        let _ = child.wait();
     }
 }
 
@@ -339,6 +365,17 @@ mod tests {
         ))
         .unwrap();
         assert_eq!(p.addr(), "127.0.0.1:4242");
+    }
+
+    #[test]
+    fn live_worlds_can_be_killed_from_outside() {
+        let p = SimProcess::spawn(shell("echo 'listening on 127.0.0.1:1'; exec sleep 30")).unwrap();
+        assert!(lock(&LIVE)
+            .iter()
+            .any(|w| w.ptr_eq(&Arc::downgrade(&p.child))));
+        kill_each(&[Arc::downgrade(&p.child)]);
+        // Killed and reaped: its status is known at once.
+        assert!(lock(&p.child).try_wait().unwrap().is_some());
     }
 
     #[test]
