@@ -82,7 +82,7 @@ impl Variant {
             Variant::Random => DEFAULT_TRAIN_RUNS.to_vec(),
             Variant::FixedThree => vec![3],
             Variant::TwoObjects => vec![6],
-            Variant::ConstantFeedback => vec![0],
+            Variant::ConstantFeedback => Vec::new(),
         }
     }
 
@@ -522,6 +522,33 @@ mod tests {
             .unwrap();
         let first_move = batches.iter().position(|b| b == &["move(0,0.5)"]).unwrap();
         assert_eq!(run_end - first_move, 150);
+    }
+
+    /// Folds and N_train values are separate jobs: each starts like the
+    /// spec's `new_fold` (a fresh clone of the untrained model, rate and
+    /// world reset, its own seed), so consecutive jobs on one world do not
+    /// see each other, and a job replayed gives the same commands.
+    #[test]
+    fn every_job_starts_like_a_new_fold() {
+        let untrained = Probe::default();
+        let jobs = PushJob::all(Variant::Random, &[1, 2], 2, 7);
+        let mut runs = Vec::new();
+        for job in &jobs {
+            let mut driver = Driver::new(untrained.clone(), PushTask::new(job), 100);
+            let batches = simulate(&mut driver, 100_000);
+            assert_eq!(batches[0], ["rate(100)", "move(0,0)", "reset"]);
+            let (task, model, _) = driver.into_parts();
+            assert_eq!(task.training_starts.len(), job.n_train);
+            assert_eq!(model.trained_updates, 149 * job.n_train as u64);
+            runs.push((task.training_starts, batches));
+        }
+        // Folds of one N_train draw different starts; N_train = 2 does not
+        // continue the sequence of N_train = 1.
+        assert_ne!(runs[0].0, runs[1].0);
+        assert_ne!(runs[0].0[0], runs[2].0[0]);
+        // Replaying job 3 alone gives exactly the same command sequence.
+        let mut again = Driver::new(untrained, PushTask::new(&jobs[3]), 100);
+        assert_eq!(simulate(&mut again, 100_000), runs[3].1);
     }
 
     #[test]
