@@ -3,7 +3,17 @@
 //! * [`wire`]: the protobuf schema (`proto/pushlearn.proto`), framing,
 //!   connections and command validation shared by the world daemon and its
 //!   clients;
-//! * [`client`]: an async client for the world daemon.
+//! * [`client`]: an async client for the world daemon;
+//! * [`frame`]: world states as the learner sees them;
+//! * [`experiment`]: the thesis's experiments over the sockets;
+//! * [`learn`]: the learner daemon;
+//! * [`models`]: the learners by name;
+//! * [`report`]: JSON documents and terminal tables beside the thesis's numbers.
 
 pub mod client;
+pub mod experiment;
+pub mod frame;
+pub mod learn;
+pub mod models;
+pub mod report;
 pub mod wire;

@@ -22,6 +22,8 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Ctl(cli::ctl::CtlArgs),
+    Experiment(cli::experiment::ExperimentArgs),
+    Learn(cli::learn::LearnArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +36,8 @@ fn main() -> ExitCode {
         .init();
     let result = match cli.command {
         Command::Ctl(args) => cli::ctl::run(args),
+        Command::Experiment(args) => cli::experiment::run(args),
+        Command::Learn(args) => cli::learn::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,8 @@
 //! Subcommands of the `pushlearn` binary.
 
 pub mod ctl;
+pub mod experiment;
+pub mod learn;
 
 /// Whether `err` comes from writing to a closed stdout pipe.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {

@@ -10,4 +10,5 @@ mod process;
 mod client;
 mod ctl;
 mod docs;
+mod experiment;
 mod python;

@@ -1,0 +1,385 @@
+//! `pushlearn experiment`: the thesis's experiments against real worlds.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use learner::{Model, ObjectState};
+use pushlearn::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
+use pushlearn::experiment::push_task::Variant;
+use pushlearn::experiment::run::{self, Plan};
+use pushlearn::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
+use pushlearn::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
+use pushlearn::models::{ModelKind, WithModel};
+use pushlearn::report::{self, table};
+
+/// Run one of the thesis's experiments and print its table beside the
+/// thesis's numbers.
+///
+/// Each worker starts its own world (`pushlearn-sim serve` on a free port,
+/// found next to this executable, on PATH, or at --sim-bin) and runs
+/// independent jobs; results are gathered in job order, so they do not
+/// depend on --workers. In the lock-step modes the same --seed gives the same
+/// results.
+#[derive(Debug, Args)]
+pub struct ExperimentArgs {
+    #[command(subcommand)]
+    command: ExperimentCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum ExperimentCommand {
+    /// Push Task Simulation: train the forward model on N pushes, then
+    /// predict 150 steps of 21 test pushes without feedback (experiments.md §3).
+    #[command(after_help = "Thesis tables:\n  \
+        pushlearn experiment push-task --model gate                               # §3.4, §4.2\n  \
+        pushlearn experiment push-task --model interaction                        # §3.2, §4.1\n  \
+        pushlearn experiment push-task --model gate --variant fixed-three         # §5.3\n  \
+        pushlearn experiment push-task --model gate --variant two-objects         # §6.1\n  \
+        pushlearn experiment push-task --model gate --variant two-objects --train-runs 7   # §6.2\n  \
+        pushlearn experiment push-task --model gate --variant constant-feedback   # §7 (qualitative)")]
+    PushTask(PushTaskArgs),
+    /// Move to Target: train on 8 fixed pushes, then plan pushes until the
+    /// block reaches a target pose (experiments.md §4).
+    #[command(after_help = "Thesis tables:\n  \
+        pushlearn experiment move-to-target --model gate          # §8.2\n  \
+        pushlearn experiment move-to-target --model interaction   # §8.1")]
+    MoveToTarget(MoveToTargetArgs),
+}
+
+/// Where the worlds come from and how they are timed.
+#[derive(Debug, Args)]
+struct WorldArgs {
+    /// World timing: lockstep-jitter (lock-step with seeded command latency of
+    /// 0–5 steps, the thesis's timing noise, reproducible), lockstep (no
+    /// latency: folds of fixed-start experiments are identical), or realtime
+    /// (the thesis's free-running world; the learner must keep up).
+    #[arg(long, value_enum, default_value_t = Mode::LockstepJitter)]
+    mode: Mode,
+
+    /// Number of worlds (processes) running jobs in parallel [default: the
+    /// number of CPUs].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    workers: Option<u32>,
+
+    /// The world daemon binary [default: `pushlearn-sim` next to this
+    /// executable, else on PATH].
+    #[arg(long, value_name = "PATH")]
+    sim_bin: Option<PathBuf>,
+
+    /// Use an already running world instead of starting one (one worker).
+    /// Its scene and timing mode must match the experiment.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["workers", "sim_bin"])]
+    connect: Option<String>,
+
+    /// Seed of every random choice (training starts, exploration, latency).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+
+    /// Also write the results as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct PushTaskArgs {
+    /// The learner.
+    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    model: ModelKind,
+
+    /// Which experiment of the thesis: random training starts (§3.1),
+    /// the three selected starts (§3.2), two blocks (§3.3) or constant
+    /// feedback at 10 Hz (§3.4).
+    #[arg(long, value_enum, default_value_t = Variant::Random)]
+    variant: Variant,
+
+    /// Numbers of training runs, comma-separated [default: 1,2,3,5,10,20,30
+    /// for random, 3 for fixed-three, 6 for two-objects (7 for the thesis's
+    /// second variant)].
+    #[arg(long, value_name = "N,…", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..))]
+    train_runs: Option<Vec<u32>>,
+
+    /// Repetitions (folds) per number of training runs, each with a fresh model.
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
+    folds: u32,
+
+    #[command(flatten)]
+    world: WorldArgs,
+}
+
+#[derive(Debug, Args)]
+struct MoveToTargetArgs {
+    /// The learner.
+    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    model: ModelKind,
+
+    /// A target pose X,Y,ORI of the blue block (metres, radians); repeat for
+    /// more [default: the thesis's four targets].
+    #[arg(long, value_name = "X,Y,ORI", allow_hyphen_values = true, value_parser = parse_pose)]
+    target: Vec<ObjectState>,
+
+    /// Test runs per target, each with a freshly trained model.
+    #[arg(long, default_value_t = REPETITIONS as u32, value_parser = clap::value_parser!(u32).range(1..))]
+    repetitions: u32,
+
+    /// Longest test run, in messages.
+    #[arg(long, default_value_t = MAX_STEPS, value_parser = clap::value_parser!(u64).range(1..))]
+    max_steps: u64,
+
+    #[command(flatten)]
+    world: WorldArgs,
+}
+
+/// `X,Y,ORI` as three finite numbers.
+pub fn parse_pose(text: &str) -> Result<ObjectState, String> {
+    let v = parse_numbers(text, 3)?;
+    Ok(ObjectState::new(v[0], v[1], v[2]))
+}
+
+/// `n` comma-separated finite numbers.
+pub fn parse_numbers(text: &str, n: usize) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("'{s}' is not a finite number"))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.len() == n {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected {n} comma-separated numbers, got {}",
+            v.len()
+        ))
+    }
+}
+
+impl WorldArgs {
+    fn plan(&self, model: ModelKind, scene: &str) -> Result<Plan> {
+        let source = match &self.connect {
+            Some(addr) => WorldSource::Connect(addr.clone()),
+            None => WorldSource::Spawn {
+                bin: find_sim_binary(self.sim_bin.as_deref())?,
+                args: self.mode.serve_args(scene),
+            },
+        };
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        Ok(Plan {
+            mode: self.mode,
+            workers: self.workers.map_or(cpus, |n| n as usize),
+            source,
+            seed: self.seed,
+            model: model.as_str().to_owned(),
+        })
+    }
+
+    fn write_json<T: serde::Serialize>(&self, report: &T) -> Result<()> {
+        if let Some(path) = &self.json {
+            report::write_json(path, report)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(())
+    }
+}
+
+/// A progress bar on stderr, hidden when stdout is not a terminal (reports
+/// piped into files stay clean, and so do logs).
+fn progress(len: usize, what: &str) -> ProgressBar {
+    if !std::io::stdout().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg} {wide_bar} {pos}/{len} jobs [{elapsed_precise}, eta {eta_precise}]",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_owned());
+    bar
+}
+
+/// On Ctrl-C or SIGTERM: kill the world processes, then exit. (An
+/// interrupted program does not unwind, so the processes' own clean-up would
+/// not run.)
+fn end_worlds_on_signal() {
+    std::thread::spawn(|| {
+        let Ok(runtime) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        runtime.block_on(async {
+            let mut terminate =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+            let terminated = async {
+                match terminate.as_mut() {
+                    Some(signal) => {
+                        signal.recv().await;
+                    }
+                    None => std::future::pending::<()>().await,
+                }
+            };
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                () = terminated => {}
+            }
+        });
+        kill_all_worlds();
+        eprintln!("interrupted; the world processes were stopped");
+        std::process::exit(130);
+    });
+}
+
+/// Runs `pushlearn experiment`.
+pub fn run(args: ExperimentArgs) -> Result<()> {
+    end_worlds_on_signal();
+    match args.command {
+        ExperimentCommand::PushTask(args) => push_task(&args),
+        ExperimentCommand::MoveToTarget(args) => move_to_target(&args),
+    }
+}
+
+fn push_task(args: &PushTaskArgs) -> Result<()> {
+    let variant = args.variant;
+    let plan = args.world.plan(args.model, variant.scene())?;
+    if variant == Variant::ConstantFeedback {
+        if args.train_runs.is_some() {
+            bail!("--variant constant-feedback has no training phase; drop --train-runs");
+        }
+        let report = args.model.dispatch(LOW_RATE_HZ, Feedback { plan: &plan })?;
+        args.world.write_json(&report)?;
+        let mut out = std::io::stdout().lock();
+        table::feedback(&mut out, &report, args.model)?;
+        return Ok(out.flush()?);
+    }
+    let train_runs: Vec<usize> = match &args.train_runs {
+        Some(list) => list.iter().map(|&n| n as usize).collect(),
+        None => variant.default_train_runs(),
+    };
+    let fixed = variant.fixed_starts().len();
+    if variant == Variant::TwoObjects && train_runs.iter().any(|&n| n > fixed) {
+        bail!("the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}");
+    }
+    let folds = args.folds as usize;
+    let bar = progress(train_runs.len() * folds, "push task");
+    let report = args.model.dispatch(
+        RATE_HZ,
+        Push {
+            variant,
+            train_runs: &train_runs,
+            folds,
+            plan: &plan,
+            bar: &bar,
+        },
+    )?;
+    bar.finish_and_clear();
+    args.world.write_json(&report)?;
+    let mut out = std::io::stdout().lock();
+    table::push(&mut out, &report, args.model)?;
+    Ok(out.flush()?)
+}
+
+fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
+    let plan = args.world.plan(args.model, "one_block")?;
+    let targets = if args.target.is_empty() {
+        TARGETS.to_vec()
+    } else {
+        args.target.clone()
+    };
+    let repetitions = args.repetitions as usize;
+    let bar = progress(targets.len() * repetitions, "move to target");
+    let report = args.model.dispatch(
+        RATE_HZ,
+        MoveToTarget {
+            targets: &targets,
+            repetitions,
+            max_steps: args.max_steps,
+            plan: &plan,
+            bar: &bar,
+        },
+    )?;
+    bar.finish_and_clear();
+    args.world.write_json(&report)?;
+    let mut out = std::io::stdout().lock();
+    table::move_to_target(&mut out, &report, args.model)?;
+    Ok(out.flush()?)
+}
+
+struct Push<'a> {
+    variant: Variant,
+    train_runs: &'a [usize],
+    folds: usize,
+    plan: &'a Plan,
+    bar: &'a ProgressBar,
+}
+
+impl WithModel for Push<'_> {
+    type Output = Result<report::PushReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::push_task(
+            untrained,
+            self.variant,
+            self.train_runs,
+            self.folds,
+            self.plan,
+            |done| self.bar.set_position(done as u64),
+        )?)
+    }
+}
+
+struct Feedback<'a> {
+    plan: &'a Plan,
+}
+
+impl WithModel for Feedback<'_> {
+    type Output = Result<report::FeedbackReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::constant_feedback(untrained, self.plan)?)
+    }
+}
+
+struct MoveToTarget<'a> {
+    targets: &'a [ObjectState],
+    repetitions: usize,
+    max_steps: u64,
+    plan: &'a Plan,
+    bar: &'a ProgressBar,
+}
+
+impl WithModel for MoveToTarget<'_> {
+    type Output = Result<report::MttReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::move_to_target(
+            untrained,
+            self.targets,
+            self.repetitions,
+            self.max_steps,
+            self.plan,
+            |done| self.bar.set_position(done as u64),
+        )?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn poses_and_actions_parse_strictly() {
+        assert_eq!(
+            parse_pose("-0.6, 0.7,0.75"),
+            Ok(ObjectState::new(-0.6, 0.7, 0.75))
+        );
+        assert!(parse_pose("1,2").unwrap_err().contains("expected 3"));
+        assert!(parse_pose("1,nan,2").unwrap_err().contains("finite"));
+        assert!(parse_pose("1,x,2").is_err());
+        assert_eq!(parse_numbers("0,0.5", 2), Ok(vec![0.0, 0.5]));
+    }
+}

@@ -1,0 +1,452 @@
+//! Workers: one world per worker and independent jobs spread over them.
+//!
+//! ODE's quick-step solver draws from one random generator per process, so
+//! worlds that must be reproducible cannot share a process: every worker
+//! starts its own `pushlearn-sim serve` child on a free port (or, in
+//! realtime, uses one world that is already running). Each worker thread
+//! owns its child, its connection and a single-threaded runtime, and takes
+//! the next job index from a shared counter; results are put back in job
+//! order, so the report does not depend on the number of workers or on
+//! which worker ran which job.
+
+use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{mpsc, Arc, Mutex, Weak};
+use std::time::Duration;
+
+use super::link::{Pacing, WorldLink};
+use super::ExperimentError;
+
+/// File name of the world daemon.
+pub const SIM_BIN: &str = "pushlearn-sim";
+
+/// How long a fresh world may take to print its address.
+const START_LIMIT: Duration = Duration::from_secs(30);
+
+/// What the daemon prints once it accepts connections.
+const LISTENING: &str = "listening on ";
+
+/// Locates `pushlearn-sim`: the override, else next to the running
+/// executable (where cargo puts both binaries), else on `PATH`.
+///
+/// # Errors
+/// [`ExperimentError::SimNotFound`] naming what to build.
+pub fn find_sim_binary(explicit: Option<&Path>) -> Result<PathBuf, ExperimentError> {
+    if let Some(path) = explicit {
+        return if path.is_file() {
+            Ok(path.to_owned())
+        } else {
+            Err(ExperimentError::SimNotFound {
+                looked: path.display().to_string(),
+            })
+        };
+    }
+    let beside = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(|dir| dir.join(SIM_BIN)));
+    let on_path = std::env::var_os("PATH")
+        .map(|paths| {
+            std::env::split_paths(&paths)
+                .map(|dir| dir.join(SIM_BIN))
+                .collect::<Vec<_>>()
+        })
+        .unwrap_or_default();
+    if let Some(found) = beside.iter().chain(&on_path).find(|p| p.is_file()) {
+        return Ok(found.clone());
+    }
+    Err(ExperimentError::SimNotFound {
+        looked: match beside {
+            Some(path) => format!("{} and on PATH", path.display()),
+            None => "on PATH".into(),
+        },
+    })
+}
+
+/// The command that starts a world on a free port: `bin serve --port 0 ARGS…`.
+#[must_use]
+pub fn serve_command(bin: &Path, args: &[String]) -> Command {
+    let mut command = Command::new(bin);
+    command.arg("serve").args(["--port", "0"]).args(args);
+    command
+}
+
+/// Every live world process of this program, so that a signal handler can
+/// end them before the program exits (see [`kill_all_worlds`]).
+static LIVE: Mutex<Vec<Weak<Mutex<Child>>>> = Mutex::new(Vec::new());
+
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Kills every world process still running. For signal handlers: a program
+/// that is interrupted does not unwind, so the processes' `Drop` never runs.
+pub fn kill_all_worlds() {
+    let live = std::mem::take(&mut *lock(&LIVE));
+    kill_each(&live);
+}
+
+fn kill_each(children: &[Weak<Mutex<Child>>]) {
+    for child in children.iter().filter_map(Weak::upgrade) {
+        let mut child = lock(&child);
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+}
+
+/// A world daemon child process, killed when dropped.
+#[derive(Debug)]
+pub struct SimProcess {
+    child: Arc<Mutex<Child>>,
+    addr: String,
+}
+
+impl SimProcess {
+    /// Starts `command` (see [`serve_command`]) and waits for the line
+    /// `listening on ADDR` on its stdout or stderr.
+    ///
+    /// # Errors
+    /// The process cannot be started, or exits or stays silent before it
+    /// prints its address.
+    pub fn spawn(mut command: Command) -> Result<Self, ExperimentError> {
+        command
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped());
+        let description = format!("{command:?}");
+        let mut child = command.spawn().map_err(|err| ExperimentError::Spawn {
+            command: description.clone(),
+            reason: err.to_string(),
+        })?;
+        // Both streams are drained for the child's whole life so that it
+        // never blocks on a full pipe.
+        let (found, addresses) = mpsc::channel();
+        let watch = |pipe: Box<dyn Read + Send>, stream: &'static str| {
+            let found = found.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+                    match line.find(LISTENING) {
+                        Some(at) => {
+                            let addr = line[at + LISTENING.len()..].trim().to_owned();
+                            let _ = found.send(addr);
+                        }
+                        None => tracing::debug!(target: "pushlearn_sim", stream, "{line}"),
+                    }
+                }
+            });
+        };
+        if let Some(pipe) = child.stdout.take() {
+            watch(Box::new(pipe), "stdout");
+        }
+        if let Some(pipe) = child.stderr.take() {
+            watch(Box::new(pipe), "stderr");
+        }
+        drop(found);
+        let child = Arc::new(Mutex::new(child));
+        {
+            let mut live = lock(&LIVE);
+            live.retain(|w| w.strong_count() > 0);
+            live.push(Arc::downgrade(&child));
+        }
+        let mut process = SimProcess {
+            child,
+            addr: String::new(),
+        };
+        match addresses.recv_timeout(START_LIMIT) {
+            Ok(addr) => {
+                tracing::debug!(%addr, "world started");
+                process.addr = addr;
+                Ok(process)
+            }
+            Err(_) => {
+                // Both pipes closed (the child is gone) or it stayed silent.
+                let exited = || lock(&process.child).try_wait().ok().flatten();
+                let status = exited().or_else(|| {
+                    std::thread::sleep(Duration::from_millis(50));
+                    exited()
+                });
+                Err(ExperimentError::Spawn {
+                    command: description,
+                    reason: match status {
+                        Some(status) => format!("exited ({status}) before listening"),
+                        None => format!("printed no `{LISTENING}ADDR` within {START_LIMIT:?}"),
+                    },
+                })
+            }
+        }
+    }
+
+    /// `host:port` the world listens on.
+    #[must_use]
+    pub fn addr(&self) -> &str {
+        &self.addr
+    }
+}
+
+impl Drop for SimProcess {
+    fn drop(&mut self) {
+        let mut child = lock(&self.child);
+        let _ = child.kill();
+        let _ = child.wait();
+    }
+}
+
+/// Where workers get their worlds.
+#[derive(Clone, Debug)]
+pub enum WorldSource {
+    /// Start `bin serve --port 0 ARGS…` per worker.
+    Spawn { bin: PathBuf, args: Vec<String> },
+    /// Use a running world (one worker).
+    Connect(String),
+}
+
+impl WorldSource {
+    /// How many workers can run at once: one for a running world.
+    #[must_use]
+    pub fn max_workers(&self, wanted: usize) -> usize {
+        match self {
+            WorldSource::Connect(_) => 1,
+            WorldSource::Spawn { .. } => wanted.max(1),
+        }
+    }
+}
+
+/// One worker's world: the connection and, if started by us, the process.
+#[derive(Debug)]
+pub struct Worker {
+    pub link: WorldLink,
+    // Declared after the link so that it is dropped (killed) after the
+    // connection is closed.
+    _process: Option<SimProcess>,
+}
+
+impl Worker {
+    /// Starts or connects to a world.
+    ///
+    /// # Errors
+    /// Starting the process or connecting.
+    pub fn start(source: &WorldSource, pacing: Pacing) -> Result<Self, ExperimentError> {
+        match source {
+            WorldSource::Spawn { bin, args } => {
+                let process = SimProcess::spawn(serve_command(bin, args))?;
+                let link = WorldLink::connect(process.addr(), pacing)?;
+                Ok(Self {
+                    link,
+                    _process: Some(process),
+                })
+            }
+            WorldSource::Connect(addr) => Ok(Self {
+                link: WorldLink::connect(addr, pacing)?,
+                _process: None,
+            }),
+        }
+    }
+}
+
+/// Runs `run` on every job with up to `workers` workers, each with its own
+/// resource from `start` (a world), and returns the results in job order.
+/// `progress` is called on the calling thread after each finished job with
+/// the number finished so far. The first error stops the workers after their
+/// current job and is returned.
+///
+/// # Errors
+/// The first error of any job or worker start; [`ExperimentError::JobLost`]
+/// if a job produced nothing (a worker thread panicked).
+pub fn run_jobs<J, W, R>(
+    jobs: &[J],
+    workers: usize,
+    start: impl Fn() -> Result<W, ExperimentError> + Sync,
+    run: impl Fn(&J, &mut W) -> Result<R, ExperimentError> + Sync,
+    mut progress: impl FnMut(usize),
+) -> Result<Vec<R>, ExperimentError>
+where
+    J: Sync,
+    R: Send,
+{
+    let workers = workers.clamp(1, jobs.len().max(1));
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let (sender, results) = mpsc::channel::<Result<(usize, R), ExperimentError>>();
+    std::thread::scope(|scope| {
+        for id in 0..workers {
+            let sender = sender.clone();
+            let (next, stop, start, run) = (&next, &stop, &start, &run);
+            scope.spawn(move || {
+                let mut worker = match start() {
+                    Ok(worker) => worker,
+                    Err(err) => {
+                        stop.store(true, Ordering::SeqCst);
+                        let _ = sender.send(Err(err));
+                        return;
+                    }
+                };
+                tracing::debug!(worker = id, "worker ready");
+                while !stop.load(Ordering::SeqCst) {
+                    let index = next.fetch_add(1, Ordering::SeqCst);
+                    let Some(job) = jobs.get(index) else { break };
+                    let result = run(job, &mut worker);
+                    if result.is_err() {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                    if sender.send(result.map(|r| (index, r))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(sender);
+        let mut slots: Vec<Option<R>> = std::iter::repeat_with(|| None).take(jobs.len()).collect();
+        let mut first_error = None;
+        let mut finished = 0;
+        for message in results {
+            match message {
+                Ok((index, result)) => {
+                    slots[index] = Some(result);
+                    finished += 1;
+                    progress(finished);
+                }
+                Err(err) => {
+                    first_error.get_or_insert(err);
+                }
+            }
+        }
+        if let Some(err) = first_error {
+            return Err(err);
+        }
+        slots
+            .into_iter()
+            .enumerate()
+            .map(|(index, slot)| slot.ok_or(ExperimentError::JobLost { index }))
+            .collect()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Mutex;
+
+    use super::*;
+
+    fn shell(script: &str) -> Command {
+        let mut command = Command::new("sh");
+        command.arg("-c").arg(script);
+        command
+    }
+
+    #[test]
+    fn an_explicit_sim_binary_must_exist() {
+        let missing = Path::new("/nonexistent/pushlearn-sim");
+        let err = find_sim_binary(Some(missing)).unwrap_err();
+        assert!(
+            err.to_string().contains("/nonexistent/pushlearn-sim"),
+            "{err}"
+        );
+        assert!(err.to_string().contains("cargo build"), "{err}");
+    }
+
+    #[test]
+    fn the_serve_command_asks_for_a_free_port() {
+        let c = serve_command(
+            Path::new("/x/pushlearn-sim"),
+            &["--mode".into(), "lockstep".into()],
+        );
+        let args: Vec<_> = c
+            .get_args()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(args, ["serve", "--port", "0", "--mode", "lockstep"]);
+    }
+
+    #[test]
+    fn the_address_comes_from_the_listening_line_on_either_stream() {
+        let p = SimProcess::spawn(shell(
+            "echo starting; echo 'INFO pushlearn_sim: listening on 127.0.0.1:4242' >&2; exec sleep 30",
+        ))
+        .unwrap();
+        assert_eq!(p.addr(), "127.0.0.1:4242");
+    }
+
+    #[test]
+    fn live_worlds_can_be_killed_from_outside() {
+        let p = SimProcess::spawn(shell("echo 'listening on 127.0.0.1:1'; exec sleep 30")).unwrap();
+        assert!(lock(&LIVE)
+            .iter()
+            .any(|w| w.ptr_eq(&Arc::downgrade(&p.child))));
+        kill_each(&[Arc::downgrade(&p.child)]);
+        // Killed and reaped: its status is known at once.
+        assert!(lock(&p.child).try_wait().unwrap().is_some());
+    }
+
+    #[test]
+    fn a_world_that_exits_before_listening_is_an_error() {
+        let err = SimProcess::spawn(shell("echo 'no scene' >&2; exit 3")).unwrap_err();
+        assert!(err.to_string().contains("before listening"), "{err}");
+        let err = SimProcess::spawn(Command::new("/nonexistent/pushlearn-sim")).unwrap_err();
+        assert!(matches!(err, ExperimentError::Spawn { .. }), "{err}");
+    }
+
+    /// Jobs of uneven length on 1, 2 and 3 workers: the results are the
+    /// same list in job order, and every worker resource was used.
+    #[test]
+    fn results_come_back_in_job_order_whatever_the_worker_count() {
+        let jobs: Vec<u64> = (0..12).collect();
+        let run_with = |workers: usize| {
+            let started = Mutex::new(0);
+            let mut seen = Vec::new();
+            let out = run_jobs(
+                &jobs,
+                workers,
+                || {
+                    let mut n = started.lock().unwrap();
+                    *n += 1;
+                    Ok(*n)
+                },
+                |job, _worker: &mut usize| {
+                    std::thread::sleep(Duration::from_millis((job * 7) % 5));
+                    Ok(job * job)
+                },
+                |done| seen.push(done),
+            )
+            .unwrap();
+            assert_eq!(*started.lock().unwrap(), workers);
+            assert_eq!(seen, (1..=12).collect::<Vec<_>>());
+            out
+        };
+        let one = run_with(1);
+        assert_eq!(one, jobs.iter().map(|j| j * j).collect::<Vec<_>>());
+        assert_eq!(run_with(2), one);
+        assert_eq!(run_with(3), one);
+    }
+
+    #[test]
+    fn the_first_error_stops_the_pool() {
+        let jobs: Vec<usize> = (0..50).collect();
+        let ran = AtomicUsize::new(0);
+        let err = run_jobs(
+            &jobs,
+            2,
+            || Ok(()),
+            |job, _: &mut ()| {
+                ran.fetch_add(1, Ordering::SeqCst);
+                if *job == 3 {
+                    Err(ExperimentError::JobLost { index: 3 })
+                } else {
+                    Ok(())
+                }
+            },
+            |_| {},
+        )
+        .unwrap_err();
+        assert!(matches!(err, ExperimentError::JobLost { index: 3 }));
+        assert!(ran.load(Ordering::SeqCst) < 50);
+        let err = run_jobs(
+            &jobs,
+            2,
+            || Err::<(), _>(ExperimentError::JobLost { index: 9 }),
+            |_, _| Ok(()),
+            |_| {},
+        );
+        assert!(matches!(err, Err(ExperimentError::JobLost { index: 9 })));
+    }
+}
