@@ -23,37 +23,16 @@ use std::time::{Duration, Instant};
 
 use criterion::{BatchSize, BenchmarkId, Criterion, Throughput};
 use learner::eval::{self, MESSAGES_PER_RUN, PUSH_ACTION};
-use learner::{Frame, GateModel, GateWorld, Model, Observation};
+use learner::{Frame, GateModel, GateWorld, Model};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::push_run::record_push_run;
-use sim_plugin::{Scene, Snapshot, World};
+use sim_plugin::{Scene, World};
+
+#[path = "../tests/support/push_frames.rs"]
+mod push_frames;
+use push_frames::record_run;
 
 const TRAINING_RUNS: [usize; 4] = [1, 3, 10, 30];
-
-fn frame(s: &Snapshot) -> Frame {
-    Frame {
-        objects: s
-            .bodies
-            .iter()
-            .map(|b| Observation {
-                name: b.name.clone(),
-                id: b.id,
-                position: b.position,
-                orientation: b.orientation,
-            })
-            .collect(),
-    }
-}
-
-fn record(world: &mut World, x0: f64) -> Vec<Frame> {
-    let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
-    record_push_run(world, x0, action, MESSAGES_PER_RUN + 1)
-        .expect("the push world runs")
-        .iter()
-        .map(frame)
-        .collect()
-}
 
 /// Models trained on N runs, and the parsed test runs.
 struct Data {
@@ -70,14 +49,14 @@ impl Data {
         let training: Vec<Vec<Frame>> = (0..30)
             .map(|_| {
                 let x0 = eval::random_training_start(rng.random::<f64>());
-                record(&mut world, x0)
+                record_run(&mut world, x0)
             })
             .collect();
         let parser = GateModel::default();
         let tests = eval::test_positions()
             .iter()
             .map(|&x0| {
-                record(&mut world, x0)
+                record_run(&mut world, x0)
                     .iter()
                     .map(|f| parser.parse(f).expect("world frames parse"))
                     .collect()

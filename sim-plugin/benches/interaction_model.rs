@@ -12,10 +12,13 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
-use learner::eval::{random_training_start, train_on_run, MESSAGES_PER_RUN, PUSH_ACTION};
-use learner::{stat_keys, Frame, InteractionModel, InteractionWorld, Model, Observation};
-use sim_plugin::push_run::record_push_run;
-use sim_plugin::{Command, Scene, Snapshot, World};
+use learner::eval::{random_training_start, train_on_run, PUSH_ACTION};
+use learner::{stat_keys, Frame, InteractionModel, InteractionWorld, Model};
+use sim_plugin::{Command, Scene, World};
+
+#[path = "../tests/support/push_frames.rs"]
+mod push_frames;
+use push_frames::record_run;
 
 const TRAINING_RUNS: [usize; 4] = [1, 3, 10, 30];
 
@@ -34,34 +37,6 @@ impl SplitMix {
     }
 }
 
-fn frame(snapshot: &Snapshot) -> Frame {
-    Frame {
-        objects: snapshot
-            .bodies
-            .iter()
-            .map(|b| Observation {
-                name: b.name.clone(),
-                id: b.id,
-                position: b.position,
-                orientation: b.orientation,
-            })
-            .collect(),
-    }
-}
-
-fn record(world: &mut World, x0: f64) -> Vec<Frame> {
-    record_push_run(
-        world,
-        x0,
-        [PUSH_ACTION.vx, PUSH_ACTION.vy],
-        MESSAGES_PER_RUN,
-    )
-    .expect("the thesis world runs the push task")
-    .iter()
-    .map(frame)
-    .collect()
-}
-
 fn bench(c: &mut Criterion) {
     let scene = Scene::builtin("one_block").expect("embedded scene parses");
     let mut world = World::new(&scene).expect("the thesis world builds");
@@ -70,10 +45,10 @@ fn bench(c: &mut Criterion) {
         .expect("100 Hz divides 1000");
     let mut rng = SplitMix(0x5eed);
     let training: Vec<Vec<Frame>> = (0..TRAINING_RUNS[3])
-        .map(|_| record(&mut world, random_training_start(rng.unit())))
+        .map(|_| record_run(&mut world, random_training_start(rng.unit())))
         .collect();
     let parser = InteractionModel::default();
-    let held_out: Vec<InteractionWorld> = record(&mut world, 0.07)
+    let held_out: Vec<InteractionWorld> = record_run(&mut world, 0.07)
         .iter()
         .map(|f| parser.parse(f).expect("frames parse"))
         .collect();

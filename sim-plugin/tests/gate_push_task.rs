@@ -13,42 +13,17 @@
 use learner::eval::{
     self, CurveSummary, PositionErrors, MESSAGES_PER_RUN, PUSH_ACTION, TEST_POSITION_COUNT,
 };
-use learner::{stat_keys, Frame, GateModel, Model, ObjectState, Observation, BLUE_ID};
+use learner::{stat_keys, Frame, GateModel, Model, ObjectState, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::push_run::record_push_run;
-use sim_plugin::{Command, Scene, Snapshot, World};
+use sim_plugin::{Command, Scene, World};
+
+#[path = "support/push_frames.rs"]
+mod push_frames;
+use push_frames::record_run;
 
 const FOLDS: u64 = 5;
 const TRAINING_RUNS: usize = 10;
-
-/// The learner's view of a published snapshot (what the daemon converts a
-/// WorldState message into).
-fn frame(s: &Snapshot) -> Frame {
-    Frame {
-        objects: s
-            .bodies
-            .iter()
-            .chain(&s.ghosts)
-            .map(|b| Observation {
-                name: b.name.clone(),
-                id: b.id,
-                position: b.position,
-                orientation: b.orientation,
-            })
-            .collect(),
-    }
-}
-
-/// The 151 messages of one push-task run from x0, as the driver meets them.
-fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
-    let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
-    record_push_run(world, x0, action, MESSAGES_PER_RUN + 1)
-        .expect("the push world runs")
-        .iter()
-        .map(frame)
-        .collect()
-}
 
 /// `check_start_positions` of `experiments.md` §2 as an assertion: in
 /// lock-step nothing can be stale, so a failure is a bug here.

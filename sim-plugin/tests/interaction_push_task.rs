@@ -10,42 +10,18 @@
 
 use learner::eval::{random_training_start, PUSH_ACTION};
 use learner::eval::{test_on_run, test_positions, train_on_run, CurveSummary, PositionErrors};
-use learner::{stat_keys, Frame, InteractionModel, Model, Observation, BLUE_ID};
+use learner::{stat_keys, Frame, InteractionModel, Model, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sim_plugin::push_run::record_push_run;
-use sim_plugin::{Command, Scene, Snapshot, World};
+use sim_plugin::{Command, Scene, World};
+
+#[path = "support/push_frames.rs"]
+mod push_frames;
+use push_frames::record_run;
 
 const FOLDS: u64 = 5;
 const TRAINING_RUNS: usize = 10;
-/// Messages recorded per run: 150 processed and the 151st that ends the run.
-const RUN_MESSAGES: usize = 151;
 const PUBLISH_HZ: u32 = 100;
-
-fn frame(snapshot: &Snapshot) -> Frame {
-    Frame {
-        objects: snapshot
-            .bodies
-            .iter()
-            .map(|b| Observation {
-                name: b.name.clone(),
-                id: b.id,
-                position: b.position,
-                orientation: b.orientation,
-            })
-            .collect(),
-    }
-}
-
-/// One push-task run of the in-process world: 150 processed messages and
-/// the 151st that ends it.
-fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
-    record_push_run(world, x0, [PUSH_ACTION.vx, PUSH_ACTION.vy], RUN_MESSAGES)
-        .expect("the thesis world runs the push task")
-        .iter()
-        .map(frame)
-        .collect()
-}
 
 struct FoldResult {
     ac_count: f64,
