@@ -386,7 +386,7 @@ pub(crate) mod test_support {
             name: name.into(),
             id,
             position: [x, y, z],
-            orientation: [0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()],
+            orientation: learner::features::yaw_to_quaternion(yaw),
         };
         let mut objects = vec![obs("actuator", 8, actuator.0, actuator.1, 0.0, 0.03)];
         for (id, s) in blocks {

@@ -19,22 +19,17 @@ impl pb::Vector3d {
 }
 
 impl pb::Quaternion {
-    /// A rotation by `yaw` radians about the world z axis:
-    /// `(0, 0, sin(yaw/2), cos(yaw/2))`.
+    /// A rotation by `yaw` radians about the world z axis, as the learners
+    /// define it (`features.md` §1: `(0, 0, sin(yaw/2), cos(yaw/2))`).
     pub fn from_yaw(yaw: f64) -> Self {
-        let (sin, cos) = (yaw / 2.0).sin_cos();
-        Self {
-            x: 0.0,
-            y: 0.0,
-            z: sin,
-            w: cos,
-        }
+        let [x, y, z, w] = learner::features::yaw_to_quaternion(yaw);
+        Self { x, y, z, w }
     }
 
-    /// The rotation about the world z axis (ZYX Euler yaw), in `(-π, π]`.
+    /// The yaw the learners read from this orientation (`features.md` §1,
+    /// normalised first), in `(-π, π]`.
     pub fn yaw(&self) -> f64 {
-        let Self { x, y, z, w } = *self;
-        (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+        learner::features::quaternion_to_yaw([self.x, self.y, self.z, self.w])
     }
 }
 
