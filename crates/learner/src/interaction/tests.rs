@@ -972,3 +972,95 @@ fn a_fresh_model_is_untrained() {
     let back: InteractionModel = serde_json::from_str(&json).expect("an untrained snapshot");
     assert_eq!(back, m);
 }
+
+// ------------------------------------------------- the thesis draft's variants
+
+/// `trained()`'s runs for a model with these parameters.
+fn trained_with(params: InteractionParams) -> InteractionModel {
+    let mut m = InteractionModel::new(params.check().expect("valid"));
+    for x0 in [-0.18, 0.18, 0.0, 0.07] {
+        let run = push_run(x0);
+        m.reset_objects(&run[0]);
+        for w in &run[1..] {
+            m.update(w, Action::new(0.0, 0.5));
+        }
+    }
+    m.set_training(false);
+    m
+}
+
+#[test]
+fn every_selector_is_trained_on_the_same_episodes_and_round_trips() {
+    let aitm = trained();
+    for kind in SelectorKind::ALL {
+        let m = trained_with(InteractionParams {
+            selector: kind,
+            ..InteractionParams::hz100()
+        });
+        assert_eq!(m.selector().kind(), kind);
+        // The ACs do not depend on the selector: same sets, same ids.
+        let sets: Vec<&[usize]> = m.collections().iter().map(|ac| ac.features()).collect();
+        let want: Vec<&[usize]> = aitm.collections().iter().map(|ac| ac.features()).collect();
+        assert_eq!(sets, want, "{kind}");
+        let stats = m.stats();
+        assert_eq!(stats.maps[stat_keys::ACS].update_calls, 4 * 59, "{kind}");
+        // On the training inputs themselves the memory-based selectors
+        // agree with the model's own assignment at every step.
+        let run = push_run(0.07);
+        let hits = run
+            .windows(2)
+            .filter(|w| {
+                let (truth, chosen) = m.selection(
+                    &w[0].states[&KEY],
+                    &w[1].states[&KEY],
+                    Action::new(0.0, 0.5),
+                );
+                truth.is_some() && truth == chosen
+            })
+            .count();
+        if matches!(kind, SelectorKind::Tree | SelectorKind::Nearest) {
+            assert_eq!(hits, run.len() - 1, "{kind}");
+        } else {
+            assert!(hits > 0, "{kind}");
+        }
+        let json = serde_json::to_string(&m).expect("serialise");
+        let back: InteractionModel = serde_json::from_str(&json).expect("deserialise");
+        assert_eq!(back, m, "{kind}");
+    }
+}
+
+#[test]
+fn a_snapshot_whose_selector_differs_from_its_configuration_is_rejected() {
+    let m = trained_with(InteractionParams {
+        selector: SelectorKind::Nearest,
+        ..InteractionParams::hz100()
+    });
+    let mut v = serde_json::to_value(&m).expect("serialise");
+    v["config"]["selector"] = serde_json::json!("tree");
+    let err = serde_json::from_value::<InteractionModel>(v).expect_err("mismatch");
+    assert!(err.to_string().contains("selector kind"), "{err}");
+    let mut v = serde_json::to_value(&m).expect("serialise");
+    v["selector"]["references"]["labels"][0] = serde_json::json!(99);
+    let err = serde_json::from_value::<InteractionModel>(v).expect_err("bad label");
+    assert!(err.to_string().contains("names no AC"), "{err}");
+}
+
+#[test]
+fn the_ac_learning_rate_moves_ac_nodes() {
+    let outputs = |eta: f64| {
+        let m = trained_with(InteractionParams {
+            ac_learning_rate: eta,
+            ..InteractionParams::hz100()
+        });
+        m.collections()
+            .iter()
+            .flat_map(|ac| {
+                ac.forward()
+                    .nodes()
+                    .map(|n| n.w_in.to_vec())
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>()
+    };
+    assert_ne!(outputs(0.0), outputs(0.2));
+}
