@@ -196,13 +196,13 @@ impl InteractionModel {
         self.selector.aitm()
     }
 
-    /// The AC the model's own assignment gives to the transition `old` →
-    /// `new` (the AC of its changed-feature set, `interaction-model.md` §3),
+    /// One pair's sample of [`Model::selection`]: the AC the model's own
+    /// assignment gives to the transition `old` → `new` (the AC of its changed-feature set, `interaction-model.md` §3),
     /// `None` if no AC has that set, together with the AC the selector
     /// chooses for `old` under `action`: one sample of the selector's
     /// accuracy on real transitions. Changes nothing.
     #[must_use]
-    pub fn selection(
+    pub fn pair_selection(
         &self,
         old: &InteractionState,
         new: &InteractionState,
@@ -421,6 +421,18 @@ impl Model for InteractionModel {
         let per_ac: Vec<MapStats> = self.acs.iter().map(|ac| ac.forward.stats()).collect();
         ac_summary(&per_ac, &mut stats.extra);
         stats
+    }
+
+    fn selection(
+        &self,
+        old: &Poses,
+        new: &Poses,
+        action: Action,
+    ) -> Vec<(Option<usize>, Option<usize>)> {
+        let (old, new) = (interaction_states(old), interaction_states(new));
+        old.iter()
+            .filter_map(|(key, o)| Some(self.pair_selection(o, new.get(key)?, action)))
+            .collect()
     }
 }
 

@@ -1010,7 +1010,7 @@ fn every_selector_is_trained_on_the_same_episodes_and_round_trips() {
         let hits = run
             .windows(2)
             .filter(|w| {
-                let (truth, chosen) = m.selection(
+                let (truth, chosen) = m.pair_selection(
                     &w[0].states[&KEY],
                     &w[1].states[&KEY],
                     Action::new(0.0, 0.5),
