@@ -150,6 +150,8 @@ fn weighted_gini(counts: &[f64], n: f64) -> f64 {
 /// one that does not lower it (XOR-like layouts need such a first split):
 /// threshold halfway between two consecutive distinct values. `None` for a
 /// pure set or one whose inputs are all identical.
+// `f` indexes the features inside each point, not `points` itself.
+#[allow(clippy::needless_range_loop)]
 fn best_split(
     points: &[Vec<f64>],
     labels: &[usize],
