@@ -8,12 +8,12 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::{Model, ObjectState};
 use pushlearn::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
-use pushlearn::experiment::push_task::Variant;
+use pushlearn::experiment::push_task::{Protocol, Variant};
 use pushlearn::experiment::run::{self, Plan};
 use pushlearn::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
 use pushlearn::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
-use pushlearn::models::{ModelKind, WithModel};
-use pushlearn::report::{self, table};
+use pushlearn::models::{ModelKind, ModelOptions, WithModel};
+use pushlearn::report::{self, draft, table};
 
 /// Run one of the thesis's experiments and print its table beside the
 /// thesis's numbers.
@@ -39,7 +39,10 @@ enum ExperimentCommand {
         pushlearn experiment push-task --model gate --variant fixed-three         # §5.3\n  \
         pushlearn experiment push-task --model gate --variant two-objects         # §6.1\n  \
         pushlearn experiment push-task --model gate --variant two-objects --train-runs 7   # §6.2\n  \
-        pushlearn experiment push-task --model gate --variant constant-feedback   # §7 (qualitative)")]
+        pushlearn experiment push-task --model gate --variant constant-feedback   # §7 (qualitative)\n\n\
+        Thesis draft (Tables 6.1, 6.2; every row of the draft):\n  \
+        pushlearn experiment push-task --report draft\n  \
+        pushlearn experiment push-task --model interaction --variant draft --selector tree --train-runs 3,10")]
     PushTask(PushTaskArgs),
     /// Move to Target: train on 8 fixed pushes, then plan pushes until the
     /// block reaches a target pose (experiments.md §4).
@@ -90,10 +93,18 @@ struct PushTaskArgs {
     model: ModelKind,
 
     /// Which experiment of the thesis: random training starts (§3.1),
-    /// the three selected starts (§3.2), two blocks (§3.3) or constant
-    /// feedback at 10 Hz (§3.4).
+    /// the three selected starts (§3.2), two blocks (§3.3), constant
+    /// feedback at 10 Hz (§3.4), or the thesis draft's protocol (starts at
+    /// the block's ends and centre, then random in [−0.35, 0.35); 20 test
+    /// runs from one fixed seed).
     #[arg(long, value_enum, default_value_t = Variant::Random)]
     variant: Variant,
+
+    /// Which tables to print: the final thesis's (for --variant), or the
+    /// thesis draft's Tables 6.1 and 6.2, which runs every row of the draft
+    /// (its own models, flags and protocol) and ignores --model.
+    #[arg(long, value_enum, default_value_t = ReportKind::Thesis)]
+    report: ReportKind,
 
     /// Numbers of training runs, comma-separated [default: 1,2,3,5,10,20,30
     /// for random, 3 for fixed-three, 6 for two-objects (7 for the thesis's
@@ -101,12 +112,26 @@ struct PushTaskArgs {
     #[arg(long, value_name = "N,…", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..))]
     train_runs: Option<Vec<u32>>,
 
-    /// Repetitions (folds) per number of training runs, each with a fresh model.
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
-    folds: u32,
+    /// Repetitions (folds) per number of training runs, each with a fresh
+    /// model [default: 20; 1 for the draft's protocol, which trained one
+    /// model per row].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    folds: Option<u32>,
+
+    #[command(flatten)]
+    options: ModelOptions,
 
     #[command(flatten)]
     world: WorldArgs,
+}
+
+/// The table layouts of `push-task`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ReportKind {
+    /// The final thesis's tables for the chosen variant.
+    Thesis,
+    /// The thesis draft's Tables 6.1 and 6.2.
+    Draft,
 }
 
 #[derive(Debug, Args)]
@@ -127,6 +152,9 @@ struct MoveToTargetArgs {
     /// Longest test run, in messages.
     #[arg(long, default_value_t = MAX_STEPS, value_parser = clap::value_parser!(u64).range(1..))]
     max_steps: u64,
+
+    #[command(flatten)]
+    options: ModelOptions,
 
     #[command(flatten)]
     world: WorldArgs,
@@ -247,13 +275,18 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
 }
 
 fn push_task(args: &PushTaskArgs) -> Result<()> {
+    if args.report == ReportKind::Draft {
+        return draft_tables(args);
+    }
     let variant = args.variant;
     let plan = args.world.plan(args.model, variant.scene())?;
     if variant == Variant::ConstantFeedback {
         if args.train_runs.is_some() {
             bail!("--variant constant-feedback has no training phase; drop --train-runs");
         }
-        let report = args.model.dispatch(LOW_RATE_HZ, Feedback { plan: &plan })?;
+        let report =
+            args.model
+                .dispatch(&args.options, LOW_RATE_HZ, Feedback { plan: &plan })??;
         args.world.write_json(&report)?;
         let mut out = std::io::stdout().lock();
         table::feedback(&mut out, &report, args.model)?;
@@ -263,26 +296,95 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
         Some(list) => list.iter().map(|&n| n as usize).collect(),
         None => variant.default_train_runs(),
     };
-    let fixed = variant.fixed_starts().len();
+    let protocol = Protocol::new(variant, args.options.config_number());
+    let fixed = protocol.fixed_starts.len();
     if variant == Variant::TwoObjects && train_runs.iter().any(|&n| n > fixed) {
         bail!("the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}");
     }
-    let folds = args.folds as usize;
+    let folds = args.folds.map_or(variant_folds(variant), |n| n as usize);
     let bar = progress(train_runs.len() * folds, "push task");
     let report = args.model.dispatch(
-        RATE_HZ,
+        &args.options,
+        protocol.rate_hz,
         Push {
-            variant,
+            protocol: &protocol,
             train_runs: &train_runs,
             folds,
             plan: &plan,
             bar: &bar,
         },
-    )?;
+    )??;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
     let mut out = std::io::stdout().lock();
     table::push(&mut out, &report, args.model)?;
+    draft::keypoint_section(&mut out, &report)?;
+    Ok(out.flush()?)
+}
+
+/// Folds when --folds is not given: the thesis's 20, and one model per row
+/// for the draft, which reports 20 test runs of one training sequence.
+fn variant_folds(variant: Variant) -> usize {
+    if variant == Variant::Draft {
+        1
+    } else {
+        20
+    }
+}
+
+/// `push-task --report draft`: every row of the draft's Tables 6.1/6.2 on
+/// the draft's protocol.
+fn draft_tables(args: &PushTaskArgs) -> Result<()> {
+    if args.variant != Variant::Random
+        || args.train_runs.is_some()
+        || args.options != ModelOptions::default()
+    {
+        bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs and the model options");
+    }
+    let rows = draft::rows();
+    let folds = args
+        .folds
+        .map_or(variant_folds(Variant::Draft), |n| n as usize);
+    let bar = progress(rows.len() * folds, "draft tables");
+    let mut results = Vec::new();
+    let mut reports = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let plan = args.world.plan(row.model, Variant::Draft.scene())?;
+        let protocol = Protocol::new(Variant::Draft, row.options.config_number());
+        let report = row.model.dispatch(
+            &row.options,
+            protocol.rate_hz,
+            Push {
+                protocol: &protocol,
+                train_runs: &[row.train_runs],
+                folds,
+                plan: &plan,
+                bar: &ProgressBar::hidden(),
+            },
+        )??;
+        bar.set_position(((i + 1) * folds) as u64);
+        let entry = report
+            .results
+            .first()
+            .context("a draft row produced no results")?;
+        results.push(draft::DraftRowResult::of(row, entry));
+        reports.push(report);
+    }
+    bar.finish_and_clear();
+    let setup = reports
+        .first()
+        .map(|r| r.setup.clone())
+        .context("the draft has no rows")?;
+    let report = draft::DraftReport {
+        setup,
+        folds,
+        test_positions: Protocol::from(Variant::Draft).test_positions,
+        rows: results,
+        reports,
+    };
+    args.world.write_json(&report)?;
+    let mut out = std::io::stdout().lock();
+    draft::tables(&mut out, &report)?;
     Ok(out.flush()?)
 }
 
@@ -296,6 +398,7 @@ fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
     let repetitions = args.repetitions as usize;
     let bar = progress(targets.len() * repetitions, "move to target");
     let report = args.model.dispatch(
+        &args.options,
         RATE_HZ,
         MoveToTarget {
             targets: &targets,
@@ -304,7 +407,7 @@ fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
             plan: &plan,
             bar: &bar,
         },
-    )?;
+    )??;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
     let mut out = std::io::stdout().lock();
@@ -313,7 +416,7 @@ fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
 }
 
 struct Push<'a> {
-    variant: Variant,
+    protocol: &'a Protocol,
     train_runs: &'a [usize],
     folds: usize,
     plan: &'a Plan,
@@ -325,7 +428,7 @@ impl WithModel for Push<'_> {
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::push_task(
             untrained,
-            self.variant,
+            self.protocol,
             self.train_runs,
             self.folds,
             self.plan,

@@ -7,7 +7,7 @@ use clap::Args;
 use learner::{Action, Model, ObjectState};
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
 use pushlearn::learn::{serve, Learner, Policy, ServeOptions, Stop, WorkSummary};
-use pushlearn::models::{ModelKind, WithModel};
+use pushlearn::models::{ModelKind, ModelOptions, WithModel};
 
 use super::experiment::{parse_numbers, parse_pose};
 
@@ -60,6 +60,9 @@ pub struct LearnArgs {
     /// Seed of the planner's exploration.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+
+    #[command(flatten)]
+    options: ModelOptions,
 }
 
 fn parse_action(text: &str) -> Result<Action, String> {
@@ -88,6 +91,12 @@ pub fn run(args: LearnArgs) -> Result<()> {
         };
         let client = SimClient::connect_with(args.connect.as_str(), options).await?;
         let rate = client.hello().publish_rate;
+        if args.options.low_frequency() && rate != pushlearn::experiment::LOW_RATE_HZ {
+            anyhow::bail!(
+                "LOWFREQ (bit 2, --flag low-freq) needs a world publishing at {} Hz; this one publishes at {rate} Hz (set it with `pushlearn ctl` or start pushlearn-sim at that rate)",
+                pushlearn::experiment::LOW_RATE_HZ
+            );
+        }
         let policy = match (args.action, args.target) {
             (_, Some(pose)) => Policy::Target(pose),
             (Some(action), None) => Policy::Fixed(action),
@@ -98,7 +107,7 @@ pub fn run(args: LearnArgs) -> Result<()> {
             policy,
             args: &args,
         };
-        args.model.dispatch(rate, job).await
+        args.model.dispatch(&args.options, rate, job)?.await
     })
 }
 

@@ -8,10 +8,13 @@
 use std::collections::BTreeMap;
 
 use learner::eval::{
-    random_training_start, test_positions, two_object_test_positions, CurveSummary, MeanStd,
-    PositionErrors, RunErrors, FIXED_TRAINING_STARTS, PUSH_ACTION,
+    draft_training_starts, test_positions, training_start_in, two_object_test_positions,
+    CurveSummary, MeanStd, PositionErrors, RunErrors, FIXED_TRAINING_STARTS, PUSH_ACTION,
+    TRAINING_START_RANGE, WIDE_TRAINING_START_RANGE,
 };
-use learner::{Model, ModelStats, BLUE_ID, RED_ID};
+use learner::flags;
+use learner::keypoints::{KeyPointRun, KeyPointScore};
+use learner::{Model, ModelStats, Poses, BLUE_ID, RED_ID};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -42,6 +45,85 @@ pub enum Variant {
     ConstantFeedback,
     /// §3.3: both blocks; six (or, with `--train-runs 7`, seven) fixed starts.
     TwoObjects,
+    /// The thesis draft's protocol (draft §6.1.1): training starts at the
+    /// block's left end, right end and centre, then uniform in [−0.35,
+    /// 0.35); 20 test starts drawn once from a fixed seed in the same range.
+    Draft,
+}
+
+/// Seed of the draft protocol's test starts: the original reseeded its
+/// generator with 4321 before every test phase (`experiments.md` §5), which
+/// is what the draft's "another seed is set after the training is done, so
+/// that all models are tested on the same starting positions" describes.
+/// The original's generator cannot be reproduced, so the 20 starts differ
+/// from the draft's; they are the same for every model, flag and --seed.
+pub const DRAFT_TEST_SEED: u64 = 4321;
+
+/// Number of test runs of the draft protocol (draft §6.1.2: "over 20 test
+/// runs").
+pub const DRAFT_TEST_RUNS: usize = 20;
+
+/// The draft protocol's test starts: [`DRAFT_TEST_RUNS`] uniform draws in
+/// [−0.35, 0.35) from [`DRAFT_TEST_SEED`], in draw order.
+#[must_use]
+pub fn draft_test_positions() -> Vec<f64> {
+    use rand::SeedableRng;
+    let mut rng = ChaCha8Rng::seed_from_u64(DRAFT_TEST_SEED);
+    (0..DRAFT_TEST_RUNS)
+        .map(|_| training_start_in(rng.random::<f64>(), WIDE_TRAINING_START_RANGE))
+        .collect()
+}
+
+/// How a push-task experiment places its runs and how fast the world
+/// publishes: the variant's protocol, changed by the driver's
+/// configuration bits (`experiments.md` §1: 2 LOWFREQ, 4 ALLOWMISSPOSITIONS,
+/// 8 FIXFIRSTTHREETRAININGRUNS).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Protocol {
+    pub variant: Variant,
+    /// Training starts that replace the random ones, run by run.
+    pub fixed_starts: Vec<f64>,
+    /// Width of the random training start range, centred on 0.
+    pub start_range: f64,
+    pub test_positions: Vec<f64>,
+    /// The world's publish rate and the learner's update rate.
+    pub rate_hz: u32,
+}
+
+impl Protocol {
+    /// The protocol of `variant` under configuration number `config`.
+    #[must_use]
+    pub fn new(variant: Variant, config: u32) -> Self {
+        let mut fixed_starts = match variant {
+            Variant::Draft => draft_training_starts().to_vec(),
+            _ => variant.fixed_starts().to_vec(),
+        };
+        if config & flags::FIXFIRSTTHREETRAININGRUNS != 0 && fixed_starts.is_empty() {
+            fixed_starts = FIXED_TRAINING_STARTS.to_vec();
+        }
+        let wide = variant == Variant::Draft || config & flags::ALLOWMISSPOSITIONS != 0;
+        Self {
+            variant,
+            fixed_starts,
+            start_range: if wide {
+                WIDE_TRAINING_START_RANGE
+            } else {
+                TRAINING_START_RANGE
+            },
+            test_positions: variant.test_positions(),
+            rate_hz: if config & flags::LOWFREQ != 0 {
+                super::LOW_RATE_HZ
+            } else {
+                super::RATE_HZ
+            },
+        }
+    }
+}
+
+impl From<Variant> for Protocol {
+    fn from(variant: Variant) -> Self {
+        Self::new(variant, 0)
+    }
 }
 
 impl Variant {
@@ -53,6 +135,7 @@ impl Variant {
             Variant::FixedThree => "fixed-three",
             Variant::ConstantFeedback => "constant-feedback",
             Variant::TwoObjects => "two-objects",
+            Variant::Draft => "draft",
         }
     }
 
@@ -69,7 +152,7 @@ impl Variant {
     #[must_use]
     pub fn fixed_starts(self) -> &'static [f64] {
         match self {
-            Variant::Random | Variant::ConstantFeedback => &[],
+            Variant::Random | Variant::ConstantFeedback | Variant::Draft => &[],
             Variant::FixedThree => &FIXED_TRAINING_STARTS,
             Variant::TwoObjects => &TWO_OBJECT_TRAINING_STARTS,
         }
@@ -83,6 +166,8 @@ impl Variant {
             Variant::FixedThree => vec![3],
             Variant::TwoObjects => vec![6],
             Variant::ConstantFeedback => Vec::new(),
+            // The draft's tables: 3 and 10 training runs.
+            Variant::Draft => vec![3, 10],
         }
     }
 
@@ -94,6 +179,7 @@ impl Variant {
             // §3.4: the left corner, then the right one.
             Variant::ConstantFeedback => vec![-0.25, 0.25],
             Variant::Random | Variant::FixedThree => test_positions().to_vec(),
+            Variant::Draft => draft_test_positions(),
         }
     }
 
@@ -113,7 +199,7 @@ impl Variant {
 pub struct PushJob {
     pub n_train: usize,
     pub fold: usize,
-    pub variant: Variant,
+    pub protocol: Protocol,
     /// Seed of the job's generator (training starts).
     pub seed: u64,
     /// Seed for the world's latency emulation.
@@ -124,7 +210,13 @@ impl PushJob {
     /// The jobs of one experiment in report order: for each N_train, for each
     /// fold (`experiments.md` §3, outer loops).
     #[must_use]
-    pub fn all(variant: Variant, train_runs: &[usize], folds: usize, seed: u64) -> Vec<PushJob> {
+    pub fn all(
+        protocol: impl Into<Protocol>,
+        train_runs: &[usize],
+        folds: usize,
+        seed: u64,
+    ) -> Vec<PushJob> {
+        let protocol = protocol.into();
         let mut jobs = Vec::with_capacity(train_runs.len() * folds);
         for &n_train in train_runs {
             for fold in 0..folds {
@@ -132,7 +224,7 @@ impl PushJob {
                 jobs.push(PushJob {
                     n_train,
                     fold,
-                    variant,
+                    protocol: protocol.clone(),
                     seed: super::seed::derive(
                         seed,
                         EXPERIMENT,
@@ -156,7 +248,8 @@ impl PushJob {
 #[derive(Debug)]
 pub struct PushTask {
     n_train: usize,
-    fixed_starts: &'static [f64],
+    fixed_starts: Vec<f64>,
+    start_range: f64,
     test_positions: Vec<f64>,
     rng: ChaCha8Rng,
     train_run: usize,
@@ -168,6 +261,43 @@ pub struct PushTask {
     pub errors: Vec<Option<RunErrors>>,
     /// Node statistics when training ended (§7.5).
     pub nodes: Option<ModelStats>,
+    /// The thesis draft's key-point scores, one per finished test run.
+    pub keypoints: Vec<KeyPointRun>,
+    /// The current test run's scores so far.
+    keypoints_run: KeyPointRun,
+    /// The real state of the previous message of the current test run, for
+    /// the selector samples.
+    previous_real: Option<Poses>,
+    /// Selector samples of the test runs' real transitions.
+    pub selection: SelectionCount,
+}
+
+/// How often the model's AC selector chose, for the real state and action
+/// of a test message, the AC that the model's own assignment gives to the
+/// real transition that followed (models without a selector count nothing).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SelectionCount {
+    /// Transitions sampled.
+    pub samples: u64,
+    /// Of those, the selector chose the AC of the transition.
+    pub agreed: u64,
+    /// Of those, no AC has the transition's changed-feature set, so no
+    /// selector could be right.
+    pub unknown: u64,
+}
+
+impl SelectionCount {
+    fn add(&mut self, other: SelectionCount) {
+        self.samples += other.samples;
+        self.agreed += other.agreed;
+        self.unknown += other.unknown;
+    }
+
+    /// `agreed / samples`, `None` without samples.
+    #[must_use]
+    pub fn accuracy(&self) -> Option<f64> {
+        (self.samples > 0).then(|| self.agreed as f64 / self.samples as f64)
+    }
 }
 
 impl PushTask {
@@ -177,21 +307,46 @@ impl PushTask {
         use rand::SeedableRng;
         Self {
             n_train: job.n_train,
-            fixed_starts: job.variant.fixed_starts(),
-            test_positions: job.variant.test_positions(),
+            fixed_starts: job.protocol.fixed_starts.clone(),
+            start_range: job.protocol.start_range,
+            test_positions: job.protocol.test_positions.clone(),
             rng: ChaCha8Rng::seed_from_u64(job.seed),
             train_run: 0,
             test_run: 0,
             training_starts: Vec::new(),
             errors: Vec::new(),
             nodes: None,
+            keypoints: Vec::new(),
+            keypoints_run: KeyPointRun::default(),
+            previous_real: None,
+            selection: SelectionCount::default(),
         }
+    }
+
+    /// The draft's per-message scores (draft §6.1.2) and the selector
+    /// sample of one message of a test run: `actual` against the prediction
+    /// made for it, and the real transition from the previous message.
+    fn score_test_message<M: Model>(&mut self, model: &M, actual: Poses, predicted: Option<Poses>) {
+        if let Some(p) = predicted {
+            self.keypoints_run.add(&actual, &p);
+        }
+        if let Some(old) = &self.previous_real {
+            for (truth, chosen) in model.selection(old, &actual, PUSH_ACTION) {
+                self.selection.samples += 1;
+                match truth {
+                    None => self.selection.unknown += 1,
+                    Some(k) if chosen == Some(k) => self.selection.agreed += 1,
+                    Some(_) => {}
+                }
+            }
+        }
+        self.previous_real = Some(actual);
     }
 
     /// `training_start(k)`: `u` is drawn for every run so that the random
     /// sequence does not depend on the variant.
     fn training_start(&mut self, k: usize) -> f64 {
-        let random = random_training_start(self.rng.random::<f64>());
+        let random = training_start_in(self.rng.random::<f64>(), self.start_range);
         self.fixed_starts.get(k).copied().unwrap_or(random)
     }
 }
@@ -205,11 +360,13 @@ impl<M: Model> Task<M> for PushTask {
                 let testing = self.train_run == self.n_train && self.test_run < n_test;
                 if testing {
                     // Scored before `reset_world` forgets the prediction (§7.2).
-                    let score = core
-                        .stepper
-                        .last_prediction()
-                        .map(|p| RunErrors::score(&M::poses(world), &M::poses(p)));
-                    self.errors.push(score);
+                    let predicted = core.stepper.last_prediction().map(M::poses);
+                    let actual = M::poses(world);
+                    self.errors
+                        .push(predicted.as_ref().map(|p| RunErrors::score(&actual, p)));
+                    self.score_test_message(model, actual, predicted);
+                    self.keypoints.push(std::mem::take(&mut self.keypoints_run));
+                    self.previous_real = None;
                 }
                 core.reset_world();
                 core.run_started = false;
@@ -240,6 +397,8 @@ impl<M: Model> Task<M> for PushTask {
             }
         } else if self.test_run < n_test {
             if core.run_started {
+                let predicted = core.stepper.last_prediction().map(M::poses);
+                self.score_test_message(model, M::poses(world), predicted);
                 let action = core.stepper.test(model, world, PUSH_ACTION);
                 core.send_move(action);
             } else {
@@ -263,6 +422,11 @@ pub struct PushJobResult {
     pub nodes: ModelStats,
     pub counters: Counters,
     pub timing: super::link::Timing,
+    /// The draft's key-point scores per test run, in order.
+    #[serde(default)]
+    pub keypoints: Vec<KeyPointRun>,
+    #[serde(default)]
+    pub selection: SelectionCount,
 }
 
 impl PushJobResult {
@@ -295,6 +459,8 @@ impl PushJobResult {
             nodes: task.nodes.unwrap_or_default(),
             counters,
             timing,
+            keypoints: task.keypoints,
+            selection: task.selection,
         })
     }
 }
@@ -345,6 +511,46 @@ pub struct CurveEntry {
     pub red: Option<BlockCurve>,
     pub nodes: NodeSummary,
     pub folds: usize,
+    /// The thesis draft's key-point scores (draft §6.1.2) per body id
+    /// (actuator 8), each the mean over every test run of every fold.
+    #[serde(default)]
+    pub keypoints: BTreeMap<u32, KeyPointScore>,
+    /// The AC selector's agreement on the test runs' real transitions
+    /// (interaction model only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selection: Option<SelectionCount>,
+}
+
+/// Per body, the mean of each key-point score over `runs`.
+#[must_use]
+pub fn mean_keypoints<'a>(
+    runs: impl IntoIterator<Item = &'a KeyPointRun>,
+) -> BTreeMap<u32, KeyPointScore> {
+    let mut sums: BTreeMap<u32, (KeyPointScore, usize)> = BTreeMap::new();
+    for run in runs {
+        for (&id, s) in &run.bodies {
+            let (sum, n) = sums.entry(id).or_default();
+            sum.final_dif += s.final_dif;
+            sum.cum_dif += s.cum_dif;
+            sum.mean_dif += s.mean_dif;
+            sum.predictions += s.predictions;
+            *n += 1;
+        }
+    }
+    sums.into_iter()
+        .map(|(id, (s, n))| {
+            let k = n as f64;
+            (
+                id,
+                KeyPointScore {
+                    final_dif: s.final_dif / k,
+                    cum_dif: s.cum_dif / k,
+                    mean_dif: s.mean_dif / k,
+                    predictions: s.predictions / n,
+                },
+            )
+        })
+        .collect()
 }
 
 fn mean_std(p: learner::eval::CurvePoint) -> MeanStd {
@@ -394,11 +600,12 @@ fn block_curve(
 /// A block without errors at some position (e.g. the red block asked for in
 /// a one-block scene), or an N_train without jobs.
 pub fn summarise(
-    variant: Variant,
+    protocol: &Protocol,
     train_runs: &[usize],
     results: &[PushJobResult],
 ) -> Result<Vec<CurveEntry>, ExperimentError> {
-    let x0 = variant.test_positions();
+    let variant = protocol.variant;
+    let x0 = &protocol.test_positions;
     train_runs
         .iter()
         .map(|&n| {
@@ -413,11 +620,11 @@ pub fn summarise(
                     p.push(e);
                 }
             }
-            let blue = block_curve(&positions, &x0, BLUE_ID)?;
+            let blue = block_curve(&positions, x0, BLUE_ID)?;
             let red = variant
                 .blocks()
                 .contains(&RED_ID)
-                .then(|| block_curve(&positions, &x0, RED_ID))
+                .then(|| block_curve(&positions, x0, RED_ID))
                 .transpose()?;
             let stats: Vec<&ModelStats> = jobs.iter().map(|j| &j.nodes).collect();
             Ok(CurveEntry {
@@ -426,6 +633,15 @@ pub fn summarise(
                 red,
                 nodes: NodeSummary::of(&stats),
                 folds: jobs.len(),
+                keypoints: mean_keypoints(jobs.iter().flat_map(|j| &j.keypoints)),
+                selection: jobs
+                    .iter()
+                    .map(|j| j.selection)
+                    .reduce(|mut a, b| {
+                        a.add(b);
+                        a
+                    })
+                    .filter(|c| c.samples > 0),
             })
         })
         .collect()
@@ -499,6 +715,16 @@ mod tests {
             .errors
             .iter()
             .all(|e| e.as_ref().unwrap().actuator < 1e-9));
+        // The draft's key-point score: one per test run, 150 predictions
+        // each (messages 2 … 151), exact for the probe.
+        assert_eq!(task.keypoints.len(), 21);
+        for run in &task.keypoints {
+            let a = run.actuator().unwrap();
+            assert_eq!(a.predictions, 150);
+            assert!(a.cum_dif < 1e-9 && a.final_dif < 1e-9);
+        }
+        // The probe has no AC selector: nothing sampled.
+        assert_eq!(task.selection, SelectionCount::default());
         // Every run: one resync. A test run also "updates" on its first
         // message (with training off that only moves the chain forward).
         assert_eq!(model.resets, 2 + 21);
@@ -554,7 +780,7 @@ mod tests {
     #[test]
     fn random_starts_are_drawn_per_run_and_replaced_by_fixed_ones() {
         let random = PushJob {
-            variant: Variant::Random,
+            protocol: Variant::Random.into(),
             ..job(3, Variant::FixedThree)
         };
         let mut a = PushTask::new(&random);
@@ -565,6 +791,48 @@ mod tests {
         assert_eq!(&fixed[..3], &FIXED_TRAINING_STARTS);
         // The fourth draw continues the same random sequence.
         assert_eq!(fixed[3], a.training_start(3));
+    }
+
+    #[test]
+    fn driver_bits_change_the_protocol() {
+        let base = Protocol::from(Variant::Random);
+        assert_eq!(base, Protocol::new(Variant::Random, 16 | 32 | 64 | 1));
+        assert_eq!((base.rate_hz, base.start_range), (100, 0.5));
+        assert!(base.fixed_starts.is_empty());
+        // LOWFREQ: 10 Hz.
+        assert_eq!(Protocol::new(Variant::Random, flags::LOWFREQ).rate_hz, 10);
+        // FIXFIRSTTHREETRAININGRUNS: the §3.2 starts, not replacing a
+        // variant's own table.
+        assert_eq!(
+            Protocol::new(Variant::Random, flags::FIXFIRSTTHREETRAININGRUNS).fixed_starts,
+            Protocol::from(Variant::FixedThree).fixed_starts
+        );
+        assert_eq!(
+            Protocol::new(Variant::TwoObjects, 8).fixed_starts,
+            TWO_OBJECT_TRAINING_STARTS
+        );
+        // ALLOWMISSPOSITIONS: starts in [−0.35, 0.35), some beyond ±0.25.
+        let wide = Protocol::new(Variant::Random, flags::ALLOWMISSPOSITIONS);
+        let mut t = PushTask::new(&PushJob::all(wide, &[200], 1, 3).remove(0));
+        let starts: Vec<f64> = (0..200).map(|k| t.training_start(k)).collect();
+        assert!(starts.iter().all(|x| (-0.35..0.35).contains(x)));
+        assert!(starts.iter().any(|x| x.abs() > 0.3));
+    }
+
+    #[test]
+    fn the_draft_protocol_starts_at_the_blocks_ends_and_tests_on_a_fixed_seed() {
+        let p = Protocol::from(Variant::Draft);
+        assert_eq!(p.fixed_starts, [-0.25, 0.25, 0.0]);
+        assert_eq!(p.start_range, 0.7);
+        assert_eq!(p.rate_hz, 100);
+        assert_eq!(p.test_positions.len(), DRAFT_TEST_RUNS);
+        assert!(p.test_positions.iter().all(|x| (-0.35..0.35).contains(x)));
+        // The same 20 starts whatever the seed, N_train or fold.
+        let jobs = PushJob::all(Variant::Draft, &[3, 10], 2, 99);
+        assert!(jobs
+            .iter()
+            .all(|j| j.protocol.test_positions == p.test_positions));
+        assert_eq!(Variant::Draft.default_train_runs(), [3, 10]);
     }
 
     #[test]
@@ -609,6 +877,8 @@ mod tests {
             nodes: ModelStats::default(),
             counters: Counters::default(),
             timing: Default::default(),
+            keypoints: Vec::new(),
+            selection: SelectionCount::default(),
         }
     }
 
@@ -621,7 +891,7 @@ mod tests {
             result(1, 0, |_| 0.0),
             result(3, 0, |_| 0.1),
         ];
-        let curve = summarise(Variant::Random, &[3, 1], &results).unwrap();
+        let curve = summarise(&Variant::Random.into(), &[3, 1], &results).unwrap();
         assert_eq!(curve[0].train_runs, 3);
         assert_eq!(curve[0].folds, 2);
         let pos = curve[0].blue.block_pos_err;
@@ -632,11 +902,11 @@ mod tests {
         assert!(curve[0].red.is_none());
         // The red block cannot be summarised without its errors.
         assert!(matches!(
-            summarise(Variant::TwoObjects, &[1], &results),
+            summarise(&Variant::TwoObjects.into(), &[1], &results),
             Err(ExperimentError::MissingBlock { id: RED_ID })
         ));
         assert!(matches!(
-            summarise(Variant::Random, &[5], &results),
+            summarise(&Variant::Random.into(), &[5], &results),
             Err(ExperimentError::NoJobs { n_train: 5 })
         ));
     }
@@ -648,7 +918,7 @@ mod tests {
             0,
             |i| if (3..=17).contains(&i) { 0.0 } else { 1.0 },
         )];
-        let curve = summarise(Variant::Random, &[1], &results).unwrap();
+        let curve = summarise(&Variant::Random.into(), &[1], &results).unwrap();
         assert_eq!(curve[0].blue.interacting.block_pos_err.mean, 0.0);
         assert!((curve[0].blue.block_pos_err.mean - 6.0 / 21.0).abs() < 1e-12);
         assert!((curve[0].blue.interacting.actuator_pos_err_script_quirk - 0.0005).abs() < 1e-12);

@@ -11,7 +11,7 @@ use super::driver::{Driver, Task};
 use super::link::{Timing, WorldLink};
 use super::move_to_target::{MttJob, MttJobResult, MttTask, TargetSummary};
 use super::nodes::NodeSummary;
-use super::push_task::{summarise, PushJob, PushJobResult, PushTask, Variant};
+use super::push_task::{summarise, Protocol, PushJob, PushJobResult, PushTask, Variant};
 use super::workers::{run_jobs, Worker, WorldSource};
 use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
 use crate::report::{FeedbackReport, MttReport, PushReport, RunInfo, Setup, TargetEntry};
@@ -85,14 +85,15 @@ fn drive<M: Model, T: Task<M>>(
 /// The first failing job, or a summary that cannot be formed.
 pub fn push_task<M: Model>(
     untrained: M,
-    variant: Variant,
+    protocol: &Protocol,
     train_runs: &[usize],
     folds: usize,
     plan: &Plan,
     progress: impl FnMut(usize),
 ) -> Result<PushReport, ExperimentError> {
     let started = Instant::now();
-    let jobs = PushJob::all(variant, train_runs, folds, plan.seed);
+    let variant = protocol.variant;
+    let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
     let untrained = Mutex::new(untrained);
     let results = run_jobs(
         &jobs,
@@ -103,7 +104,7 @@ pub fn push_task<M: Model>(
                 &mut worker.link,
                 &untrained,
                 PushTask::new(job),
-                RATE_HZ,
+                protocol.rate_hz,
                 plan.job_setup(job.latency_seed),
             )?;
             PushJobResult::from_task(job, task, counters, timing)
@@ -115,7 +116,7 @@ pub fn push_task<M: Model>(
         variant: variant.as_str().to_owned(),
         folds,
         train_runs: train_runs.to_vec(),
-        results: summarise(variant, train_runs, &results)?,
+        results: summarise(protocol, train_runs, &results)?,
         run: RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,

@@ -6,6 +6,7 @@
 //! `runs`, `targets`: identical for identical seeds in lock-step) from how
 //! the run went (`run`: wall-clock times, too-slow counts).
 
+pub mod draft;
 pub mod reference;
 pub mod table;
 
@@ -197,6 +198,8 @@ mod tests {
                 busy_seconds: 0.1,
                 max_seconds: 0.03,
             },
+            keypoints: Vec::new(),
+            selection: Default::default(),
         }
     }
 
@@ -215,7 +218,7 @@ mod tests {
             variant: variant.as_str().into(),
             folds: 2,
             train_runs: train_runs.to_vec(),
-            results: summarise(variant, train_runs, &jobs).unwrap(),
+            results: summarise(&variant.into(), train_runs, &jobs).unwrap(),
             run: RunInfo::of(jobs.iter().map(|j| (j.counters, j.timing)), 100, 2, 1.5),
         }
     }

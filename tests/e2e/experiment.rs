@@ -342,3 +342,81 @@ fn a_world_in_the_wrong_mode_or_scene_is_refused_clearly() {
     let stderr = text(&out.stderr);
     assert!(stderr.contains("needs `two_blocks`"), "{stderr}");
 }
+
+/// The thesis draft's protocol and options over real sockets: the draft's
+/// starts, 20 test runs, key-point scores per body, the selector agreement
+/// of the interaction model, and the hard-coded actuator's exact steps.
+#[test]
+fn draft_protocol_reports_key_point_scores_and_selector_agreement() {
+    let dir = TempDir::new("draft");
+    let (pairwise, gate) = (dir.file("pairwise.json"), dir.file("gate.json"));
+    let table = succeeded(&experiment(&[
+        "push-task",
+        "--model",
+        "interaction",
+        "--variant",
+        "draft",
+        "--selector",
+        "nearest",
+        "--train-runs",
+        "3",
+        "--mode",
+        "lockstep",
+        "--json",
+        &pairwise,
+    ]));
+    assert!(table.contains("Key-point score"), "{table}");
+    let v = read_json(&pairwise);
+    assert_eq!(v["variant"], "draft");
+    assert_eq!(v["folds"], 1, "one model per row, as the draft");
+    let r = &v["results"][0];
+    assert_eq!(r["per_position"].as_array().map(Vec::len), Some(20));
+    for body in ["8", "15"] {
+        let k = &r["keypoints"][body];
+        assert_eq!(k["predictions"], 150, "{k}");
+        let (cum, mean) = (number(&k["cum_dif"]), number(&k["mean_dif"]));
+        assert!(cum.is_finite() && (mean * 150.0 - cum).abs() < 1e-9, "{k}");
+    }
+    let s = &r["selection"];
+    let (samples, agreed) = (number(&s["samples"]), number(&s["agreed"]));
+    // 150 real transitions per test run.
+    assert_eq!(samples, 20.0 * 150.0, "{s}");
+    assert!(agreed > 0.0 && agreed <= samples, "{s}");
+
+    succeeded(&experiment(&[
+        "push-task",
+        "--model",
+        "gate",
+        "--variant",
+        "draft",
+        "--flag",
+        "use-dyns,hard-coded-gate,hard-coded-actuator",
+        "--eta",
+        "0.1",
+        "--train-runs",
+        "1",
+        "--mode",
+        "lockstep",
+        "--json",
+        &gate,
+    ]));
+    let r = &read_json(&gate)["results"][0];
+    assert!(r.get("selection").is_none(), "the gate model has no selector");
+    // The hard-coded actuator predicts the commanded 5 mm per message; the
+    // world's actuator is re-imposed that velocity every step.
+    assert!(number(&r["keypoints"]["8"]["mean_dif"]) < 0.001, "{r}");
+    assert_eq!(
+        number(&r["nodes"]["maps"]["actuator"]["update_calls"]["mean"]),
+        0.0,
+        "never trained"
+    );
+
+    // Options that do not fit the model are refused with a clear message.
+    let refused = experiment(&["push-task", "--model", "gate", "--selector", "tree"]);
+    assert!(!refused.status.success());
+    assert!(
+        text(&refused.stderr).contains("--selector does not apply to the gate model"),
+        "{}",
+        text(&refused.stderr)
+    );
+}

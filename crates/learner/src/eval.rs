@@ -54,13 +54,38 @@ pub fn two_object_test_positions() -> [f64; TEST_POSITION_COUNT] {
     std::array::from_fn(|i| -0.8 + 0.06 * i as f64)
 }
 
+/// Width of the random training start range of `experiments.md` §3:
+/// [−0.25, 0.25), the block's length.
+pub const TRAINING_START_RANGE: f64 = 0.5;
+
+/// The range with configuration bit 4, ALLOWMISSPOSITIONS (`experiments.md`
+/// §1): [−0.35, 0.35), so that some pushes miss the block (thesis draft
+/// §6.1.1 samples "between −0.35 and 0.35").
+pub const WIDE_TRAINING_START_RANGE: f64 = 0.7;
+
 /// A random training start from a uniform sample `u` in [0, 1):
 /// `(u − 0.5) · 0.5`, i.e. [−0.25, 0.25) (`experiments.md` §3). The caller
 /// draws `u` for every run, also when a fixed start replaces it, so that the
 /// random sequence does not depend on the variant.
 #[must_use]
 pub fn random_training_start(u: f64) -> f64 {
-    (u - 0.5) * 0.5
+    training_start_in(u, TRAINING_START_RANGE)
+}
+
+/// A start uniform in a range of `width` centred on 0, from `u` in [0, 1).
+#[must_use]
+pub fn training_start_in(u: f64, width: f64) -> f64 {
+    (u - 0.5) * width
+}
+
+/// The thesis draft's first three training starts (§6.1.1): "the outer
+/// left, the outer right side and directly at the center" of the blue
+/// block, i.e. the actuator's centre under the block's ends (± its half
+/// length from the shape table) and under its centre.
+#[must_use]
+pub fn draft_training_starts() -> [f64; 3] {
+    let (w, _) = crate::keypoints::half_extents(crate::types::BLUE_ID);
+    [-w, w, 0.0]
 }
 
 /// `run_ended(WS)` of `experiments.md` §2.1, for the distance part; the step
@@ -457,6 +482,8 @@ mod tests {
         assert!((two[0] + 0.8).abs() < 1e-12 && (two[20] - 0.4).abs() < 1e-12);
         assert_eq!(random_training_start(0.0), -0.25);
         assert_eq!(random_training_start(0.5), 0.0);
+        assert_eq!(training_start_in(0.0, WIDE_TRAINING_START_RANGE), -0.35);
+        assert_eq!(draft_training_starts(), [-0.25, 0.25, 0.0]);
     }
 
     #[test]

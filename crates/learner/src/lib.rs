@@ -15,16 +15,21 @@
 //! * [`interaction`]: the pairwise interaction-state model
 //!   (`interaction-model.md`);
 //! * [`planning`]: the model-independent parts of Move to Target
-//!   (`planning.md` §1, §4, §5).
+//!   (`planning.md` §1, §4, §5);
+//! * [`tree`]: the decision trees of the thesis draft's AC selector;
+//! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2).
 
 pub mod aim;
 pub mod aitm;
 pub mod eval;
 pub mod features;
+pub mod flags;
 pub mod gate;
 pub mod interaction;
+pub mod keypoints;
 pub mod model;
 pub mod planning;
+pub mod tree;
 pub mod types;
 
 pub use aitm::MapStats;

@@ -139,6 +139,20 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     /// Node statistics of every map (`experiments.md` §7.5); key names in
     /// [`stat_keys`].
     fn stats(&self) -> ModelStats;
+
+    /// Selector diagnostics for the real transition `old` → `new` under
+    /// `action`: per interaction pair, the AC the model's own assignment
+    /// gives to the transition (`None` if no AC has its changed-feature set)
+    /// and the AC its selector chooses from `old`. Empty for models without
+    /// an AC selector. Changes nothing.
+    fn selection(
+        &self,
+        _old: &Poses,
+        _new: &Poses,
+        _action: Action,
+    ) -> Vec<(Option<usize>, Option<usize>)> {
+        Vec::new()
+    }
 }
 
 /// A model's statistics (`gate-model.md` §7, `interaction-model.md` §6).

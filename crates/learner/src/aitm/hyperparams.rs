@@ -67,6 +67,18 @@ impl AitmParams {
         }
     }
 
+    /// These parameters with all three learning rates set to `eta` (the
+    /// draft's "ITM η" rows vary them together, thesis draft Tables 6.1/6.2).
+    #[must_use]
+    pub fn with_learning_rate(self, eta: f64) -> Self {
+        Self {
+            eta_in: eta,
+            eta_out: eta,
+            eta_a: eta,
+            ..self
+        }
+    }
+
     /// Validates the parameters once.
     pub fn check(self) -> Result<AitmConfig, AitmError> {
         let sq = self.sigma * self.sigma;

@@ -22,6 +22,8 @@ pub use crate::planning::{
     APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
 pub use model::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
-pub use params::{flags, GateConfig, GateError, GateParams, FLAG_PREDICTION_BOOST};
+pub use params::{
+    flags, GateConfig, GateError, GateParams, VelocityFeatures, FLAG_PREDICTION_BOOST,
+};
 pub use planner::{PASS_MAX, PASS_MIN};
 pub use world::GateWorld;

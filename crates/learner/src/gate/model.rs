@@ -6,13 +6,14 @@ use std::collections::BTreeMap;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::params::{GateConfig, GateError};
+use super::params::{GateConfig, GateError, VelocityFeatures};
 use super::world::{GateWorld, Record, SharedBlock};
 use crate::aim::InverseModel;
-use crate::aitm::{Aitm, AitmConfig, QueryMode};
+use crate::aitm::{Aitm, AitmConfig};
 use crate::features::{
-    actuator_change, apply_actuator_change, apply_local_change, local_change, parse_frame,
-    relative_features, ActuatorYaw, ParseError, LOCAL_CHANGE_DIM, RELATIVE_FEATURES_DIM,
+    actuator_change, apply_actuator_change, apply_local_change, local_change, local_vec,
+    parse_frame, r3, r3_vec, relative_features, ActuatorYaw, ParseError, LOCAL_CHANGE_DIM,
+    RELATIVE_FEATURES_DIM,
 };
 use crate::model::{stat_keys, Model, ModelStats};
 use crate::types::{Action, Frame, ObjectState, Poses, Target, TargetError, TrackedObject};
@@ -34,6 +35,39 @@ const CHANGED: i64 = 1;
 /// Value of the stats labels for a hard-coded part (`gate-model.md` §5).
 pub const HARD_CODED_LABEL: &str = "hard-coded";
 
+/// Longest block-predictor input: φ and the three velocities of USE_DYNS.
+const MAX_PREDICTOR_INPUT: usize = RELATIVE_FEATURES_DIM + 3;
+
+/// The block predictors' input dimension under `config`.
+fn predictor_input_dim(config: &GateConfig) -> usize {
+    RELATIVE_FEATURES_DIM + config.params().velocity_features.dim()
+}
+
+/// The block predictor's input for block `o` with features `phi`: φ itself
+/// in the evaluated configuration; with USE_DYNS followed by `o`'s own
+/// velocity ([`VelocityFeatures`]). Returns the buffer and its used length.
+fn predictor_input(
+    config: &GateConfig,
+    o: &TrackedObject,
+    phi: &[f64; RELATIVE_FEATURES_DIM],
+) -> ([f64; MAX_PREDICTOR_INPUT], usize) {
+    let mut x = [0.0; MAX_PREDICTOR_INPUT];
+    x[..RELATIVE_FEATURES_DIM].copy_from_slice(phi);
+    let extra = config.params().velocity_features;
+    if extra != VelocityFeatures::None {
+        let v = r3_vec(local_vec(
+            o.s_prev.theta,
+            o.s.position() - o.s_prev.position(),
+        ));
+        x[RELATIVE_FEATURES_DIM] = v.x;
+        x[RELATIVE_FEATURES_DIM + 1] = v.y;
+        if extra == VelocityFeatures::LinearAngular {
+            x[RELATIVE_FEATURES_DIM + 2] = r3(o.s.theta - o.s_prev.theta);
+        }
+    }
+    (x, RELATIVE_FEATURES_DIM + extra.dim())
+}
+
 /// The models of one block id (`gate-model.md` §1): forward model φ → Δ and
 /// the inverse model, created together on the block's first observed change.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -46,8 +80,8 @@ impl Predictor {
     fn new(config: &GateConfig) -> Self {
         Self {
             forward: Aitm::new(
-                AitmConfig::regressor(QueryMode::BestTwo),
-                RELATIVE_FEATURES_DIM,
+                config.forward(),
+                predictor_input_dim(config),
                 LOCAL_CHANGE_DIM,
             ),
             inverse: InverseModel::new(config.aim()),
@@ -120,11 +154,7 @@ impl GateModel {
     pub fn new(config: GateConfig) -> Self {
         Self {
             config,
-            actuator_model: Aitm::new(
-                AitmConfig::regressor(QueryMode::BestTwo),
-                ACTION_DIM,
-                LOCAL_CHANGE_DIM,
-            ),
+            actuator_model: Aitm::new(config.forward(), ACTION_DIM, LOCAL_CHANGE_DIM),
             gate: Aitm::new(AitmConfig::classifier(), RELATIVE_FEATURES_DIM, 1),
             predictors: BTreeMap::new(),
             actuator: None,
@@ -216,7 +246,8 @@ impl GateModel {
         phi: &[f64; RELATIVE_FEATURES_DIM],
     ) -> Option<ObjectState> {
         let p = self.predictors.get(&o.id)?;
-        let d = p.forward.query(phi);
+        let (x, n) = predictor_input(&self.config, o, phi);
+        let d = p.forward.query(&x[..n]);
         Some(apply_local_change(
             &o.s,
             [d[0], d[1], d[2]],
@@ -237,11 +268,12 @@ impl GateModel {
         }
         if changed {
             let config = &self.config;
+            let (x, n) = predictor_input(config, k, &phi);
             let p = self
                 .predictors
                 .entry(o.id)
                 .or_insert_with(|| Predictor::new(config));
-            p.forward.update(&phi, &delta);
+            p.forward.update(&x[..n], &delta);
             p.inverse.train(&phi, &delta);
         }
     }
@@ -433,7 +465,7 @@ impl TryFrom<GateModelState> for GateModel {
             return Err(Bad("gate dimensions or kind"));
         }
         for p in s.predictors.values() {
-            if dims(&p.forward) != (RELATIVE_FEATURES_DIM, LOCAL_CHANGE_DIM) {
+            if dims(&p.forward) != (predictor_input_dim(&s.config), LOCAL_CHANGE_DIM) {
                 return Err(Bad("predictor dimensions"));
             }
             if p.inverse

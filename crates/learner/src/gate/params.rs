@@ -5,30 +5,47 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::aim::{AimConfig, AimError, AimParams};
+use crate::aitm::{AitmConfig, AitmError, AitmParams, QueryMode};
 use crate::features::DEFAULT_PREDICTION_BOOST;
 
 /// The boost of configuration flag 64 (`gate-model.md` §5).
 pub const FLAG_PREDICTION_BOOST: f64 = 1.5;
 
-/// Configuration bits of the original (`experiments.md` §1) that concern the
-/// gate model.
-pub mod flags {
-    /// Velocity features from the message: not specified, refused.
-    pub const USE_DYNS: u32 = 1;
-    /// 10 Hz thresholds.
-    pub const LOWFREQ: u32 = 2;
-    /// Driver only (training start range).
-    pub const ALLOWMISSPOSITIONS: u32 = 4;
-    /// Driver only (fixed first training runs).
-    pub const FIXFIRSTTHREETRAININGRUNS: u32 = 8;
-    /// Hard-coded actuator forward model.
-    pub const HARDCODEDACT: u32 = 16;
-    /// Hard-coded gate.
-    pub const HARDCODEDGATE: u32 = 32;
-    /// Prediction boost 1.5.
-    pub const USINGPREDICTIONBOOST: u32 = 64;
-    /// Every bit the original defined.
-    pub const ALL: u32 = 127;
+pub use crate::flags;
+
+/// Which of the block's own velocities the block predictors see besides φ
+/// (configuration bit 1, USE_DYNS; thesis draft §4.3.1 lists linVelX,
+/// linVelY and angVel among an object's features).
+///
+/// *(decision)* The learner's frames carry no message velocities
+/// (`protocol.md` §4: no evaluated learner reads them), so the velocities
+/// are the block's displacement since its previous state, in that previous
+/// state's frame and rounded to 3 decimals, and its yaw change: the
+/// message's velocities times the message period up to the world's
+/// integration.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VelocityFeatures {
+    /// φ only: the evaluated configuration (the draft's "NoDyns").
+    #[default]
+    None,
+    /// φ and the block's linear velocity (the draft's "NoAV": no angular
+    /// velocity).
+    Linear,
+    /// φ, the linear and the angular velocity (USE_DYNS).
+    LinearAngular,
+}
+
+impl VelocityFeatures {
+    /// Number of components added to φ.
+    #[must_use]
+    pub fn dim(self) -> usize {
+        match self {
+            VelocityFeatures::None => 0,
+            VelocityFeatures::Linear => 2,
+            VelocityFeatures::LinearAngular => 3,
+        }
+    }
 }
 
 /// Why a gate model configuration or a deserialised gate model was rejected.
@@ -40,9 +57,11 @@ pub enum GateError {
     /// The inverse models' thresholds are invalid.
     #[error("inverse model parameters: {0}")]
     Aim(#[from] AimError),
-    /// Flag 1 (velocity features) was never used for a result and is not
-    /// specified (`features.md` §8); unknown bits are refused as well.
-    #[error("configuration number {0}: unsupported or unknown bits {1:#x}")]
+    /// The forward models' learning rate is invalid.
+    #[error("forward model learning rate: {0}")]
+    Rate(#[from] AitmError),
+    /// Bits the original never defined.
+    #[error("configuration number {0}: unknown bits {1:#x}")]
     UnsupportedFlags(u32, u32),
     /// A deserialised model violates an invariant.
     #[error("inconsistent gate model state: {0}")]
@@ -64,6 +83,14 @@ pub struct GateParams {
     /// Flag 32: a geometric rule replaces the learned gate, which is then
     /// never trained (`gate-model.md` §5).
     pub hard_coded_gate: bool,
+    /// η_in = η_out = η_A of the actuator and block forward models
+    /// (`aitm.md` §4): 0 in every final result, varied in the thesis
+    /// draft's tables ("ITM η").
+    #[serde(default)]
+    pub forward_learning_rate: f64,
+    /// The block predictors' velocity inputs (flag 1).
+    #[serde(default)]
+    pub velocity_features: VelocityFeatures,
 }
 
 impl GateParams {
@@ -75,6 +102,8 @@ impl GateParams {
             prediction_boost: DEFAULT_PREDICTION_BOOST,
             hard_coded_actuator: false,
             hard_coded_gate: false,
+            forward_learning_rate: 0.0,
+            velocity_features: VelocityFeatures::None,
         }
     }
 
@@ -89,10 +118,9 @@ impl GateParams {
 
     /// The parameters of one of the original's configuration numbers
     /// (`experiments.md` §1). Driver-only bits (4, 8) are accepted and have
-    /// no effect here; bit 1 (velocity features) and undefined bits are
-    /// refused.
+    /// no effect here; undefined bits are refused.
     pub fn from_config_number(number: u32) -> Result<Self, GateError> {
-        let bad = (number & flags::USE_DYNS) | (number & !flags::ALL);
+        let bad = number & !flags::ALL;
         if bad != 0 {
             return Err(GateError::UnsupportedFlags(number, bad));
         }
@@ -109,6 +137,11 @@ impl GateParams {
             },
             hard_coded_actuator: number & flags::HARDCODEDACT != 0,
             hard_coded_gate: number & flags::HARDCODEDGATE != 0,
+            velocity_features: if number & flags::USE_DYNS != 0 {
+                VelocityFeatures::LinearAngular
+            } else {
+                VelocityFeatures::None
+            },
             ..base
         })
     }
@@ -119,7 +152,14 @@ impl GateParams {
         if !(self.prediction_boost.is_finite() && self.prediction_boost > 0.0) {
             return Err(GateError::InvalidBoost(self.prediction_boost));
         }
-        Ok(GateConfig { params: self, aim })
+        let forward = AitmParams::regressor(QueryMode::BestTwo)
+            .with_learning_rate(self.forward_learning_rate)
+            .check()?;
+        Ok(GateConfig {
+            params: self,
+            aim,
+            forward,
+        })
     }
 }
 
@@ -136,6 +176,9 @@ pub struct GateConfig {
     params: GateParams,
     /// `params.aim`, checked.
     aim: AimConfig,
+    /// The actuator and block forward models' configuration (BESTTWO,
+    /// `aitm.md` §6, with `params.forward_learning_rate`), checked.
+    forward: AitmConfig,
 }
 
 impl TryFrom<GateParams> for GateConfig {
@@ -164,6 +207,7 @@ impl GateConfig {
         Self {
             params: GateParams::hz100(),
             aim: AimConfig::hz100(),
+            forward: AitmConfig::regressor(QueryMode::BestTwo),
         }
     }
 
@@ -172,6 +216,7 @@ impl GateConfig {
         Self {
             params: GateParams::hz10(),
             aim: AimConfig::hz10(),
+            ..Self::hz100()
         }
     }
 
@@ -183,6 +228,11 @@ impl GateConfig {
     /// The per-block inverse models' configuration.
     pub fn aim(&self) -> AimConfig {
         self.aim
+    }
+
+    /// The actuator and block forward models' configuration.
+    pub fn forward(&self) -> AitmConfig {
+        self.forward
     }
 }
 
@@ -215,9 +265,10 @@ mod tests {
         assert_eq!(p.prediction_boost, 1.5);
         assert!(p.hard_coded_actuator && p.hard_coded_gate);
         assert_eq!(
-            GateParams::from_config_number(1 | 8),
-            Err(GateError::UnsupportedFlags(9, 1))
+            GateParams::from_config_number(1 | 8).map(|p| p.velocity_features),
+            Ok(VelocityFeatures::LinearAngular)
         );
+        assert_eq!(p.velocity_features, VelocityFeatures::None);
         assert_eq!(
             GateParams::from_config_number(128),
             Err(GateError::UnsupportedFlags(128, 128))
@@ -244,6 +295,19 @@ mod tests {
             ..GateParams::hz100()
         };
         assert!(matches!(p.check(), Err(GateError::Aim(_))));
+        let p = GateParams {
+            forward_learning_rate: f64::NAN,
+            ..GateParams::hz100()
+        };
+        assert!(matches!(p.check(), Err(GateError::Rate(_))));
+        let c = GateParams {
+            forward_learning_rate: 0.1,
+            ..GateParams::hz100()
+        }
+        .check()
+        .unwrap();
+        assert_eq!(c.forward().params().eta_out, 0.1);
+        assert_eq!(GateConfig::hz100().forward().params().eta_out, 0.0);
         let json = serde_json::to_string(&GateConfig::hz100()).unwrap();
         let back: GateConfig = serde_json::from_str(&json).unwrap();
         assert_eq!(back, GateConfig::hz100());

@@ -988,3 +988,82 @@ fn circling_on_the_blocks_centre_does_not_produce_nan() {
     let a = circle(-0.07, Vector2::zeros(), 0.0, Vector2::new(1.0, 0.0));
     assert_eq!(a, Action::ZERO);
 }
+
+// ------------------------------------------------- the thesis draft's variants
+
+/// A model trained on two synthetic pushes under `params`.
+fn trained_with(params: GateParams) -> GateModel {
+    let mut m = GateModel::new(params.check().unwrap());
+    train(&mut m, &[0.0, 0.1]);
+    m
+}
+
+#[test]
+fn velocity_features_extend_the_block_predictor_input() {
+    let dims = |v: VelocityFeatures| {
+        let m = trained_with(GateParams {
+            velocity_features: v,
+            ..GateParams::hz100()
+        });
+        let f = m.predictor(BLUE_ID).unwrap().forward();
+        // The gate and the inverse model keep φ alone.
+        assert_eq!(m.gate().input_dim(), 8);
+        (
+            f.input_dim(),
+            f.nodes().map(|n| n.w_in.to_vec()).collect::<Vec<_>>(),
+        )
+    };
+    let (n0, plain) = dims(VelocityFeatures::None);
+    let (n2, linear) = dims(VelocityFeatures::Linear);
+    let (n3, full) = dims(VelocityFeatures::LinearAngular);
+    assert_eq!((n0, n2, n3), (8, 10, 11));
+    // The synthetic block moves 5 mm per message once pushed: some stored
+    // input carries that velocity in its block frame, and the turning push
+    // (x0 = 0.1 turns the block by −0.002 per message) its yaw change.
+    assert!(linear.iter().any(|w| w[9] == 0.005), "{linear:?}");
+    assert!(full.iter().any(|w| w[10] == -0.002));
+    assert!(plain.iter().all(|w| w.len() == 8));
+    // GateParams from configuration number 1 selects all three.
+    assert_eq!(
+        GateParams::from_config_number(1).unwrap().velocity_features,
+        VelocityFeatures::LinearAngular
+    );
+}
+
+#[test]
+fn a_velocity_model_round_trips_and_rejects_the_wrong_dimension() {
+    let m = trained_with(GateParams {
+        velocity_features: VelocityFeatures::Linear,
+        ..GateParams::hz100()
+    });
+    let json = serde_json::to_value(&m).unwrap();
+    let back: GateModel = serde_json::from_value(json.clone()).unwrap();
+    assert_eq!(
+        serde_json::to_string(&back).unwrap(),
+        serde_json::to_string(&m).unwrap()
+    );
+    let mut v = json;
+    v["config"]["velocity_features"] = serde_json::json!("none");
+    let err = serde_json::from_value::<GateModel>(v).unwrap_err();
+    assert!(err.to_string().contains("predictor dimensions"), "{err}");
+}
+
+#[test]
+fn a_learning_rate_moves_the_forward_models_nodes() {
+    let nodes = |eta: f64| {
+        let m = trained_with(GateParams {
+            forward_learning_rate: eta,
+            ..GateParams::hz100()
+        });
+        let f = m.predictor(BLUE_ID).unwrap().forward();
+        assert_eq!(f.config().params().eta_out, eta);
+        f.nodes()
+            .map(|n| (n.w_in.to_vec(), n.w_out.to_vec()))
+            .collect::<Vec<_>>()
+    };
+    let still = nodes(0.0);
+    let moved = nodes(0.2);
+    assert_ne!(still, moved);
+    // With η = 0 every stored input is one the model was shown: rounded.
+    assert!(still.iter().all(|(w, _)| w.iter().all(|&v| v == r3(v))));
+}

@@ -15,11 +15,13 @@
 //! | §6 node statistics | [`crate::Model::stats`], keys in [`crate::stat_keys`] |
 //! | `planning.md` §3, §4 | [`crate::Model::act`], [`circle_interaction`] |
 //! | parameters (100 Hz / 10 Hz) | [`InteractionParams`], [`InteractionConfig`] |
+//! | the draft's selectors (draft §3.2.2, §4.2.3) | [`AcSelector`], [`Selector`], [`SelectorKind`] |
 
 mod errors;
 mod model;
 mod params;
 mod planner;
+mod selector;
 
 #[cfg(test)]
 mod tests;
@@ -28,3 +30,4 @@ pub use errors::InteractionError;
 pub use model::{AbstractCollection, InteractionModel, InteractionWorld};
 pub use params::{InteractionConfig, InteractionParams};
 pub use planner::circle_interaction;
+pub use selector::{AcSelector, NearestSelector, References, Selector, SelectorKind, TreeSelector};

@@ -7,8 +7,9 @@ use serde::{Deserialize, Serialize};
 
 use super::errors::InteractionError;
 use super::params::InteractionConfig;
+use super::selector::{AcSelector, Selector};
 use crate::aim::InverseModel;
-use crate::aitm::{Aitm, AitmConfig, MapStats, QueryMode};
+use crate::aitm::{Aitm, MapStats};
 use crate::features::{
     changed_features, episode_difference, interaction_states, parse_frame, poses_from_states,
     target_interaction_state, ActuatorYaw, InteractionState, PairKey, ParseError, Shape,
@@ -50,12 +51,8 @@ pub struct AbstractCollection {
 }
 
 impl AbstractCollection {
-    fn new(features: Vec<usize>) -> Self {
-        let forward = Aitm::new(
-            AitmConfig::regressor(QueryMode::Winner),
-            INTERACTION_INPUT_DIM,
-            features.len(),
-        );
+    fn new(features: Vec<usize>, config: &InteractionConfig) -> Self {
+        let forward = Aitm::new(config.ac(), INTERACTION_INPUT_DIM, features.len());
         Self { features, forward }
     }
 
@@ -133,8 +130,9 @@ pub struct InteractionModel {
     /// deserialising.
     #[serde(skip)]
     pub(super) index: BTreeMap<Vec<usize>, usize>,
-    /// The ACS: `[ι, a_local]` → AC id, integer labels (`aitm.md` §6).
-    pub(super) selector: Aitm,
+    /// The ACS: `[ι, a_local]` → AC id; by default the AITM classifier with
+    /// integer labels (`aitm.md` §6), else one of the draft's selectors.
+    pub(super) selector: Selector,
     pub(super) selector_trained: bool,
     /// The single global AIM (`interaction-model.md` §8).
     pub(super) inverse: InverseModel,
@@ -159,7 +157,7 @@ impl InteractionModel {
             config,
             acs: Vec::new(),
             index: BTreeMap::new(),
-            selector: Aitm::new(AitmConfig::classifier(), INTERACTION_INPUT_DIM, 1),
+            selector: Selector::new(config.selector()),
             selector_trained: false,
             inverse: InverseModel::new(config.aim()),
             current: BTreeMap::new(),
@@ -188,8 +186,36 @@ impl InteractionModel {
 
     /// The Abstract Collection Selector.
     #[must_use]
-    pub fn selector(&self) -> &Aitm {
+    pub fn selector(&self) -> &Selector {
         &self.selector
+    }
+
+    /// The ACS as the final thesis's AITM classifier, if it is one.
+    #[must_use]
+    pub fn aitm_selector(&self) -> Option<&Aitm> {
+        self.selector.aitm()
+    }
+
+    /// One pair's sample of [`Model::selection`]: the AC the model's own
+    /// assignment gives to the transition `old` → `new` (the AC of its changed-feature set, `interaction-model.md` §3),
+    /// `None` if no AC has that set, together with the AC the selector
+    /// chooses for `old` under `action`: one sample of the selector's
+    /// accuracy on real transitions. Changes nothing.
+    #[must_use]
+    pub fn pair_selection(
+        &self,
+        old: &InteractionState,
+        new: &InteractionState,
+        action: Action,
+    ) -> (Option<usize>, Option<usize>) {
+        let d = episode_difference(old, new);
+        let truth = self.collection_id(&changed_features(&d, self.config.eps_noise()));
+        let chosen = if self.selector_trained {
+            self.selector.select(&old.input(action))
+        } else {
+            None
+        };
+        (truth, chosen)
     }
 
     /// Whether the ACS was ever trained (before that, predictions change nothing).
@@ -223,7 +249,8 @@ impl InteractionModel {
         }
         let k = self.acs.len();
         self.index.insert(features.clone(), k);
-        self.acs.push(AbstractCollection::new(features));
+        self.acs
+            .push(AbstractCollection::new(features, &self.config));
         k
     }
 
@@ -237,8 +264,7 @@ impl InteractionModel {
         let ac = &mut self.acs[k];
         let y: Vec<f64> = ac.features.iter().map(|&i| d[i]).collect();
         ac.forward.update(&x, &y);
-        // At most 64 ACs (S ⊆ {0, …, 7}): the id always fits.
-        self.selector.update_label(&x, k as i64);
+        self.selector.learn(&x, k);
         self.selector_trained = true;
         self.inverse.train(&x, &d);
     }
@@ -256,12 +282,7 @@ impl InteractionModel {
         // The stored labels are AC ids (checked when deserialising); a label
         // without an AC, which only a hand-edited snapshot could produce,
         // predicts no change rather than panicking.
-        let Some(ac) = self
-            .selector
-            .classify(&x)
-            .and_then(|k| usize::try_from(k).ok())
-            .and_then(|k| self.acs.get(k))
-        else {
+        let Some(ac) = self.selector.select(&x).and_then(|k| self.acs.get(k)) else {
             return out;
         };
         let change = ac.forward.query(&x);
@@ -345,7 +366,12 @@ impl Model for InteractionModel {
         )
     }
 
+    /// Turning training off also brings the selector up to date (the
+    /// draft's batch tree refits on every reference stored so far).
     fn set_training(&mut self, on: bool) {
+        if !on {
+            self.selector.refresh();
+        }
         self.training = on;
     }
 
@@ -396,6 +422,18 @@ impl Model for InteractionModel {
         ac_summary(&per_ac, &mut stats.extra);
         stats
     }
+
+    fn selection(
+        &self,
+        old: &Poses,
+        new: &Poses,
+        action: Action,
+    ) -> Vec<(Option<usize>, Option<usize>)> {
+        let (old, new) = (interaction_states(old), interaction_states(new));
+        old.iter()
+            .filter_map(|(key, o)| Some(self.pair_selection(o, new.get(key)?, action)))
+            .collect()
+    }
 }
 
 /// The serialised form, validated before it becomes an [`InteractionModel`]
@@ -404,7 +442,7 @@ impl Model for InteractionModel {
 struct InteractionModelState {
     config: InteractionConfig,
     acs: Vec<AbstractCollection>,
-    selector: Aitm,
+    selector: Selector,
     selector_trained: bool,
     inverse: InverseModel,
     current: BTreeMap<PairKey, InteractionState>,
@@ -433,23 +471,11 @@ impl TryFrom<InteractionModelState> for InteractionModel {
                 return Err(Bad("two ACs with the same feature list"));
             }
         }
-        if s.selector.input_dim() != INTERACTION_INPUT_DIM
-            || s.selector.output_dim() != 1
-            || !s.selector.config().is_classifier()
-        {
-            return Err(Bad("selector dimensions or kind"));
+        if let Some(why) = s.selector.inconsistency(s.acs.len(), s.selector_trained) {
+            return Err(Bad(why));
         }
-        // The AITM never deletes its last two nodes: trained ⇔ non-empty.
-        if s.selector_trained == s.selector.is_empty() {
-            return Err(Bad("selector trained flag contradicts its nodes"));
-        }
-        let valid_label = |v: f64| v.fract() == 0.0 && v >= 0.0 && v < s.acs.len() as f64;
-        if !s
-            .selector
-            .nodes()
-            .all(|n| n.w_out.iter().all(|&v| valid_label(v)))
-        {
-            return Err(Bad("selector label names no AC"));
+        if s.selector.kind() != s.config.selector() {
+            return Err(Bad("selector kind differs from the configuration"));
         }
         if s.inverse
             .precondition_dim()

@@ -174,12 +174,23 @@ fn acs_are_created_per_new_changed_set_with_ids_in_creation_order() {
         .collect();
     assert_eq!(updates, vec![2, 1, 1]);
     // The ACS and the AIM see every episode.
-    assert_eq!(m.selector().stats().update_calls, 4);
+    assert_eq!(
+        m.aitm_selector()
+            .expect("the AITM selector")
+            .stats()
+            .update_calls,
+        4
+    );
     assert!(m.selector_trained());
     // Selector nodes store the AC ids as labels. Episode 3 starts where
     // episode 2 did (same input) with label 0: that node's 1 becomes
     // trunc(0.5) = 0. Episode 4's new input inserts label 2.
-    let labels: Vec<f64> = m.selector().nodes().map(|n| n.w_out[0]).collect();
+    let labels: Vec<f64> = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .map(|n| n.w_out[0])
+        .collect();
     assert_eq!(labels, [0.0, 0.0, 2.0]);
 }
 
@@ -209,7 +220,12 @@ fn the_training_input_is_the_old_state_and_the_action_in_the_old_frame() {
     m.update(&new, a);
     let x = old.states[&KEY].input(a);
     assert_ne!(x, new.states[&KEY].input(a));
-    let acs_node = m.selector().nodes().next().expect("node");
+    let acs_node = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .next()
+        .expect("node");
     assert_eq!(acs_node.w_in, &x[..]);
     let ac = &m.collections()[0];
     let ac_node = ac.forward().nodes().next().expect("node");
@@ -285,7 +301,13 @@ fn training_off_only_moves_the_states_forward() {
     m.reset_objects(&w0);
     m.update(&w1, Action::new(0.0, 0.5));
     assert!(m.collections().is_empty());
-    assert_eq!(m.selector().stats().update_calls, 0);
+    assert_eq!(
+        m.aitm_selector()
+            .expect("the AITM selector")
+            .stats()
+            .update_calls,
+        0
+    );
     assert!(!m.selector_trained());
     assert_eq!(m.inverse_model().prototype_count(), 0);
     assert_eq!(m.current_states()[&KEY], w1.states[&KEY]);
@@ -305,7 +327,13 @@ fn a_pair_seen_for_the_first_time_is_stored_without_training() {
     let mut two = poses((0.0, 0.25, 0.0), (0.0, 0.005, 0.0));
     two.blocks.insert(RED_ID, ObjectState::new(-0.6, 0.35, 0.0));
     m.update(&InteractionWorld::from_poses(two), Action::new(0.0, 0.5));
-    assert_eq!(m.selector().stats().update_calls, 1);
+    assert_eq!(
+        m.aitm_selector()
+            .expect("the AITM selector")
+            .stats()
+            .update_calls,
+        1
+    );
     assert_eq!(m.current_states().len(), 4);
 }
 
@@ -323,15 +351,33 @@ fn acs_labels_are_truncated_integers() {
     episode(&mut m, &b, &changed(&b, &[(5, 0.005)]), far); // AC 1 at x_far
     episode(&mut m, &b, &changed(&b, &[(5, 0.005), (6, 0.005)]), a); // AC 2 at x_a
     assert_eq!(m.collections().len(), 3);
-    assert_eq!(m.selector().stats().nodes, 2);
-    let labels: Vec<f64> = m.selector().nodes().map(|n| n.w_out[0]).collect();
+    assert_eq!(
+        m.aitm_selector().expect("the AITM selector").stats().nodes,
+        2
+    );
+    let labels: Vec<f64> = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .map(|n| n.w_out[0])
+        .collect();
     // Node 0 held 0, was hit by label 2: 0 + 0.5·2 = 1 exactly, stays 1.
     assert_eq!(labels, vec![1.0, 1.0]);
     episode(&mut m, &b, &changed(&b, &[(6, 0.005)]), a); // label 0 at x_a: 1 → 0.5 → 0
-    let labels: Vec<f64> = m.selector().nodes().map(|n| n.w_out[0]).collect();
+    let labels: Vec<f64> = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .map(|n| n.w_out[0])
+        .collect();
     assert_eq!(labels, vec![0.0, 1.0]);
     episode(&mut m, &b, &changed(&b, &[(5, 0.005)]), a); // label 1 at x_a: 0 → 0.5 → 0
-    let labels: Vec<f64> = m.selector().nodes().map(|n| n.w_out[0]).collect();
+    let labels: Vec<f64> = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .map(|n| n.w_out[0])
+        .collect();
     assert_eq!(labels, vec![0.0, 1.0]);
     // Prediction selects AC 0 ({6}), not the fractional "0.5".
     let p = m.predict_state(&b, a);
@@ -371,9 +417,14 @@ fn acs_labels_of_ten_and_more_need_an_error_above_ten_to_insert() {
         );
     }
     assert_eq!(m.collections().len(), 12);
-    let stats = m.selector().stats();
+    let stats = m.aitm_selector().expect("the AITM selector").stats();
     assert_eq!((stats.update_calls, stats.nodes), (12, 10));
-    let labels: Vec<f64> = m.selector().nodes().map(|n| n.w_out[0]).collect();
+    let labels: Vec<f64> = m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .nodes()
+        .map(|n| n.w_out[0])
+        .collect();
     assert_eq!(labels, (0..10).map(f64::from).collect::<Vec<_>>());
     // At AC 10's own training input the selector answers AC 9 ({2, 6}).
     let p = m.predict_state(&b, Action::new(0.0, 1.0));
@@ -531,7 +582,13 @@ fn reset_objects_replaces_all_states_and_update_keeps_unseen_ones() {
     // No training happened in reset.
     m.set_training(true);
     m.reset_objects(&two);
-    assert_eq!(m.selector().stats().update_calls, 0);
+    assert_eq!(
+        m.aitm_selector()
+            .expect("the AITM selector")
+            .stats()
+            .update_calls,
+        0
+    );
 }
 
 // ------------------------------------------------------------ statistics (§6)
@@ -561,7 +618,10 @@ fn statistics_cover_every_map_and_both_ac_column_definitions() {
     }
     let s = m.stats();
     assert_eq!(s.extra[stat_keys::AC_COUNT], 2.0);
-    assert_eq!(s.maps[stat_keys::ACS], m.selector().stats());
+    assert_eq!(
+        s.maps[stat_keys::ACS],
+        m.aitm_selector().expect("the AITM selector").stats()
+    );
     assert_eq!(s.maps[stat_keys::ACS].update_calls, 7);
     assert_eq!(s.labels["ac/0"], "6");
     assert_eq!(s.labels["ac/1"], "5");
@@ -899,9 +959,108 @@ fn a_fresh_model_is_untrained() {
     assert_eq!(m.config(), &InteractionConfig::hz10());
     assert!(m.collections().is_empty() && !m.selector_trained());
     assert!(m.current_states().is_empty() && m.target().is_none());
-    assert_eq!(m.selector().input_dim(), 10);
-    assert!(m.selector().config().is_classifier());
+    assert_eq!(
+        m.aitm_selector().expect("the AITM selector").input_dim(),
+        10
+    );
+    assert!(m
+        .aitm_selector()
+        .expect("the AITM selector")
+        .config()
+        .is_classifier());
     let json = serde_json::to_string(&m).expect("serialise");
     let back: InteractionModel = serde_json::from_str(&json).expect("an untrained snapshot");
     assert_eq!(back, m);
+}
+
+// ------------------------------------------------- the thesis draft's variants
+
+/// `trained()`'s runs for a model with these parameters.
+fn trained_with(params: InteractionParams) -> InteractionModel {
+    let mut m = InteractionModel::new(params.check().expect("valid"));
+    for x0 in [-0.18, 0.18, 0.0, 0.07] {
+        let run = push_run(x0);
+        m.reset_objects(&run[0]);
+        for w in &run[1..] {
+            m.update(w, Action::new(0.0, 0.5));
+        }
+    }
+    m.set_training(false);
+    m
+}
+
+#[test]
+fn every_selector_is_trained_on_the_same_episodes_and_round_trips() {
+    let aitm = trained();
+    for kind in SelectorKind::ALL {
+        let m = trained_with(InteractionParams {
+            selector: kind,
+            ..InteractionParams::hz100()
+        });
+        assert_eq!(m.selector().kind(), kind);
+        // The ACs do not depend on the selector: same sets, same ids.
+        let sets: Vec<&[usize]> = m.collections().iter().map(|ac| ac.features()).collect();
+        let want: Vec<&[usize]> = aitm.collections().iter().map(|ac| ac.features()).collect();
+        assert_eq!(sets, want, "{kind}");
+        let stats = m.stats();
+        assert_eq!(stats.maps[stat_keys::ACS].update_calls, 4 * 59, "{kind}");
+        // On the training inputs themselves the memory-based selectors
+        // agree with the model's own assignment at every step.
+        let run = push_run(0.07);
+        let hits = run
+            .windows(2)
+            .filter(|w| {
+                let (truth, chosen) = m.pair_selection(
+                    &w[0].states[&KEY],
+                    &w[1].states[&KEY],
+                    Action::new(0.0, 0.5),
+                );
+                truth.is_some() && truth == chosen
+            })
+            .count();
+        if matches!(kind, SelectorKind::Tree | SelectorKind::Nearest) {
+            assert_eq!(hits, run.len() - 1, "{kind}");
+        } else {
+            assert!(hits > 0, "{kind}");
+        }
+        let json = serde_json::to_string(&m).expect("serialise");
+        let back: InteractionModel = serde_json::from_str(&json).expect("deserialise");
+        assert_eq!(back, m, "{kind}");
+    }
+}
+
+#[test]
+fn a_snapshot_whose_selector_differs_from_its_configuration_is_rejected() {
+    let m = trained_with(InteractionParams {
+        selector: SelectorKind::Nearest,
+        ..InteractionParams::hz100()
+    });
+    let mut v = serde_json::to_value(&m).expect("serialise");
+    v["config"]["selector"] = serde_json::json!("tree");
+    let err = serde_json::from_value::<InteractionModel>(v).expect_err("mismatch");
+    assert!(err.to_string().contains("selector kind"), "{err}");
+    let mut v = serde_json::to_value(&m).expect("serialise");
+    v["selector"]["references"]["labels"][0] = serde_json::json!(99);
+    let err = serde_json::from_value::<InteractionModel>(v).expect_err("bad label");
+    assert!(err.to_string().contains("names no AC"), "{err}");
+}
+
+#[test]
+fn the_ac_learning_rate_moves_ac_nodes() {
+    let outputs = |eta: f64| {
+        let m = trained_with(InteractionParams {
+            ac_learning_rate: eta,
+            ..InteractionParams::hz100()
+        });
+        m.collections()
+            .iter()
+            .flat_map(|ac| {
+                ac.forward()
+                    .nodes()
+                    .map(|n| n.w_in.to_vec())
+                    .collect::<Vec<_>>()
+            })
+            .collect::<Vec<_>>()
+    };
+    assert_ne!(outputs(0.0), outputs(0.2));
 }

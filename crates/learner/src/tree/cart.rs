@@ -1,0 +1,239 @@
+//! A batch CART classifier (Gini impurity, binary splits `x[f] ≤ t`).
+
+use serde::{Deserialize, Serialize};
+
+use super::majority;
+
+/// One node of a fitted tree, stored in an arena (children by index).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+enum Node {
+    Leaf {
+        label: usize,
+    },
+    Split {
+        feature: usize,
+        threshold: f64,
+        left: usize,
+        right: usize,
+    },
+}
+
+/// A classification tree fitted to labelled points of one dimension.
+///
+/// Grown until every leaf is pure or no split separates its points
+/// (identical inputs with different labels): the draft's selector is a
+/// memory-based lookup, so no pruning *(decision)*.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Cart {
+    dim: usize,
+    nodes: Vec<Node>,
+}
+
+impl Cart {
+    /// Fits a tree to `points` (each of length `dim`) and their `labels`.
+    /// An empty training set gives a tree that classifies nothing.
+    ///
+    /// # Panics
+    /// If the two slices differ in length or a point has another length
+    /// than `dim` (the caller's bug).
+    #[must_use]
+    pub fn fit(dim: usize, points: &[Vec<f64>], labels: &[usize]) -> Self {
+        assert_eq!(points.len(), labels.len(), "one label per point");
+        assert!(points.iter().all(|p| p.len() == dim), "point dimension");
+        let mut tree = Self {
+            dim,
+            nodes: Vec::new(),
+        };
+        if !points.is_empty() {
+            let n_labels = labels.iter().max().map_or(0, |&m| m + 1);
+            let mut idx: Vec<usize> = (0..points.len()).collect();
+            tree.grow(points, labels, n_labels, &mut idx);
+        }
+        tree
+    }
+
+    /// Grows the subtree of the points `idx` and returns its node index.
+    fn grow(
+        &mut self,
+        points: &[Vec<f64>],
+        labels: &[usize],
+        n_labels: usize,
+        idx: &mut [usize],
+    ) -> usize {
+        let mut counts = vec![0.0; n_labels];
+        for &i in idx.iter() {
+            counts[labels[i]] += 1.0;
+        }
+        let at = self.nodes.len();
+        let label = majority(&counts).unwrap_or(0);
+        self.nodes.push(Node::Leaf { label });
+        let Some((feature, threshold)) = best_split(points, labels, &counts, idx, self.dim) else {
+            return at;
+        };
+        // Partition in place, keeping the original order on each side so
+        // that the result never depends on an unstable sort.
+        let (mut left, mut right): (Vec<usize>, Vec<usize>) =
+            idx.iter().partition(|&&i| points[i][feature] <= threshold);
+        let l = self.grow(points, labels, n_labels, &mut left);
+        let r = self.grow(points, labels, n_labels, &mut right);
+        self.nodes[at] = Node::Split {
+            feature,
+            threshold,
+            left: l,
+            right: r,
+        };
+        at
+    }
+
+    /// The label of the leaf `x` falls into; `None` for an empty tree.
+    #[must_use]
+    pub fn classify(&self, x: &[f64]) -> Option<usize> {
+        let mut at = 0;
+        loop {
+            match self.nodes.get(at)? {
+                Node::Leaf { label } => return Some(*label),
+                Node::Split {
+                    feature,
+                    threshold,
+                    left,
+                    right,
+                } => {
+                    at = if x.get(*feature)? <= threshold {
+                        *left
+                    } else {
+                        *right
+                    };
+                }
+            }
+        }
+    }
+
+    /// Number of nodes (leaves and splits).
+    #[must_use]
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Whether every stored label is below `n` and every child index points
+    /// forward inside the arena (checked when a snapshot is loaded, so that
+    /// `classify` cannot loop or name an unknown class).
+    #[must_use]
+    pub fn is_consistent(&self, n: usize) -> bool {
+        self.nodes.iter().enumerate().all(|(at, node)| match node {
+            Node::Leaf { label } => *label < n,
+            Node::Split {
+                feature,
+                threshold,
+                left,
+                right,
+            } => {
+                *feature < self.dim
+                    && threshold.is_finite()
+                    && *left > at
+                    && *right > at
+                    && *left < self.nodes.len()
+                    && *right < self.nodes.len()
+            }
+        })
+    }
+}
+
+/// Gini impurity times the count: `n − Σ c² / n`.
+fn weighted_gini(counts: &[f64], n: f64) -> f64 {
+    if n == 0.0 {
+        return 0.0;
+    }
+    n - counts.iter().map(|c| c * c).sum::<f64>() / n
+}
+
+/// The split of an impure `idx` with the lowest weighted Gini impurity, even
+/// one that does not lower it (XOR-like layouts need such a first split):
+/// threshold halfway between two consecutive distinct values. `None` for a
+/// pure set or one whose inputs are all identical.
+// `f` indexes the features inside each point, not `points` itself.
+#[allow(clippy::needless_range_loop)]
+fn best_split(
+    points: &[Vec<f64>],
+    labels: &[usize],
+    counts: &[f64],
+    idx: &[usize],
+    dim: usize,
+) -> Option<(usize, f64)> {
+    let n = idx.len() as f64;
+    let parent = weighted_gini(counts, n);
+    if parent <= 0.0 {
+        return None;
+    }
+    let mut best: Option<(f64, usize, f64)> = None;
+    let mut order = idx.to_vec();
+    for f in 0..dim {
+        order.sort_by(|&a, &b| points[a][f].total_cmp(&points[b][f]).then(a.cmp(&b)));
+        let mut left = vec![0.0; counts.len()];
+        for k in 0..order.len() - 1 {
+            left[labels[order[k]]] += 1.0;
+            let (v, next) = (points[order[k]][f], points[order[k + 1]][f]);
+            if v == next {
+                continue;
+            }
+            let nl = (k + 1) as f64;
+            let right: Vec<f64> = counts.iter().zip(&left).map(|(c, l)| c - l).collect();
+            let impurity = weighted_gini(&left, nl) + weighted_gini(&right, n - nl);
+            if best.is_none_or(|(b, _, _)| impurity < b) {
+                best = Some((impurity, f, v + (next - v) / 2.0));
+            }
+        }
+    }
+    best.map(|(_, f, t)| (f, t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn separates_classes_along_the_informative_feature() {
+        // Label 1 iff x[1] > 0.5; x[0] is noise.
+        let points: Vec<Vec<f64>> = (0..40)
+            .map(|i| vec![(i * 7 % 11) as f64, f64::from(i) / 40.0])
+            .collect();
+        let labels: Vec<usize> = points.iter().map(|p| usize::from(p[1] > 0.5)).collect();
+        let tree = Cart::fit(2, &points, &labels);
+        assert_eq!(tree.node_count(), 3, "one split suffices");
+        assert_eq!(tree.classify(&[3.0, 0.9]), Some(1));
+        assert_eq!(tree.classify(&[3.0, 0.1]), Some(0));
+        assert!(tree.is_consistent(2));
+        assert!(!tree.is_consistent(1));
+        for (p, &l) in points.iter().zip(&labels) {
+            assert_eq!(tree.classify(p), Some(l));
+        }
+    }
+
+    #[test]
+    fn empty_and_contradictory_data() {
+        let tree = Cart::fit(2, &[], &[]);
+        assert_eq!(tree.classify(&[0.0, 0.0]), None);
+        // Identical inputs with different labels: one leaf, the majority
+        // (ties to the lower label).
+        let p = vec![vec![1.0, 1.0]; 4];
+        let tree = Cart::fit(2, &p, &[2, 1, 2, 1]);
+        assert_eq!(tree.node_count(), 1);
+        assert_eq!(tree.classify(&[5.0, 5.0]), Some(1));
+        let tree = Cart::fit(2, &p, &[2, 1, 2, 0]);
+        assert_eq!(tree.classify(&[1.0, 1.0]), Some(2));
+    }
+
+    #[test]
+    fn fits_xor_with_two_levels() {
+        let points = vec![
+            vec![0.0, 0.0],
+            vec![0.0, 1.0],
+            vec![1.0, 0.0],
+            vec![1.0, 1.0],
+        ];
+        let labels = [0, 1, 1, 0];
+        let tree = Cart::fit(2, &points, &labels);
+        for (p, &l) in points.iter().zip(&labels) {
+            assert_eq!(tree.classify(p), Some(l), "{p:?}");
+        }
+    }
+}
