@@ -401,7 +401,10 @@ fn draft_protocol_reports_key_point_scores_and_selector_agreement() {
         &gate,
     ]));
     let r = &read_json(&gate)["results"][0];
-    assert!(r.get("selection").is_none(), "the gate model has no selector");
+    assert!(
+        r.get("selection").is_none(),
+        "the gate model has no selector"
+    );
     // The hard-coded actuator predicts the commanded 5 mm per message; the
     // world's actuator is re-imposed that velocity every step.
     assert!(number(&r["keypoints"]["8"]["mean_dif"]) < 0.001, "{r}");

@@ -2,21 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::majority;
-
-/// One node of a fitted tree, stored in an arena (children by index).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-enum Node {
-    Leaf {
-        label: usize,
-    },
-    Split {
-        feature: usize,
-        threshold: f64,
-        left: usize,
-        right: usize,
-    },
-}
+use super::{arena_is_consistent, leaf_index, majority, Node};
 
 /// A classification tree fitted to labelled points of one dimension.
 ///
@@ -26,7 +12,8 @@ enum Node {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Cart {
     dim: usize,
-    nodes: Vec<Node>,
+    /// Leaves keep their label.
+    nodes: Vec<Node<usize>>,
 }
 
 impl Cart {
@@ -66,7 +53,7 @@ impl Cart {
         }
         let at = self.nodes.len();
         let label = majority(&counts).unwrap_or(0);
-        self.nodes.push(Node::Leaf { label });
+        self.nodes.push(Node::Leaf(label));
         let Some((feature, threshold)) = best_split(points, labels, &counts, idx, self.dim) else {
             return at;
         };
@@ -88,23 +75,9 @@ impl Cart {
     /// The label of the leaf `x` falls into; `None` for an empty tree.
     #[must_use]
     pub fn classify(&self, x: &[f64]) -> Option<usize> {
-        let mut at = 0;
-        loop {
-            match self.nodes.get(at)? {
-                Node::Leaf { label } => return Some(*label),
-                Node::Split {
-                    feature,
-                    threshold,
-                    left,
-                    right,
-                } => {
-                    at = if x.get(*feature)? <= threshold {
-                        *left
-                    } else {
-                        *right
-                    };
-                }
-            }
+        match self.nodes.get(leaf_index(&self.nodes, x)?)? {
+            Node::Leaf(label) => Some(*label),
+            Node::Split { .. } => None,
         }
     }
 
@@ -119,22 +92,7 @@ impl Cart {
     /// `classify` cannot loop or name an unknown class).
     #[must_use]
     pub fn is_consistent(&self, n: usize) -> bool {
-        self.nodes.iter().enumerate().all(|(at, node)| match node {
-            Node::Leaf { label } => *label < n,
-            Node::Split {
-                feature,
-                threshold,
-                left,
-                right,
-            } => {
-                *feature < self.dim
-                    && threshold.is_finite()
-                    && *left > at
-                    && *right > at
-                    && *left < self.nodes.len()
-                    && *right < self.nodes.len()
-            }
-        })
+        arena_is_consistent(&self.nodes, self.dim, |&label| label < n)
     }
 }
 

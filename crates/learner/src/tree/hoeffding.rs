@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::majority;
+use super::{arena_is_consistent, leaf_index, majority, Node};
 
 /// Hyperparameters; [`Default`] gives MOA's defaults.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -136,24 +136,13 @@ struct Leaf {
     mc_correct: u64,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-enum Node {
-    Leaf(Leaf),
-    Split {
-        feature: usize,
-        threshold: f64,
-        left: usize,
-        right: usize,
-    },
-}
-
 /// An incremental classification tree over inputs of one dimension, labels
 /// `0, 1, …`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HoeffdingTree {
     dim: usize,
     params: HoeffdingParams,
-    nodes: Vec<Node>,
+    nodes: Vec<Node<Leaf>>,
     seen: u64,
 }
 
@@ -181,31 +170,10 @@ impl HoeffdingTree {
         self.nodes.len()
     }
 
-    fn leaf_of(&self, x: &[f64]) -> Option<usize> {
-        let mut at = 0;
-        loop {
-            match self.nodes.get(at)? {
-                Node::Leaf(_) => return Some(at),
-                Node::Split {
-                    feature,
-                    threshold,
-                    left,
-                    right,
-                } => {
-                    at = if x.get(*feature)? <= threshold {
-                        *left
-                    } else {
-                        *right
-                    }
-                }
-            }
-        }
-    }
-
     /// The leaf's answer for `x`; `None` before any example.
     #[must_use]
     pub fn classify(&self, x: &[f64]) -> Option<usize> {
-        match self.nodes.get(self.leaf_of(x)?)? {
+        match self.nodes.get(leaf_index(&self.nodes, x)?)? {
             Node::Leaf(leaf) => leaf.predict(x, self.params.min_std),
             Node::Split { .. } => None,
         }
@@ -218,7 +186,9 @@ impl HoeffdingTree {
     pub fn learn(&mut self, x: &[f64], label: usize) {
         assert_eq!(x.len(), self.dim, "input dimension");
         self.seen += 1;
-        let Some(at) = self.leaf_of(x) else { return };
+        let Some(at) = leaf_index(&self.nodes, x) else {
+            return;
+        };
         let params = self.params;
         let Some(Node::Leaf(leaf)) = self.nodes.get_mut(at) else {
             return;
@@ -244,28 +214,13 @@ impl HoeffdingTree {
     /// loaded) and every class seen is below `n`.
     #[must_use]
     pub fn is_consistent(&self, n: usize) -> bool {
-        self.nodes.iter().enumerate().all(|(at, node)| match node {
-            Node::Leaf(leaf) => {
-                leaf.counts
-                    .iter()
-                    .enumerate()
-                    .all(|(c, &k)| c < n || k == 0.0)
-                    && leaf.stats.len() == leaf.counts.len()
-                    && leaf.stats.iter().all(|s| s.len() == self.dim)
-            }
-            Node::Split {
-                feature,
-                threshold,
-                left,
-                right,
-            } => {
-                *feature < self.dim
-                    && threshold.is_finite()
-                    && *left > at
-                    && *right > at
-                    && *left < self.nodes.len()
-                    && *right < self.nodes.len()
-            }
+        arena_is_consistent(&self.nodes, self.dim, |leaf| {
+            leaf.counts
+                .iter()
+                .enumerate()
+                .all(|(c, &k)| c < n || k == 0.0)
+                && leaf.stats.len() == leaf.counts.len()
+                && leaf.stats.iter().all(|s| s.len() == self.dim)
         })
     }
 }

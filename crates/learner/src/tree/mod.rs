@@ -14,8 +14,68 @@
 mod cart;
 mod hoeffding;
 
+use serde::{Deserialize, Serialize};
+
 pub use cart::Cart;
 pub use hoeffding::{HoeffdingParams, HoeffdingTree};
+
+/// One node of a tree stored in an arena (children by index, always after
+/// their parent); `L` is what a leaf keeps.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+enum Node<L> {
+    Leaf(L),
+    Split {
+        feature: usize,
+        threshold: f64,
+        left: usize,
+        right: usize,
+    },
+}
+
+/// Arena index of the leaf `x` falls into (`x[feature] ≤ threshold` goes
+/// left); `None` for an empty arena or an `x` shorter than a split needs.
+fn leaf_index<L>(nodes: &[Node<L>], x: &[f64]) -> Option<usize> {
+    let mut at = 0;
+    loop {
+        match nodes.get(at)? {
+            Node::Leaf(_) => return Some(at),
+            Node::Split {
+                feature,
+                threshold,
+                left,
+                right,
+            } => {
+                at = if x.get(*feature)? <= threshold {
+                    *left
+                } else {
+                    *right
+                };
+            }
+        }
+    }
+}
+
+/// Whether every split of a loaded arena names a feature below `dim`, has a
+/// finite threshold and children that point forward inside the arena (so
+/// that a descent cannot loop or leave it), and every leaf passes `leaf_ok`.
+fn arena_is_consistent<L>(nodes: &[Node<L>], dim: usize, leaf_ok: impl Fn(&L) -> bool) -> bool {
+    nodes.iter().enumerate().all(|(at, node)| match node {
+        Node::Leaf(leaf) => leaf_ok(leaf),
+        Node::Split {
+            feature,
+            threshold,
+            left,
+            right,
+        } => {
+            *feature < dim
+                && threshold.is_finite()
+                && *left > at
+                && *right > at
+                && *left < nodes.len()
+                && *right < nodes.len()
+        }
+    })
+}
 
 /// The most frequent label of `counts` (index = label); ties go to the
 /// lower label. `None` if every count is zero.
