@@ -18,7 +18,8 @@ use super::experiment::{parse_numbers, parse_pose};
 /// force, chooses the next action (a fixed --action, or its planner towards
 /// --target), predicts the next state and sends Move (and with --shadows the
 /// prediction as the ghost bodies actuatorShadow, blockAShadow,
-/// blockBShadow). A lock-step world is advanced after every state; in a
+/// blockBShadow, and a --target as blockAShadowTarget, for `pushlearn
+/// view`). A lock-step world is advanced after every state; in a
 /// realtime world the work per message is measured against the 2/f budget
 /// (20 ms at 100 Hz). Stop with Ctrl-C: a summary follows.
 #[derive(Debug, Args)]
@@ -45,7 +46,8 @@ pub struct LearnArgs {
     #[arg(long, value_name = "X,Y,ORI", allow_hyphen_values = true, value_parser = parse_pose)]
     target: Option<ObjectState>,
 
-    /// Send the predicted poses as the *Shadow ghost bodies.
+    /// Send the predicted poses (and the --target) as *Shadow ghost bodies,
+    /// which `pushlearn view` draws.
     #[arg(long)]
     shadows: bool,
 

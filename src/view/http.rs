@@ -173,8 +173,13 @@ impl Request {
 #[derive(Debug, PartialEq)]
 enum Route {
     Page,
-    WebSocket { accept_key: String },
-    Refuse { status: &'static str, reason: String },
+    WebSocket {
+        accept_key: String,
+    },
+    Refuse {
+        status: &'static str,
+        reason: String,
+    },
 }
 
 fn refuse(status: &'static str, reason: impl Into<String>) -> Route {
@@ -213,8 +218,8 @@ fn route(request: &Request) -> Route {
                     );
                 }
             }
-            let upgrade = request.lists("upgrade", "websocket")
-                && request.lists("connection", "upgrade");
+            let upgrade =
+                request.lists("upgrade", "websocket") && request.lists("connection", "upgrade");
             match (upgrade, request.header("sec-websocket-key")) {
                 (true, Some(key)) if request.header("sec-websocket-version") == Some("13") => {
                     Route::WebSocket {
@@ -227,7 +232,10 @@ fn route(request: &Request) -> Route {
                 ),
             }
         }
-        _ => refuse("404 Not Found", format!("nothing at {path}; the viewer is at /")),
+        _ => refuse(
+            "404 Not Found",
+            format!("nothing at {path}; the viewer is at /"),
+        ),
     }
 }
 
@@ -256,7 +264,10 @@ mod tests {
     fn the_page_is_served_at_the_root() {
         let r = request("GET /?x=1 HTTP/1.1\nHost: localhost:8000\n\n");
         assert_eq!(route(&r), Route::Page);
-        assert!(PAGE.contains("<canvas"), "the embedded page draws on a canvas");
+        assert!(
+            PAGE.contains("<canvas"),
+            "the embedded page draws on a canvas"
+        );
     }
 
     #[test]
@@ -270,7 +281,10 @@ mod tests {
             }
         );
         // Non-browser clients send no Origin.
-        assert!(matches!(route(&request(&format!("{UPGRADE}\n"))), Route::WebSocket { .. }));
+        assert!(matches!(
+            route(&request(&format!("{UPGRADE}\n"))),
+            Route::WebSocket { .. }
+        ));
     }
 
     #[test]
@@ -279,11 +293,23 @@ mod tests {
             Route::Refuse { status, .. } => status,
             other => panic!("{other:?}"),
         };
-        assert_eq!(status(&format!("{UPGRADE}Origin: http://evil.example\n\n")), "403 Forbidden");
-        assert_eq!(status("GET / HTTP/1.1\nHost: evil.example:8000\n\n"), "403 Forbidden");
+        assert_eq!(
+            status(&format!("{UPGRADE}Origin: http://evil.example\n\n")),
+            "403 Forbidden"
+        );
+        assert_eq!(
+            status("GET / HTTP/1.1\nHost: evil.example:8000\n\n"),
+            "403 Forbidden"
+        );
         assert_eq!(status("GET / HTTP/1.1\n\n"), "400 Bad Request");
-        assert_eq!(status("POST / HTTP/1.1\nHost: [::1]:8000\n\n"), "405 Method Not Allowed");
-        assert_eq!(status("GET /x HTTP/1.1\nHost: 127.0.0.1\n\n"), "404 Not Found");
+        assert_eq!(
+            status("POST / HTTP/1.1\nHost: [::1]:8000\n\n"),
+            "405 Method Not Allowed"
+        );
+        assert_eq!(
+            status("GET /x HTTP/1.1\nHost: 127.0.0.1\n\n"),
+            "404 Not Found"
+        );
         assert_eq!(
             status("GET /ws HTTP/1.1\nHost: 127.0.0.1\n\n"),
             "426 Upgrade Required"

@@ -42,9 +42,13 @@ impl Control {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
 pub enum Shape {
-    Sphere { radius: f64 },
+    Sphere {
+        radius: f64,
+    },
     /// Full edge lengths along the body's x, y, z.
-    Box { size: [f64; 3] },
+    Box {
+        size: [f64; 3],
+    },
 }
 
 /// A body of the scene, at its start pose.
@@ -293,7 +297,10 @@ mod tests {
         assert_eq!(bodies[1]["of"], "blockA");
         assert!((bodies[0]["yaw"].as_f64().unwrap() - 0.5).abs() < 1e-12);
         assert!((bodies[1]["yaw"].as_f64().unwrap() + 2.1).abs() < 1e-12);
-        assert_eq!((bodies[1]["x"].as_f64(), bodies[1]["y"].as_f64()), (Some(0.6), Some(0.7)));
+        assert_eq!(
+            (bodies[1]["x"].as_f64(), bodies[1]["y"].as_f64()),
+            (Some(0.6), Some(0.7))
+        );
     }
 
     #[test]
@@ -303,7 +310,10 @@ mod tests {
             step_size: 0.001,
             publish_rate: 100,
             timing_mode: "lockstep".into(),
-            bodies: vec![model("actuator", 8, 0.0, 0.0, 0.0), model("blockA", 15, 0.0, 0.25, 0.0)],
+            bodies: vec![
+                model("actuator", 8, 0.0, 0.0, 0.0),
+                model("blockA", 15, 0.0, 0.25, 0.0),
+            ],
             shapes: vec![pb::Shape {
                 name: "blockA".into(),
                 geometry: Some(Geometry::BoxSize(pb::Vector3d::new(0.5, 0.1, 0.1))),
@@ -314,7 +324,10 @@ mod tests {
         assert_eq!(got["world"], "127.0.0.1:1");
         assert_eq!(got["timing_mode"], "lockstep");
         assert_eq!(got["bodies"][0]["shape"], Value::Null, "an older world");
-        assert_eq!(got["bodies"][1]["shape"], json!({"type": "box", "size": [0.5, 0.1, 0.1]}));
+        assert_eq!(
+            got["bodies"][1]["shape"],
+            json!({"type": "box", "size": [0.5, 0.1, 0.1]})
+        );
         assert_eq!(got["bodies"][1]["y"], 0.25);
     }
 

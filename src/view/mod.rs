@@ -133,7 +133,12 @@ impl Viewer {
             events: broadcast::Sender::new(EVENT_BACKLOG),
             controls,
         });
-        let world_task = tokio::spawn(follow_world(world, world_addr, Arc::clone(&hub), control_rx));
+        let world_task = tokio::spawn(follow_world(
+            world,
+            world_addr,
+            Arc::clone(&hub),
+            control_rx,
+        ));
         tokio::pin!(shutdown);
         let result = loop {
             tokio::select! {
@@ -164,7 +169,9 @@ fn is_per_connection(err: &std::io::Error) -> bool {
     matches!(
         err.kind(),
         ConnectionAborted | ConnectionReset | Interrupted | WouldBlock
-    ) || err.raw_os_error().is_some_and(|code| code == 24 || code == 23) // EMFILE, ENFILE
+    ) || err
+        .raw_os_error()
+        .is_some_and(|code| code == 24 || code == 23) // EMFILE, ENFILE
 }
 
 /// Follows the world for the viewer's whole life: publishes every state,

@@ -78,7 +78,8 @@ impl Browser {
                 panic!("{program} did not start: {message}");
             }
         };
-        let socket = match tokio::time::timeout(LIMIT, tokio_tungstenite::connect_async(&url)).await {
+        let socket = match tokio::time::timeout(LIMIT, tokio_tungstenite::connect_async(&url)).await
+        {
             Ok(Ok((socket, _))) => socket,
             Ok(Err(err)) => {
                 kill_group(&mut child);

@@ -203,7 +203,10 @@ async fn the_page_draws_the_world_and_controls_it() {
         ]))
         .await
         .unwrap();
-    let state = world.command_and_wait_applied(Payload::advance()).await.unwrap();
+    let state = world
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .unwrap();
 
     let mut browser = Browser::start(1000, 700).await;
     browser.navigate(&viewer.url).await;
@@ -215,8 +218,15 @@ async fn the_page_draws_the_world_and_controls_it() {
     assert_drawn_at(&frame, "actuator", "body", pose(&state, "actuator"));
     let shadow = pose(&state, "blockAShadow");
     assert_drawn_at(&frame, "blockAShadow", "shadow", shadow);
-    assert_drawn_at(&frame, "blockAShadowTarget", "target", pose(&state, "blockAShadowTarget"));
-    let time = browser.eval("document.getElementById('time').textContent").await;
+    assert_drawn_at(
+        &frame,
+        "blockAShadowTarget",
+        "target",
+        pose(&state, "blockAShadowTarget"),
+    );
+    let time = browser
+        .eval("document.getElementById('time').textContent")
+        .await;
     assert!(
         time.as_str()
             .is_some_and(|t| t.contains(&format!("{:.3} s", state.sim_time))),
@@ -237,12 +247,23 @@ async fn the_page_draws_the_world_and_controls_it() {
     );
     let (sx, sy, _) = shadow;
     let ghost = pixel(&mut browser, sx + 0.17, sy).await;
-    assert_colour(ghost, blend(BLUE, SHADOW_ALPHA, BACKGROUND), "inside the prediction");
+    assert_colour(
+        ghost,
+        blend(BLUE, SHADOW_ALPHA, BACKGROUND),
+        "inside the prediction",
+    );
     let (ax, ay, _) = pose(&state, "actuator");
-    assert_colour(pixel(&mut browser, ax, ay).await, GREY, "the actuator's centre");
+    assert_colour(
+        pixel(&mut browser, ax, ay).await,
+        GREY,
+        "the actuator's centre",
+    );
 
     let png = browser.screenshot().await;
-    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "the screenshot is no PNG");
+    assert!(
+        png.starts_with(b"\x89PNG\r\n\x1a\n"),
+        "the screenshot is no PNG"
+    );
     let path = screenshot_path();
     std::fs::write(&path, &png).unwrap();
     println!("screenshot: {}", path.display());
@@ -266,22 +287,34 @@ async fn the_page_draws_the_world_and_controls_it() {
 
     // Unpause: it advances again, and the page follows.
     click(&mut browser, "unpause").await;
-    let moved = world.command_and_wait_applied(Payload::advance()).await.unwrap();
+    let moved = world
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .unwrap();
     assert!(moved.step > state.step);
     let frame = wait_for_state(&mut browser, &moved).await;
     assert_drawn_at(&frame, "blockA", "body", pose(&moved, "blockA"));
 
     // Reset: the block is back at its start pose and the ghosts are gone.
     click(&mut browser, "reset").await;
-    let reset = world.command_and_wait_applied(Payload::advance()).await.unwrap();
+    let reset = world
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .unwrap();
     assert_eq!(reset.step, 10, "one publish interval after the reset");
     let (x, y, _) = pose(&reset, "blockA");
-    assert!((x - 0.0).abs() < 1e-3 && (y - 0.25).abs() < 1e-3, "({x}, {y})");
+    assert!(
+        (x - 0.0).abs() < 1e-3 && (y - 0.25).abs() < 1e-3,
+        "({x}, {y})"
+    );
     let frame = wait_for_state(&mut browser, &reset).await;
     assert_drawn_at(&frame, "blockA", "body", pose(&reset, "blockA"));
     let kinds: Vec<&Value> = frame
         .as_array()
         .map(|b| b.iter().map(|b| &b["kind"]).collect())
         .unwrap_or_default();
-    assert!(kinds.iter().all(|k| *k == "body"), "ghosts after a reset: {frame}");
+    assert!(
+        kinds.iter().all(|k| *k == "body"),
+        "ghosts after a reset: {frame}"
+    );
 }
