@@ -37,8 +37,8 @@ pub enum HttpError {
 pub enum Accepted {
     /// A response was sent and the connection closed.
     Served,
-    /// The page opened its WebSocket.
-    WebSocket(Socket),
+    /// The page opened its WebSocket (boxed: the stream is large).
+    WebSocket(Box<Socket>),
 }
 
 /// Reads one request and answers it: the page, the WebSocket handshake, or
@@ -70,9 +70,9 @@ pub async fn accept(stream: TcpStream) -> Result<Accepted, HttpError> {
             );
             stream.write_all(answer.as_bytes()).await?;
             stream.flush().await?;
-            Ok(Accepted::WebSocket(
+            Ok(Accepted::WebSocket(Box::new(
                 WebSocketStream::from_raw_socket(stream, Role::Server, None).await,
-            ))
+            )))
         }
         Route::Refuse { status, reason } => {
             tracing::debug!(status, %reason, "refused a browser request");

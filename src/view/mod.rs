@@ -288,7 +288,7 @@ async fn serve_browser(stream: TcpStream, hub: &Hub) -> Result<(), http::HttpErr
     match http::accept(stream).await? {
         http::Accepted::Served => Ok(()),
         http::Accepted::WebSocket(socket) => {
-            follow_tab(socket, hub).await;
+            follow_tab(*socket, hub).await;
             Ok(())
         }
     }
