@@ -84,11 +84,8 @@ pub fn run(args: LearnArgs) -> Result<()> {
         .build()
         .context("cannot start the async runtime")?;
     runtime.block_on(async {
-        let options = ClientOptions {
-            first_seq: pushlearn::client::seq_base_from_clock(),
-            ..ClientOptions::default()
-        };
-        let client = SimClient::connect_with(args.connect.as_str(), options).await?;
+        let client =
+            SimClient::connect_with(args.connect.as_str(), ClientOptions::clock_seqs()).await?;
         let rate = client.hello().publish_rate;
         let policy = match (args.action, args.target) {
             (_, Some(pose)) => Policy::Target(pose),

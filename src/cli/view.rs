@@ -44,12 +44,8 @@ pub fn run(args: ViewArgs) -> Result<()> {
         .build()
         .context("cannot start the async runtime")?;
     runtime.block_on(async {
-        let options = ClientOptions {
-            first_seq: pushlearn::client::seq_base_from_clock(),
-            ..ClientOptions::default()
-        };
         // A wrong --sim is reported now rather than as a page that stays empty.
-        let world = SimClient::connect_with(args.sim.as_str(), options)
+        let world = SimClient::connect_with(args.sim.as_str(), ClientOptions::clock_seqs())
             .await
             .context("is pushlearn-sim running? start it with `pushlearn-sim serve`")?;
         let viewer = Viewer::bind(SocketAddr::new(args.bind, args.port)).await?;

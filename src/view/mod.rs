@@ -201,15 +201,6 @@ async fn follow_world(
     }
 }
 
-/// Client options for the viewer: its seqs start at the clock so that they
-/// stay apart from a learner's (protocol.md §5, "Several clients").
-fn client_options() -> ClientOptions {
-    ClientOptions {
-        first_seq: crate::client::seq_base_from_clock(),
-        ..ClientOptions::default()
-    }
-}
-
 async fn reconnect(addr: &str, hub: &Hub, controls: &mut mpsc::Receiver<Control>) -> SimClient {
     loop {
         let sleep = tokio::time::sleep(RECONNECT_EVERY);
@@ -225,7 +216,7 @@ async fn reconnect(addr: &str, hub: &Hub, controls: &mut mpsc::Receiver<Control>
                 )),
             }
         }
-        match SimClient::connect_with(addr, client_options()).await {
+        match SimClient::connect_with(addr, ClientOptions::clock_seqs()).await {
             Ok(client) => return client,
             Err(err) => tracing::debug!(%addr, %err, "world still unreachable"),
         }
