@@ -47,7 +47,12 @@ pub fn run(args: ViewArgs) -> Result<()> {
         // A wrong --sim is reported now rather than as a page that stays empty.
         let world = SimClient::connect_with(args.sim.as_str(), ClientOptions::clock_seqs())
             .await
-            .context("is pushlearn-sim running? start it with `pushlearn-sim serve`")?;
+            .map_err(|err| {
+                anyhow::anyhow!(
+                    "{err}; is pushlearn-sim running? (start it with `pushlearn-sim serve`, \
+                     or point --sim at it)"
+                )
+            })?;
         let viewer = Viewer::bind(SocketAddr::new(args.bind, args.port)).await?;
         if !args.bind.is_loopback() {
             tracing::warn!(
@@ -71,7 +76,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
                 std::future::pending::<()>().await;
             }
         };
-        viewer.run(world, args.sim.clone(), interrupted).await?;
+        viewer.run(world, args.sim.clone(), interrupted).await;
         Ok(())
     })
 }

@@ -42,10 +42,14 @@ const RECONNECT_EVERY: Duration = Duration::from_secs(1);
 /// always gets the newest one).
 const EVENT_BACKLOG: usize = 64;
 
+/// Pause after a failed accept(), so that a persistent failure (no file
+/// descriptors left) does not spin.
+const ACCEPT_BACKOFF: Duration = Duration::from_millis(100);
+
 /// Controls waiting to be forwarded to the world.
 const CONTROL_BACKLOG: usize = 16;
 
-/// What can stop the viewer.
+/// Why the viewer cannot start.
 #[derive(Debug, thiserror::Error)]
 pub enum ViewError {
     /// The listening socket could not be opened.
@@ -56,9 +60,6 @@ pub enum ViewError {
         /// Why.
         reason: std::io::Error,
     },
-    /// Accepting browser connections failed.
-    #[error("accepting a browser connection failed: {0}")]
-    Accept(std::io::Error),
 }
 
 /// What the world task shares with the browser tabs.
@@ -68,7 +69,10 @@ struct Hub {
     hello: watch::Sender<Utf8Bytes>,
     /// The newest world state as JSON (`Outgoing::State`), or nothing yet.
     state: watch::Sender<Option<Utf8Bytes>>,
-    /// Control results, world errors, connection status.
+    /// The connection to the world (`Outgoing::Status`), for tabs opened
+    /// later too.
+    status: watch::Sender<Utf8Bytes>,
+    /// Control results and world errors.
     events: broadcast::Sender<Utf8Bytes>,
     /// Browser → world.
     controls: mpsc::Sender<Control>,
@@ -117,19 +121,17 @@ impl Viewer {
 
     /// Serves browsers until `shutdown` completes. `world` is the connected
     /// world, `world_addr` where to reach it again if the connection is lost.
-    ///
-    /// # Errors
-    /// The listening socket fails.
     pub async fn run(
         self,
         world: SimClient,
         world_addr: String,
         shutdown: impl Future<Output = ()>,
-    ) -> Result<(), ViewError> {
+    ) {
         let (controls, control_rx) = mpsc::channel(CONTROL_BACKLOG);
         let hub = Arc::new(Hub {
             hello: watch::Sender::new(Outgoing::hello(&world_addr, world.hello()).to_json()),
             state: watch::Sender::new(None),
+            status: watch::Sender::new(connected(&world_addr)),
             events: broadcast::Sender::new(EVENT_BACKLOG),
             controls,
         });
@@ -140,7 +142,7 @@ impl Viewer {
             control_rx,
         ));
         tokio::pin!(shutdown);
-        let result = loop {
+        loop {
             tokio::select! {
                 accepted = self.listener.accept() => match accepted {
                     Ok((stream, peer)) => {
@@ -151,27 +153,26 @@ impl Viewer {
                             }
                         });
                     }
-                    // Running out of descriptors is transient; other errors
-                    // of accept() concern the one connection.
-                    Err(err) if is_per_connection(&err) => tracing::debug!(%err, "accept"),
-                    Err(err) => break Err(ViewError::Accept(err)),
+                    // Failures of accept() concern one connection or are
+                    // transient (out of descriptors): the page stays up.
+                    Err(err) => {
+                        tracing::warn!(%err, "accepting a browser connection failed");
+                        tokio::time::sleep(ACCEPT_BACKOFF).await;
+                    }
                 },
-                () = &mut shutdown => break Ok(()),
+                () = &mut shutdown => break,
             }
-        };
+        }
         world_task.abort();
-        result
     }
 }
 
-fn is_per_connection(err: &std::io::Error) -> bool {
-    use std::io::ErrorKind::{ConnectionAborted, ConnectionReset, Interrupted, WouldBlock};
-    matches!(
-        err.kind(),
-        ConnectionAborted | ConnectionReset | Interrupted | WouldBlock
-    ) || err
-        .raw_os_error()
-        .is_some_and(|code| code == 24 || code == 23) // EMFILE, ENFILE
+fn connected(addr: &str) -> Utf8Bytes {
+    Outgoing::Status {
+        connected: true,
+        message: format!("connected to the world at {addr}"),
+    }
+    .to_json()
 }
 
 /// Follows the world for the viewer's whole life: publishes every state,
@@ -187,16 +188,16 @@ async fn follow_world(
         hub.hello
             .send_replace(Outgoing::hello(&addr, client.hello()).to_json());
         hub.state.send_replace(None);
-        hub.event(&Outgoing::Status {
-            connected: true,
-            message: format!("connected to the world at {addr}"),
-        });
+        hub.status.send_replace(connected(&addr));
         let lost = pump(&mut client, &hub, &mut controls).await;
         tracing::warn!(%addr, %lost, "lost the world; reconnecting");
-        hub.event(&Outgoing::Status {
-            connected: false,
-            message: format!("lost the world at {addr}: {lost}; reconnecting"),
-        });
+        hub.status.send_replace(
+            Outgoing::Status {
+                connected: false,
+                message: format!("lost the world at {addr}: {lost}; reconnecting"),
+            }
+            .to_json(),
+        );
         client = reconnect(&addr, &hub, &mut controls).await;
     }
 }
@@ -290,11 +291,15 @@ async fn serve_browser(stream: TcpStream, hub: &Hub) -> Result<(), http::HttpErr
 async fn follow_tab(mut socket: http::Socket, hub: &Hub) {
     let mut hello = hub.hello.subscribe();
     let mut state = hub.state.subscribe();
+    let mut status = hub.status.subscribe();
     let mut events = hub.events.subscribe();
-    // The scene first, then the newest state if there is one.
-    let first = hello.borrow_and_update().clone();
+    // The scene first, then the connection, then the newest state if any.
+    let first = [
+        hello.borrow_and_update().clone(),
+        status.borrow_and_update().clone(),
+    ];
     let newest = state.borrow_and_update().clone();
-    for json in std::iter::once(first).chain(newest) {
+    for json in first.into_iter().chain(newest) {
         if socket.send(Message::Text(json)).await.is_err() {
             return;
         }
@@ -306,6 +311,10 @@ async fn follow_tab(mut socket: http::Socket, hub: &Hub) {
             biased;
             changed = hello.changed() => match changed {
                 Ok(()) => hello.borrow_and_update().clone(),
+                Err(_) => return,
+            },
+            changed = status.changed() => match changed {
+                Ok(()) => status.borrow_and_update().clone(),
                 Err(_) => return,
             },
             changed = state.changed() => match changed {
