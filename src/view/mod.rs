@@ -37,7 +37,7 @@ pub const DEFAULT_PORT: u16 = 11346;
 /// How long the viewer waits before trying to reach a lost world again.
 const RECONNECT_EVERY: Duration = Duration::from_secs(1);
 
-/// Control results and connection news kept for tabs that read slowly; a tab
+/// Control results and world errors kept for tabs that read slowly; a tab
 /// that falls further behind skips the oldest (states are never queued: a tab
 /// always gets the newest one).
 const EVENT_BACKLOG: usize = 64;
@@ -254,6 +254,16 @@ async fn pump(
                     Ok(_) => hub.event(&Outgoing::accepted(control)),
                     Err(ClientError::Refused { message, .. }) => {
                         hub.event(&Outgoing::refused(control, message));
+                    }
+                    // An error not about this command (the physics blew up)
+                    // arrived first: the connection is fine, the command's
+                    // fate unknown; the barrier's late answer is skipped.
+                    Err(ClientError::World { message }) => {
+                        hub.event(&Outgoing::refused(
+                            control,
+                            "not confirmed: the world reported an error first".into(),
+                        ));
+                        hub.event(&Outgoing::Error { message });
                     }
                     Err(err) => {
                         hub.event(&Outgoing::refused(control, err.to_string()));
