@@ -3,7 +3,8 @@
 # toolchain, and nothing that is already there. Safe to run any number of times.
 #
 #   scripts/ensure-deps.sh            system packages for building and running
-#   scripts/ensure-deps.sh --test     also what the test suite needs (Python client)
+#   scripts/ensure-deps.sh --test     also what the test suite needs (Python client,
+#                                     Debian's chromium for the viewer's browser test)
 set -euo pipefail
 
 want_test=0
@@ -23,6 +24,11 @@ if ! ls /usr/lib/llvm-*/lib/libclang.so* /usr/lib/x86_64-linux-gnu/libclang*.so*
   missing+=(libclang-dev)
 fi
 command -v cc >/dev/null 2>&1 || missing+=(gcc)
+
+# The viewer's end-to-end test drives headless Chromium (tests/e2e/browser.rs).
+if [ "$want_test" = 1 ] && [ -z "${PUSHLEARN_CHROMIUM:-}" ] && ! command -v chromium >/dev/null 2>&1; then
+  missing+=(chromium)
+fi
 
 if [ ${#missing[@]} -gt 0 ]; then
   echo "ensure-deps: installing Debian packages: ${missing[*]}"

@@ -186,6 +186,18 @@ impl Default for ClientOptions {
     }
 }
 
+impl ClientOptions {
+    /// The defaults, with seqs from [`seq_base_from_clock`]: for a
+    /// long-running client beside others (a learner, a viewer), whose
+    /// `applied_seq`s must stay apart from theirs (protocol.md §5).
+    pub fn clock_seqs() -> Self {
+        Self {
+            first_seq: seq_base_from_clock(),
+            ..Self::default()
+        }
+    }
+}
+
 /// A connection to the world daemon.
 #[derive(Debug)]
 pub struct SimClient {

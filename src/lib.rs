@@ -8,7 +8,8 @@
 //! * [`experiment`]: the thesis's experiments over the sockets;
 //! * [`learn`]: the learner daemon;
 //! * [`models`]: the learners by name;
-//! * [`report`]: JSON documents and terminal tables beside the thesis's numbers.
+//! * [`report`]: JSON documents and terminal tables beside the thesis's numbers;
+//! * [`view`]: the browser viewer (`pushlearn view`).
 
 pub mod client;
 pub mod experiment;
@@ -16,4 +17,5 @@ pub mod frame;
 pub mod learn;
 pub mod models;
 pub mod report;
+pub mod view;
 pub mod wire;

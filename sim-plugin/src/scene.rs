@@ -15,7 +15,7 @@ pub const KNOWN_IDS: [(&str, u32); 3] = [("actuator", 8), ("blockA", 15), ("bloc
 pub const ACTUATOR: &str = "actuator";
 
 /// Substring that marks a non-physical ghost pose (`protocol.md` §3).
-pub const GHOST_MARKER: &str = "Shadow";
+pub use pushlearn::wire::GHOST_MARKER;
 
 const BUILTINS: [(&str, &str); 2] = [
     ("one_block", include_str!("../scenes/one_block.toml")),

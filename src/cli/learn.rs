@@ -18,7 +18,8 @@ use super::experiment::{parse_numbers, parse_pose};
 /// force, chooses the next action (a fixed --action, or its planner towards
 /// --target), predicts the next state and sends Move (and with --shadows the
 /// prediction as the ghost bodies actuatorShadow, blockAShadow,
-/// blockBShadow). A lock-step world is advanced after every state; in a
+/// blockBShadow, and a --target as blockAShadowTarget, for `pushlearn
+/// view`). A lock-step world is advanced after every state; in a
 /// realtime world the work per message is measured against the 2/f budget
 /// (20 ms at 100 Hz). Stop with Ctrl-C: a summary follows.
 #[derive(Debug, Args)]
@@ -45,7 +46,8 @@ pub struct LearnArgs {
     #[arg(long, value_name = "X,Y,ORI", allow_hyphen_values = true, value_parser = parse_pose)]
     target: Option<ObjectState>,
 
-    /// Send the predicted poses as the *Shadow ghost bodies.
+    /// Send the predicted poses (and the --target) as *Shadow ghost bodies,
+    /// which `pushlearn view` draws.
     #[arg(long)]
     shadows: bool,
 
@@ -85,11 +87,8 @@ pub fn run(args: LearnArgs) -> Result<()> {
         .build()
         .context("cannot start the async runtime")?;
     runtime.block_on(async {
-        let options = ClientOptions {
-            first_seq: pushlearn::client::seq_base_from_clock(),
-            ..ClientOptions::default()
-        };
-        let client = SimClient::connect_with(args.connect.as_str(), options).await?;
+        let client =
+            SimClient::connect_with(args.connect.as_str(), ClientOptions::clock_seqs()).await?;
         let rate = client.hello().publish_rate;
         if args.options.low_frequency() && rate != pushlearn::experiment::LOW_RATE_HZ {
             anyhow::bail!(

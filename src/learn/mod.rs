@@ -21,7 +21,7 @@ use crate::experiment::driver::{ACTUATOR_Z, BLOCK_Z};
 use crate::experiment::link::budget;
 use crate::frame::frame_from_state;
 use crate::wire::pb::{self, client_message::Payload};
-use crate::wire::TimingMode;
+use crate::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
 
 /// How the daemon chooses its actions.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,7 +108,11 @@ impl<M: Model> Learner<M> {
         let mut commands = vec![Payload::move_(action.vx, action.vy)];
         if self.shadows {
             let predicted = M::poses(&self.model.predict(&world, action));
-            commands.push(shadows(&predicted));
+            let target = match self.policy {
+                Policy::Target(pose) => Some(pose),
+                Policy::Fixed(_) => None,
+            };
+            commands.push(shadows(&predicted, target));
         }
         Ok(commands)
     }
@@ -131,9 +135,11 @@ impl<M: Model> Learner<M> {
     }
 }
 
-/// The predicted poses as one SetPose of the ghost bodies (`world.md` §3).
-fn shadows(predicted: &learner::Poses) -> Payload {
-    let poses = predicted.objects().filter_map(|(id, s)| {
+/// The predicted poses, and the blue block's target if there is one, as one
+/// SetPose of the ghost bodies (`world.md` §3). The target is sent with every
+/// prediction rather than once, because a Reset clears the ghosts.
+fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
+    let ghost = |id, s: ObjectState, suffix: &str| {
         let name = object_name(id)?;
         let z = if id == learner::ACTUATOR_ID {
             ACTUATOR_Z
@@ -141,10 +147,14 @@ fn shadows(predicted: &learner::Poses) -> Payload {
             BLOCK_Z
         };
         Some((
-            format!("{name}Shadow"),
+            format!("{name}{GHOST_MARKER}{suffix}"),
             pb::Pose::from_position_yaw([s.x, s.y, z], s.theta),
         ))
-    });
+    };
+    let poses = predicted
+        .objects()
+        .filter_map(|(id, s)| ghost(id, s, ""))
+        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, TARGET_GHOST_SUFFIX)));
     Payload::set_poses(poses)
 }
 
@@ -347,6 +357,18 @@ mod tests {
         let stop = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
         assert_eq!(stop, ["move(0,0)"]);
         assert!(l.reached());
+    }
+
+    #[test]
+    fn shadows_of_a_target_policy_mark_the_target() {
+        let goal = ObjectState::new(0.6, 0.7, -2.1);
+        let mut l = Learner::new(Probe::default(), Policy::Target(goal), true, 1);
+        let commands = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        assert_eq!(commands.len(), 2, "{commands:?}");
+        assert!(
+            commands[1].ends_with(";pose(blockAShadowTarget,0.6,0.7)"),
+            "{commands:?}"
+        );
     }
 
     #[test]

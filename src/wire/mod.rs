@@ -24,3 +24,13 @@ pub use codec::{
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
 pub use validate::{validate, InvalidCommand};
+
+/// Substring that marks a non-physical ghost pose (`protocol.md` §3): the
+/// world never simulates such a body and learners skip it.
+pub const GHOST_MARKER: &str = "Shadow";
+
+/// Suffix after [`GHOST_MARKER`] of the ghost that marks a Move-to-Target
+/// goal: `blockAShadowTarget` is the target pose of `blockA`, and the world
+/// gives it blockA's id (docs/protocol.md §3, docs/viewer.md). A ghost
+/// without suffix (`blockAShadow`) is a predicted pose.
+pub const TARGET_GHOST_SUFFIX: &str = "Target";

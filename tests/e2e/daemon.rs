@@ -1,13 +1,10 @@
 //! The real world daemon, `pushlearn-sim`, as a child process on a free port.
 
-use std::io::{BufRead, BufReader, Read};
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
-use std::thread::{self, JoinHandle};
+use std::process::Command;
 
-use crate::process::CHILD_LIMIT;
+use crate::process::Background;
 
 /// `target/<profile>/pushlearn-sim`. A test of the root package cannot use
 /// `CARGO_BIN_EXE_` of another package, but cargo builds every binary of the
@@ -31,75 +28,30 @@ pub fn binary() -> PathBuf {
 /// A running `pushlearn-sim`; killed when dropped.
 pub struct Daemon {
     pub addr: SocketAddr,
-    child: Child,
-    logs: Option<JoinHandle<String>>,
+    _process: Background,
 }
 
 impl Daemon {
     /// Starts `pushlearn-sim serve --port 0 ARGS...` and waits for its
     /// `listening on` line.
     pub fn start(args: &[&str]) -> Daemon {
-        let mut child = Command::new(binary())
-            .args(["serve", "--port", "0"])
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start pushlearn-sim");
-        // Drained all the time: a daemon blocked on a full log pipe would
-        // stall the test.
-        let logs = child.stderr.take().map(|mut stderr| {
-            thread::spawn(move || {
-                let mut text = String::new();
-                let _ = stderr.read_to_string(&mut text);
-                text
-            })
-        });
-        let stdout = child.stdout.take().expect("piped stdout");
-        let (tx, rx) = mpsc::channel();
-        thread::spawn(move || {
-            let mut line = String::new();
-            let _ = BufReader::new(stdout).read_line(&mut line);
-            let _ = tx.send(line);
-        });
-        let mut daemon = Daemon {
-            addr: SocketAddr::from(([127, 0, 0, 1], 0)),
-            child,
-            logs,
-        };
-        let line = rx.recv_timeout(CHILD_LIMIT).unwrap_or_default();
+        let mut command = Command::new(binary());
+        command.args(["serve", "--port", "0"]).args(args);
+        let (mut process, line) = Background::start(command, "pushlearn-sim");
         match line
             .trim_end()
             .strip_prefix("listening on ")
             .and_then(|a| a.parse().ok())
         {
-            Some(addr) => daemon.addr = addr,
+            Some(addr) => Daemon {
+                addr,
+                _process: process,
+            },
             None => panic!(
                 "pushlearn-sim {args:?} did not say where it listens (first line {line:?}); \
                  its log:\n{}",
-                daemon.stop()
+                process.stop()
             ),
-        }
-        daemon
-    }
-
-    /// Kills the daemon and returns its log.
-    fn stop(&mut self) -> String {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-        self.logs
-            .take()
-            .and_then(|logs| logs.join().ok())
-            .unwrap_or_default()
-    }
-}
-
-impl Drop for Daemon {
-    fn drop(&mut self) {
-        let logs = self.stop();
-        if thread::panicking() {
-            eprintln!("pushlearn-sim's log:\n{logs}");
         }
     }
 }

@@ -4,6 +4,7 @@
 //! child process ([`daemon::Daemon`]); it must have been built
 //! (`cargo build -p sim-plugin`; `cargo test --workspace` does it).
 
+mod browser;
 mod daemon;
 mod process;
 
@@ -12,3 +13,4 @@ mod ctl;
 mod docs;
 mod experiment;
 mod python;
+mod viewer;

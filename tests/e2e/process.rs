@@ -1,9 +1,10 @@
 //! Running child processes (the `pushlearn` binary, python3) with a limit so
 //! that a hung child fails its test instead of hanging the suite.
 
-use std::io::Read;
-use std::process::{Command, Output, Stdio};
-use std::thread;
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::thread::{self, JoinHandle};
 use std::time::{Duration, Instant};
 
 /// Generous: only there to turn a hang into a failure.
@@ -72,4 +73,65 @@ pub fn ctl(addr: std::net::SocketAddr, args: &[&str]) -> Output {
 
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// A long-running child (a daemon, the viewer): killed when dropped, its
+/// stderr kept to show when a test fails.
+pub struct Background {
+    name: &'static str,
+    child: Child,
+    logs: Option<JoinHandle<String>>,
+}
+
+impl Background {
+    /// Starts `command` and returns it with the first line it prints to
+    /// stdout (empty if none comes within [`CHILD_LIMIT`]).
+    pub fn start(mut command: Command, name: &'static str) -> (Background, String) {
+        let mut child = command
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap_or_else(|err| panic!("cannot start {name}: {err}"));
+        // Drained all the time: a child blocked on a full log pipe would
+        // stall the test.
+        let logs = child.stderr.take().map(|mut stderr| {
+            thread::spawn(move || {
+                let mut text = String::new();
+                let _ = stderr.read_to_string(&mut text);
+                text
+            })
+        });
+        let stdout = child.stdout.take().expect("piped stdout");
+        let (tx, rx) = mpsc::channel();
+        thread::spawn(move || {
+            let mut line = String::new();
+            let mut stdout = BufReader::new(stdout);
+            let _ = stdout.read_line(&mut line);
+            let _ = tx.send(line);
+            // Keep reading so that later output never blocks the child.
+            let _ = std::io::copy(&mut stdout, &mut std::io::sink());
+        });
+        let line = rx.recv_timeout(CHILD_LIMIT).unwrap_or_default();
+        (Background { name, child, logs }, line)
+    }
+
+    /// Kills the child and returns its log.
+    pub fn stop(&mut self) -> String {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        self.logs
+            .take()
+            .and_then(|logs| logs.join().ok())
+            .unwrap_or_default()
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        let logs = self.stop();
+        if thread::panicking() {
+            eprintln!("{}'s log:\n{logs}", self.name);
+        }
+    }
 }

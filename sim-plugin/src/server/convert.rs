@@ -6,7 +6,7 @@ use pushlearn::wire::pb::{
 use pushlearn::wire::{InvalidCommand, TimingMode};
 
 use super::gate::{Op, Refusal};
-use crate::scene::{Scene, GHOST_MARKER};
+use crate::scene::{BodySpec, Scene, ShapeSpec, GHOST_MARKER};
 use crate::world::{check_command, ActuatorMode, BodyState, Command, Snapshot};
 
 /// `ModelState.scale`: the original always sent (1, 1, 1).
@@ -118,6 +118,18 @@ pub(super) fn hello(scene: &Scene, publish_rate: u32, timing: TimingMode) -> pb:
                 ..Default::default()
             })
             .collect(),
+        shapes: scene.bodies.iter().map(shape).collect(),
+    }
+}
+
+/// The size of a body on the wire, so that viewers draw it at its real size.
+fn shape(body: &BodySpec) -> pb::Shape {
+    pb::Shape {
+        name: body.name.clone(),
+        geometry: Some(match body.shape {
+            ShapeSpec::Sphere { radius } => pb::shape::Geometry::SphereRadius(radius),
+            ShapeSpec::Box { size } => pb::shape::Geometry::BoxSize(vector3d(size)),
+        }),
     }
 }
 
@@ -200,6 +212,27 @@ mod tests {
             operation(&pb::ClientMessage::latency_seed(1, 9), &scene),
             Ok(Op::LatencySeed(9))
         ));
+    }
+
+    #[test]
+    fn hello_gives_every_body_its_size() {
+        let scene = Scene::builtin("two_blocks").expect("embedded scene");
+        let hello = hello(&scene, 100, TimingMode::Realtime);
+        let shapes: Vec<_> = hello
+            .shapes
+            .iter()
+            .map(|s| (s.name.as_str(), s.geometry))
+            .collect();
+        let size = |x, y, z| Some(pb::shape::Geometry::BoxSize(pb::Vector3d { x, y, z }));
+        // world.md's body table.
+        assert_eq!(
+            shapes,
+            [
+                ("actuator", Some(pb::shape::Geometry::SphereRadius(0.025))),
+                ("blockA", size(0.5, 0.1, 0.1)),
+                ("blockB", size(0.3, 0.3, 0.1)),
+            ]
+        );
     }
 
     #[test]
