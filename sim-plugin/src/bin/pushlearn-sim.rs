@@ -202,6 +202,9 @@ fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
             .await
             .with_context(|| format!("cannot listen on {}:{}", args.bind, args.port))?;
         let server = Server::start(listener, config).await?;
+        // Handlers go in before the line below: whoever reads it may signal
+        // at once, and an uninstalled SIGTERM would kill us uncleanly.
+        let shutdown = shutdown_signal()?;
         // The one line on stdout, for scripts and tests that start the daemon
         // on port 0 and need to know where it is.
         let mut out = std::io::stdout().lock();
@@ -209,8 +212,7 @@ fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
         out.flush()?;
         drop(out);
         tokio::select! {
-            signal = shutdown_signal() => {
-                signal?;
+            () = shutdown => {
                 tracing::info!("shutting down");
             }
             () = server.stopped() => {}
@@ -220,22 +222,30 @@ fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
     })
 }
 
-/// SIGINT (Ctrl-C) or SIGTERM.
-async fn shutdown_signal() -> anyhow::Result<()> {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{signal, SignalKind};
-        let mut terminate = signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
+/// Installs the SIGINT (Ctrl-C) and SIGTERM handlers now and returns the
+/// future that completes on the first of them.
+#[cfg(unix)]
+fn shutdown_signal() -> anyhow::Result<impl std::future::Future<Output = ()>> {
+    use tokio::signal::unix::{signal, SignalKind};
+    let mut interrupt = signal(SignalKind::interrupt()).context("cannot listen for SIGINT")?;
+    let mut terminate = signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
+    Ok(async move {
         tokio::select! {
-            ctrl_c = tokio::signal::ctrl_c() => ctrl_c.context("cannot listen for SIGINT")?,
+            _ = interrupt.recv() => {}
             _ = terminate.recv() => {}
         }
-    }
-    #[cfg(not(unix))]
-    tokio::signal::ctrl_c()
-        .await
-        .context("cannot listen for Ctrl-C")?;
-    Ok(())
+    })
+}
+
+/// The Ctrl-C future (installed on its first poll, right after start-up).
+#[cfg(not(unix))]
+fn shutdown_signal() -> anyhow::Result<impl std::future::Future<Output = ()>> {
+    Ok(async {
+        if let Err(e) = tokio::signal::ctrl_c().await {
+            tracing::error!("cannot listen for Ctrl-C: {e}");
+            std::future::pending::<()>().await;
+        }
+    })
 }
 
 fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {
