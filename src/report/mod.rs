@@ -184,6 +184,7 @@ mod tests {
             fold,
             training_starts: vec![0.0; n_train],
             errors,
+            end_poses: Vec::new(),
             nodes,
             counters: Counters {
                 messages: 100,
@@ -287,6 +288,7 @@ mod tests {
             pos_err: 0.5,
             ori_err: 0.1,
             final_block: ObjectState::new(0.1, 0.2, 0.3),
+            trace: Default::default(),
         };
         let report = MttReport {
             setup: Setup {
