@@ -24,6 +24,7 @@ enum Command {
     Ctl(cli::ctl::CtlArgs),
     Experiment(cli::experiment::ExperimentArgs),
     Learn(cli::learn::LearnArgs),
+    Report(cli::report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +39,7 @@ fn main() -> ExitCode {
         Command::Ctl(args) => cli::ctl::run(args),
         Command::Experiment(args) => cli::experiment::run(args),
         Command::Learn(args) => cli::learn::run(args),
+        Command::Report(args) => cli::report::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -81,6 +81,11 @@ struct WorldArgs {
     /// Also write the results as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+
+    /// Also write the figures (PNG and SVG) into DIR, created if needed.
+    /// `pushlearn report plot FILE.json` draws them again from saved JSON.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -186,6 +191,27 @@ impl WorldArgs {
         }
         Ok(())
     }
+
+    /// Checks before the experiment runs that the figure directory can be
+    /// created, so that a typo does not cost a whole run.
+    fn check_plots(&self) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
+        }
+        Ok(())
+    }
+
+    fn write_plots(
+        &self,
+        plot: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>, report::plot::PlotError>,
+    ) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            let written = plot(dir)?;
+            eprintln!("wrote {} figures to {}", written.len(), dir.display());
+        }
+        Ok(())
+    }
 }
 
 /// A progress bar on stderr, hidden when stdout is not a terminal (reports
@@ -248,6 +274,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
 
 fn push_task(args: &PushTaskArgs) -> Result<()> {
     let variant = args.variant;
+    args.world.check_plots()?;
     let plan = args.world.plan(args.model, variant.scene())?;
     if variant == Variant::ConstantFeedback {
         if args.train_runs.is_some() {
@@ -255,6 +282,8 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
         }
         let report = args.model.dispatch(LOW_RATE_HZ, Feedback { plan: &plan })?;
         args.world.write_json(&report)?;
+        args.world
+            .write_plots(|dir| report::plot::feedback(&report, args.model, dir))?;
         let mut out = std::io::stdout().lock();
         table::feedback(&mut out, &report, args.model)?;
         return Ok(out.flush()?);
@@ -281,12 +310,15 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
     )?;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::push(&report, args.model, dir))?;
     let mut out = std::io::stdout().lock();
     table::push(&mut out, &report, args.model)?;
     Ok(out.flush()?)
 }
 
 fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
+    args.world.check_plots()?;
     let plan = args.world.plan(args.model, "one_block")?;
     let targets = if args.target.is_empty() {
         TARGETS.to_vec()
@@ -307,6 +339,8 @@ fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
     )?;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::move_to_target(&report, args.model, dir))?;
     let mut out = std::io::stdout().lock();
     table::move_to_target(&mut out, &report, args.model)?;
     Ok(out.flush()?)

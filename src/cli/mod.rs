@@ -3,6 +3,7 @@
 pub mod ctl;
 pub mod experiment;
 pub mod learn;
+pub mod report;
 
 /// Whether `err` comes from writing to a closed stdout pipe.
 pub fn is_broken_pipe(err: &anyhow::Error) -> bool {

@@ -6,6 +6,7 @@
 //! `runs`, `targets`: identical for identical seeds in lock-step) from how
 //! the run went (`run`: wall-clock times, too-slow counts).
 
+pub mod plot;
 pub mod reference;
 pub mod table;
 
@@ -128,6 +129,65 @@ pub struct MttReport {
     pub max_steps: u64,
     pub targets: Vec<TargetEntry>,
     pub run: RunInfo,
+}
+
+/// Any report document, as read back from its JSON.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyReport {
+    Push(PushReport),
+    Feedback(FeedbackReport),
+    MoveToTarget(MttReport),
+}
+
+/// Why a saved report cannot be read back.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("not JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("not a pushlearn report: no \"experiment\" key")]
+    NoExperiment,
+    #[error("unknown experiment {0:?} (expected push-task or move-to-target)")]
+    UnknownExperiment(String),
+}
+
+impl AnyReport {
+    /// Parses a document written by `--json`, telling the kinds apart by
+    /// their `experiment` and `variant` keys.
+    ///
+    /// # Errors
+    /// Not JSON, or not one of the report documents.
+    pub fn from_json(text: &str) -> Result<Self, ReadError> {
+        let value: serde_json::Value = serde_json::from_str(text)?;
+        let experiment = value
+            .get("experiment")
+            .and_then(serde_json::Value::as_str)
+            .ok_or(ReadError::NoExperiment)?;
+        Ok(match experiment {
+            crate::experiment::push_task::EXPERIMENT => {
+                if value.get("variant").and_then(serde_json::Value::as_str)
+                    == Some(crate::experiment::push_task::Variant::ConstantFeedback.as_str())
+                {
+                    AnyReport::Feedback(serde_json::from_value(value)?)
+                } else {
+                    AnyReport::Push(serde_json::from_value(value)?)
+                }
+            }
+            crate::experiment::move_to_target::EXPERIMENT => {
+                AnyReport::MoveToTarget(serde_json::from_value(value)?)
+            }
+            other => return Err(ReadError::UnknownExperiment(other.to_owned())),
+        })
+    }
+
+    /// The report's setup (experiment, model, mode, seed).
+    #[must_use]
+    pub fn setup(&self) -> &Setup {
+        match self {
+            AnyReport::Push(r) => &r.setup,
+            AnyReport::Feedback(r) => &r.setup,
+            AnyReport::MoveToTarget(r) => &r.setup,
+        }
+    }
 }
 
 /// Writes `report` as pretty JSON to `path`.
@@ -270,6 +330,28 @@ mod tests {
         // And back.
         let back: PushReport = serde_json::from_value(v).unwrap();
         assert_eq!(back, report);
+    }
+
+    #[test]
+    fn saved_reports_are_read_back_by_kind() {
+        let report = push_report(Variant::Random, &[1, 3]);
+        let text = serde_json::to_string(&report).unwrap();
+        assert_eq!(
+            AnyReport::from_json(&text).unwrap(),
+            AnyReport::Push(report)
+        );
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "juggling"}"#),
+            Err(ReadError::UnknownExperiment(e)) if e == "juggling"
+        ));
+        assert!(matches!(
+            AnyReport::from_json("{}"),
+            Err(ReadError::NoExperiment)
+        ));
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "move-to-target"}"#),
+            Err(ReadError::Json(_))
+        ));
     }
 
     #[test]
