@@ -224,13 +224,12 @@ impl<M: Model> Task<M> for PushTask {
                     self.errors
                         .push(predicted.as_ref().map(|p| RunErrors::score(&actual, p)));
                     let x0 = self.test_positions.get(self.test_run).copied();
-                    self.end_poses.push(predicted.zip(x0).map(|(predicted, x0)| {
-                        EndPoses {
+                    self.end_poses
+                        .push(predicted.zip(x0).map(|(predicted, x0)| EndPoses {
                             x0,
                             actual,
                             predicted,
-                        }
-                    }));
+                        }));
                 }
                 core.reset_world();
                 core.run_started = false;

@@ -203,7 +203,10 @@ fn ours(label: &str, points: Vec<(f64, MeanStd)>) -> Series {
     Series {
         label: label.to_owned(),
         colour: OURS,
-        points: points.into_iter().map(|(x, m)| (x, m.mean, m.std)).collect(),
+        points: points
+            .into_iter()
+            .map(|(x, m)| (x, m.mean, m.std))
+            .collect(),
         bars: true,
     }
 }
@@ -224,6 +227,8 @@ struct Panel {
     x_range: Range<f64>,
     /// Drawn at x + offset·k for the k-th series, so bars do not overlap.
     offset: f64,
+    /// x is a count (training runs, messages, steps): labels without decimals.
+    counts: bool,
     series: Vec<Series>,
 }
 
@@ -237,9 +242,12 @@ impl Panel {
             .y_label_area_size(52)
             .build_cartesian_2d(self.x_range.clone(), y_range)
             .or_text()?;
-        chart
-            .configure_mesh()
-            .x_desc(self.x_desc.as_str())
+        let whole = |x: &f64| format!("{x:.0}");
+        let mut mesh = chart.configure_mesh();
+        if self.counts {
+            mesh.x_label_formatter(&whole);
+        }
+        mesh.x_desc(self.x_desc.as_str())
             .y_desc(self.y_desc.as_str())
             .label_style(("sans-serif", 11))
             .axis_desc_style(("sans-serif", 12))
@@ -318,7 +326,9 @@ fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: bool) -> Gr
         thesis(
             results
                 .iter()
-                .filter_map(|e| reference::curve(model, e.train_runs).map(|r| (e.train_runs as f64, get(r))))
+                .filter_map(|e| {
+                    reference::curve(model, e.train_runs).map(|r| (e.train_runs as f64, get(r)))
+                })
                 .collect(),
         )
     };
@@ -339,6 +349,7 @@ fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: bool) -> Gr
             y_desc: y.to_owned(),
             x_range: 0.0..n_max + 1.0,
             offset: 0.35,
+            counts: true,
             series,
         }
     };
@@ -451,7 +462,10 @@ fn position_panels(block: &BlockCurve, name: &str, refs: &[(f64, Ms, Ms)]) -> [P
     let xs: Vec<f64> = block.per_position.iter().map(|p| p.x0).collect();
     let lo = xs.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let panel = |what: &str, unit: &str, get: fn(&crate::experiment::push_task::PositionSummary) -> MeanStd, r: fn(&(f64, Ms, Ms)) -> Ms| {
+    let panel = |what: &str,
+                 unit: &str,
+                 get: fn(&crate::experiment::push_task::PositionSummary) -> MeanStd,
+                 r: fn(&(f64, Ms, Ms)) -> Ms| {
         let mut series = vec![ours(
             "ours",
             block.per_position.iter().map(|p| (p.x0, get(p))).collect(),
@@ -463,6 +477,7 @@ fn position_panels(block: &BlockCurve, name: &str, refs: &[(f64, Ms, Ms)]) -> [P
             y_desc: format!("error [{unit}]"),
             x_range: padded(lo, hi, 0.03),
             offset: 0.008,
+            counts: false,
             series,
         }
     };
@@ -623,6 +638,22 @@ fn square_bounds(snapshots: &[Snapshot]) -> (Range<f64>, Range<f64>) {
     ((cx - half)..(cx + half), (cy - half)..(cy + half))
 }
 
+/// Widens the narrower of the two ranges so that a metre is as long in x
+/// as in y on a plotting area of `pixels` (bodies keep their shapes).
+fn fit_aspect(x: Range<f64>, y: Range<f64>, pixels: (u32, u32)) -> (Range<f64>, Range<f64>) {
+    let (w, h) = (f64::from(pixels.0.max(1)), f64::from(pixels.1.max(1)));
+    let (dx, dy) = (x.end - x.start, y.end - y.start);
+    let widen = |r: Range<f64>, span: f64| {
+        let c = (r.start + r.end) / 2.0;
+        (c - span / 2.0)..(c + span / 2.0)
+    };
+    if dx / w < dy / h {
+        (widen(x, dy / h * w), y)
+    } else {
+        (x, widen(y, dx / w * h))
+    }
+}
+
 struct SnapshotGrid {
     title: String,
     columns: usize,
@@ -658,25 +689,33 @@ impl Figure for SnapshotGrid {
             .zip(&body.split_evenly((rows, columns)))
         {
             let area = area.titled(&snap.title, ("sans-serif", 12)).or_text()?;
+            let (w, h) = area.dim_in_pixel();
+            let plot_px = (
+                w.saturating_sub(2 * SNAP_MARGIN + SNAP_Y_LABELS),
+                h.saturating_sub(2 * SNAP_MARGIN + SNAP_X_LABELS),
+            );
+            let (x_range, y_range) = fit_aspect(x_range.clone(), y_range.clone(), plot_px);
             let mut chart = ChartBuilder::on(&area)
                 .margin(SNAP_MARGIN)
                 .x_label_area_size(SNAP_X_LABELS)
                 .y_label_area_size(SNAP_Y_LABELS)
-                .build_cartesian_2d(x_range.clone(), y_range.clone())
+                .build_cartesian_2d(x_range, y_range)
                 .or_text()?;
             chart
                 .configure_mesh()
-                .x_labels(4)
-                .y_labels(4)
+                .x_labels(5)
+                .y_labels(5)
                 .label_style(("sans-serif", 9))
                 .light_line_style(WHITE)
                 .bold_line_style(BLACK.mix(0.08))
                 .draw()
                 .or_text()?;
             chart
-                .draw_series(snap.bodies.iter().map(|b| {
-                    Polygon::new(b.outline.clone(), b.colour.mix(b.opacity).filled())
-                }))
+                .draw_series(
+                    snap.bodies
+                        .iter()
+                        .map(|b| Polygon::new(b.outline.clone(), b.colour.mix(b.opacity).filled())),
+                )
                 .or_text()?;
         }
         Ok(())
@@ -693,8 +732,9 @@ fn push_snapshots(
         .end_poses
         .iter()
         .map(|e: &EndPoses| {
-            let mut bodies = bodies(&e.predicted, shapes, TRANSLUCENT);
-            bodies.extend(self::bodies(&e.actual, shapes, 1.0));
+            // The prediction on top, translucent, so that both stay visible.
+            let mut bodies = bodies(&e.actual, shapes, 1.0);
+            bodies.extend(self::bodies(&e.predicted, shapes, TRANSLUCENT));
             Snapshot {
                 title: format!("x0 = {:.3}", e.x0),
                 bodies,
@@ -729,7 +769,12 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
     let stem = stem(report, model);
     let mut written = Vec::new();
     if report.results.len() > 1 {
-        write(&curve_grid(model, &report.results, false), dir, &format!("{stem}-curve"), &mut written)?;
+        write(
+            &curve_grid(model, &report.results, false),
+            dir,
+            &format!("{stem}-curve"),
+            &mut written,
+        )?;
         if report.variant != "two-objects" {
             write(
                 &curve_grid(model, &report.results, true),
@@ -741,7 +786,12 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
     }
     for entry in &report.results {
         let n = entry.train_runs;
-        write(&positions_grid(report, model, entry), dir, &format!("{stem}-positions-n{n}"), &mut written)?;
+        write(
+            &positions_grid(report, model, entry),
+            dir,
+            &format!("{stem}-positions-n{n}"),
+            &mut written,
+        )?;
         if !entry.end_poses.is_empty() {
             write(
                 &push_snapshots(report, model, entry, &shapes),
@@ -759,15 +809,25 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
 ///
 /// # Errors
 /// As [`push`].
-pub fn feedback(report: &FeedbackReport, model: ModelKind, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+pub fn feedback(
+    report: &FeedbackReport,
+    model: ModelKind,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
-    let longest = report.runs.iter().map(|r| r.errors.len()).max().unwrap_or(1) as f64;
+    let longest = report
+        .runs
+        .iter()
+        .map(|r| r.errors.len())
+        .max()
+        .unwrap_or(1) as f64;
     let panel = |title: &str, unit: &str, get: &dyn Fn(&learner::eval::RunErrors) -> f64| Panel {
         title: title.to_owned(),
         x_desc: "message".to_owned(),
         y_desc: format!("error [{unit}]"),
         x_range: 0.0..longest + 1.0,
         offset: 0.0,
+        counts: true,
         series: report
             .runs
             .iter()
@@ -804,7 +864,12 @@ pub fn feedback(report: &FeedbackReport, model: ModelKind, dir: &Path) -> Result
         ],
     };
     let mut written = Vec::new();
-    write(&grid, dir, &format!("push-task-{model}-constant-feedback"), &mut written)?;
+    write(
+        &grid,
+        dir,
+        &format!("push-task-{model}-constant-feedback"),
+        &mut written,
+    )?;
     Ok(written)
 }
 
@@ -814,7 +879,11 @@ pub fn feedback(report: &FeedbackReport, model: ModelKind, dir: &Path) -> Result
 ///
 /// # Errors
 /// As [`push`].
-pub fn move_to_target(report: &MttReport, model: ModelKind, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
+pub fn move_to_target(
+    report: &MttReport,
+    model: ModelKind,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
     let shapes = footprints()?;
     let max_steps = report.max_steps as f64;
@@ -828,12 +897,17 @@ pub fn move_to_target(report: &MttReport, model: ModelKind, dir: &Path) -> Resul
                 y_desc: format!("error [{unit}]"),
                 x_range: 0.0..max_steps,
                 offset: 0.0,
+                counts: true,
                 series: target
                     .runs
                     .iter()
                     .enumerate()
                     .map(|(k, r)| {
-                        let values = if unit == "m" { &r.trace.pos_err } else { &r.trace.ori_err };
+                        let values = if unit == "m" {
+                            &r.trace.pos_err
+                        } else {
+                            &r.trace.ori_err
+                        };
                         Series {
                             label: format!(
                                 "run {} ({})",
@@ -859,7 +933,9 @@ pub fn move_to_target(report: &MttReport, model: ModelKind, dir: &Path) -> Resul
     let stem = format!("move-to-target-{model}");
     write(
         &Grid {
-            title: format!("{model} model, Move to Target: the block's error to the target over the steps"),
+            title: format!(
+                "{model} model, Move to Target: the block's error to the target over the steps"
+            ),
             columns: 2,
             panel_size: (560, 300),
             panels,
@@ -887,16 +963,28 @@ pub fn move_to_target(report: &MttReport, model: ModelKind, dir: &Path) -> Resul
                 colour: TARGET,
                 opacity: TRANSLUCENT,
             }];
-            bodies.extend(target.runs.iter().enumerate().filter(|(_, r)| {
-                let b = r.final_block;
-                b.x.is_finite() && b.y.is_finite() && b.theta.is_finite()
-            }).map(|(k, r)| Body {
-                outline: outline(&block_shape, r.final_block),
-                colour: palette(k),
-                opacity: 0.8,
-            }));
+            bodies.extend(
+                target
+                    .runs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, r)| {
+                        let b = r.final_block;
+                        b.x.is_finite() && b.y.is_finite() && b.theta.is_finite()
+                    })
+                    .map(|(k, r)| Body {
+                        outline: outline(&block_shape, r.final_block),
+                        colour: palette(k),
+                        opacity: 0.8,
+                    }),
+            );
             Snapshot {
-                title: format!("target {} ({}/{} reached)", t + 1, target.summary.reached, target.summary.runs),
+                title: format!(
+                    "target {} ({}/{} reached)",
+                    t + 1,
+                    target.summary.reached,
+                    target.summary.runs
+                ),
                 bodies,
             }
         })
@@ -913,4 +1001,321 @@ pub fn move_to_target(report: &MttReport, model: ModelKind, dir: &Path) -> Resul
         &mut written,
     )?;
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use learner::eval::{BlockError, RunErrors};
+    use learner::ModelStats;
+
+    use super::*;
+    use crate::experiment::driver::Counters;
+    use crate::experiment::move_to_target::{ErrorTrace, MttRun, TargetSummary};
+    use crate::experiment::push_task::{summarise, PushJobResult, Variant};
+    use crate::report::{RunInfo, Setup, TargetEntry};
+
+    /// A fresh directory under the system's temporary one.
+    fn scratch(name: &str) -> PathBuf {
+        let dir =
+            std::env::temp_dir().join(format!("pushlearn-plot-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        dir
+    }
+
+    fn count(path: &Path, tag: &str) -> usize {
+        let text = std::fs::read_to_string(path).unwrap();
+        text.matches(&format!("<{tag}")).count()
+    }
+
+    fn is_png(path: &Path) -> bool {
+        std::fs::read(path)
+            .unwrap()
+            .starts_with(b"\x89PNG\r\n\x1a\n")
+    }
+
+    fn push_report(train_runs: &[usize], folds: usize) -> PushReport {
+        let xs = Variant::Random.test_positions();
+        let jobs: Vec<PushJobResult> = train_runs
+            .iter()
+            .flat_map(|&n| (0..folds).map(move |f| (n, f)))
+            .map(|(n, fold)| {
+                let errors = (0..xs.len())
+                    .map(|i| RunErrors {
+                        actuator: 0.001 * (fold + 1) as f64,
+                        blocks: BTreeMap::from([(
+                            BLUE_ID,
+                            BlockError {
+                                pos: 0.1 / n as f64 + 0.01 * (i % 3) as f64,
+                                ori: 0.5 / n as f64,
+                            },
+                        )]),
+                    })
+                    .collect();
+                let end_poses = xs
+                    .iter()
+                    .map(|&x0| {
+                        let mut actual = Poses::default();
+                        actual.actuator = ObjectState::new(x0, 0.75, 0.0);
+                        actual
+                            .blocks
+                            .insert(BLUE_ID, ObjectState::new(0.0, 0.8, 0.3));
+                        let mut predicted = actual.clone();
+                        predicted
+                            .blocks
+                            .insert(BLUE_ID, ObjectState::new(0.1, 0.7, -0.2));
+                        EndPoses {
+                            x0,
+                            actual,
+                            predicted,
+                        }
+                    })
+                    .collect();
+                PushJobResult {
+                    n_train: n,
+                    fold,
+                    training_starts: vec![0.0; n],
+                    errors,
+                    end_poses,
+                    nodes: ModelStats::default(),
+                    counters: Counters::default(),
+                    timing: Default::default(),
+                }
+            })
+            .collect();
+        PushReport {
+            setup: Setup {
+                experiment: "push-task".into(),
+                model: "gate".into(),
+                mode: "lockstep".into(),
+                seed: 1,
+            },
+            variant: "random".into(),
+            folds,
+            train_runs: train_runs.to_vec(),
+            results: summarise(Variant::Random, train_runs, &jobs).unwrap(),
+            run: RunInfo::default(),
+        }
+    }
+
+    #[test]
+    fn push_figures_have_a_bar_per_point_and_a_body_per_pose() {
+        let dir = scratch("push");
+        let report = push_report(&[1, 3, 30], 2);
+        let written = push(&report, ModelKind::Gate, &dir.join("nested")).unwrap();
+        // Two curves, then per N_train the positions and the snapshots; each
+        // as PNG and SVG.
+        assert_eq!(written.len(), 2 * (2 + 3 * 2));
+        for path in &written {
+            let ext = path.extension().and_then(|e| e.to_str());
+            assert!(path.is_file(), "{}", path.display());
+            match ext {
+                Some("png") => assert!(is_png(path), "{}", path.display()),
+                Some("svg") => {
+                    let text = std::fs::read_to_string(path).unwrap();
+                    assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+                }
+                _ => panic!("unexpected file {}", path.display()),
+            }
+        }
+        let svg = |stem: &str| {
+            dir.join("nested")
+                .join(format!("push-task-gate-random-{stem}.svg"))
+        };
+        // Learning curve: 3 panels × (3 of ours + 3 of the thesis's) bars,
+        // each drawn with one dot.
+        assert_eq!(count(&svg("curve"), "circle"), 18);
+        // The interacting curve has no thesis bars for the script's values.
+        assert_eq!(count(&svg("curve-interacting"), "circle"), 18);
+        // Per position: 2 panels × 21 bars of ours; no thesis table for the
+        // random variant.
+        assert_eq!(count(&svg("positions-n3"), "circle"), 42);
+        // Snapshots: 21 runs × (actuator + block) × (actual + predicted).
+        assert_eq!(count(&svg("snapshots-n1"), "polygon"), 84);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn fixed_three_positions_show_the_thesis_table() {
+        let dir = scratch("fixed");
+        let mut report = push_report(&[3], 2);
+        report.variant = "fixed-three".into();
+        push(&report, ModelKind::Interaction, &dir).unwrap();
+        let svg = dir.join("push-task-interaction-fixed-three-positions-n3.svg");
+        // 2 panels × 21 positions × (ours + §5.2).
+        assert_eq!(count(&svg, "circle"), 84);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    fn mtt_report(runs_per_target: usize) -> MttReport {
+        let run = |k: usize| MttRun {
+            reached: k % 2 == 0,
+            steps: 100,
+            pos_err: 0.2,
+            ori_err: 0.1,
+            final_block: ObjectState::new(0.5, 0.6, -2.0 + 0.1 * k as f64),
+            trace: ErrorTrace {
+                steps: vec![0, 10, 20, 30],
+                pos_err: vec![0.7, 0.5, 0.4, 0.2],
+                ori_err: vec![2.1, 1.0, 0.5, 0.1],
+            },
+        };
+        let runs: Vec<MttRun> = (0..runs_per_target).map(run).collect();
+        MttReport {
+            setup: Setup {
+                experiment: "move-to-target".into(),
+                model: "gate".into(),
+                mode: "lockstep".into(),
+                seed: 1,
+            },
+            repetitions: runs_per_target,
+            max_steps: 3000,
+            targets: vec![
+                TargetEntry {
+                    target: [0.6, 0.7, -2.1],
+                    summary: TargetSummary::of(&runs),
+                    runs: runs.clone(),
+                    nodes_after_training: Default::default(),
+                },
+                TargetEntry {
+                    target: [-0.6, -0.7, 0.0],
+                    summary: TargetSummary::of(&runs),
+                    runs,
+                    nodes_after_training: Default::default(),
+                },
+            ],
+            run: RunInfo::default(),
+        }
+    }
+
+    #[test]
+    fn move_to_target_figures_draw_a_line_per_run_and_a_block_per_end() {
+        let dir = scratch("mtt");
+        let polylines = |runs: usize| {
+            let written = move_to_target(&mtt_report(runs), ModelKind::Gate, &dir).unwrap();
+            assert_eq!(written.len(), 4);
+            assert!(written
+                .iter()
+                .filter(|p| p.extension().is_some_and(|e| e == "png"))
+                .all(|p| is_png(p)));
+            let final_svg = dir.join("move-to-target-gate-final.svg");
+            // The target and each run's final block, per target.
+            assert_eq!(count(&final_svg, "polygon"), 2 * (1 + runs));
+            count(&dir.join("move-to-target-gate-errors.svg"), "polyline")
+        };
+        // One more run adds, in each of the 2 × 2 panels, its line and its
+        // legend entry.
+        assert_eq!(polylines(4) - polylines(3), 4 * 2);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_uncreatable_directory_is_a_clear_error() {
+        let dir = scratch("blocked");
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("a-file");
+        std::fs::write(&file, "").unwrap();
+        let err = push(
+            &push_report(&[1], 1),
+            ModelKind::Gate,
+            &file.join("figures"),
+        )
+        .unwrap_err();
+        assert!(matches!(err, PlotError::Dir { .. }), "{err}");
+        assert!(
+            err.to_string()
+                .contains("cannot create the figure directory"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn value_axes_cover_every_bar() {
+        let r = value_range([0.1, 0.35, f64::NAN, 0.2]);
+        assert_eq!(r.start, 0.0);
+        assert!(r.end > 0.35 && r.end < 0.4);
+        assert_eq!(value_range([f64::NAN]), 0.0..1.0);
+        assert_eq!(value_range([0.0]), 0.0..1.0);
+        let p = padded(-0.35, 0.35, 0.03);
+        assert!(p.start < -0.35 && p.end > 0.35);
+    }
+
+    #[test]
+    fn snapshots_keep_metres_square_and_hold_every_body() {
+        let (x, y) = fit_aspect(-0.5..0.5, 0.0..1.0, (400, 200));
+        assert!(((x.end - x.start) / 400.0 - (y.end - y.start) / 200.0).abs() < 1e-12);
+        assert!(x.start <= -0.5 && x.end >= 0.5 && y.start <= 0.0 && y.end >= 1.0);
+        let (x, y) = fit_aspect(-0.5..0.5, 0.0..1.0, (100, 300));
+        assert!(((x.end - x.start) / 100.0 - (y.end - y.start) / 300.0).abs() < 1e-12);
+        assert!(y.start <= 0.0 && y.end >= 1.0);
+
+        let shapes = footprints().unwrap();
+        let mut poses = Poses::default();
+        poses.actuator = ObjectState::new(-0.3, 0.75, 0.0);
+        poses
+            .blocks
+            .insert(BLUE_ID, ObjectState::new(0.2, 0.9, 1.0));
+        let snap = Snapshot {
+            title: String::new(),
+            bodies: bodies(&poses, &shapes, 1.0),
+        };
+        let (x, y) = square_bounds(std::slice::from_ref(&snap));
+        assert!((x.end - x.start - (y.end - y.start)).abs() < 1e-12);
+        for &(px, py) in snap.bodies.iter().flat_map(|b| &b.outline) {
+            assert!(
+                x.contains(&px) && y.contains(&py),
+                "({px}, {py}) outside {x:?} × {y:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn bodies_have_the_scene_sizes_and_turn_with_theta() {
+        let shapes = footprints().unwrap();
+        let get = |id| {
+            shapes
+                .iter()
+                .find(|(i, _)| *i == id)
+                .map(|(_, s)| s.clone())
+        };
+        assert_eq!(get(ACTUATOR_ID), Some(Footprint::Circle { radius: 0.025 }));
+        assert_eq!(
+            get(BLUE_ID),
+            Some(Footprint::Rectangle {
+                length: 0.5,
+                width: 0.1
+            })
+        );
+        assert_eq!(
+            get(RED_ID),
+            Some(Footprint::Rectangle {
+                length: 0.3,
+                width: 0.3
+            })
+        );
+        // The blue block turned by 90°: its long side along y.
+        let corners = outline(
+            &Footprint::Rectangle {
+                length: 0.5,
+                width: 0.1,
+            },
+            ObjectState::new(1.0, 2.0, std::f64::consts::FRAC_PI_2),
+        );
+        let ys: Vec<f64> = corners.iter().map(|c| c.1).collect();
+        let xs: Vec<f64> = corners.iter().map(|c| c.0).collect();
+        let span = |v: &[f64]| {
+            v.iter().copied().fold(f64::MIN, f64::max) - v.iter().copied().fold(f64::MAX, f64::min)
+        };
+        assert!((span(&ys) - 0.5).abs() < 1e-12 && (span(&xs) - 0.1).abs() < 1e-12);
+        // A circle's outline lies on its radius.
+        let circle = outline(
+            &Footprint::Circle { radius: 0.025 },
+            ObjectState::new(0.1, 0.2, 0.0),
+        );
+        assert!(circle
+            .iter()
+            .all(|&(x, y)| ((x - 0.1).hypot(y - 0.2) - 0.025).abs() < 1e-12));
+    }
 }
