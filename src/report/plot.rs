@@ -1056,8 +1056,10 @@ mod tests {
                 let end_poses = xs
                     .iter()
                     .map(|&x0| {
-                        let mut actual = Poses::default();
-                        actual.actuator = ObjectState::new(x0, 0.75, 0.0);
+                        let mut actual = Poses {
+                            actuator: ObjectState::new(x0, 0.75, 0.0),
+                            ..Poses::default()
+                        };
                         actual
                             .blocks
                             .insert(BLUE_ID, ObjectState::new(0.0, 0.8, 0.3));
@@ -1252,8 +1254,10 @@ mod tests {
         assert!(y.start <= 0.0 && y.end >= 1.0);
 
         let shapes = footprints().unwrap();
-        let mut poses = Poses::default();
-        poses.actuator = ObjectState::new(-0.3, 0.75, 0.0);
+        let mut poses = Poses {
+            actuator: ObjectState::new(-0.3, 0.75, 0.0),
+            ..Poses::default()
+        };
         poses
             .blocks
             .insert(BLUE_ID, ObjectState::new(0.2, 0.9, 1.0));

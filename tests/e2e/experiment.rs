@@ -227,7 +227,9 @@ fn move_to_target_over_sockets_reports_each_run() {
     assert!(table.contains("Move to Target"), "{table}");
     for name in ["errors", "final"] {
         for ext in ["png", "svg"] {
-            let path = dir.0.join(format!("figures/move-to-target-gate-{name}.{ext}"));
+            let path = dir
+                .0
+                .join(format!("figures/move-to-target-gate-{name}.{ext}"));
             assert!(path.is_file(), "{}", path.display());
         }
     }
@@ -253,7 +255,10 @@ fn move_to_target_over_sockets_reports_each_run() {
         .collect();
     assert_eq!(trace_steps.first(), Some(&0));
     assert_eq!(trace_steps.last(), Some(&steps));
-    let last_pos = run["trace"]["pos_err"].as_array().and_then(|v| v.last()).map(number);
+    let last_pos = run["trace"]["pos_err"]
+        .as_array()
+        .and_then(|v| v.last())
+        .map(number);
     assert!(last_pos.is_some_and(|p| (p - pos).abs() < 1e-4), "{run}");
     assert_eq!(t["summary"]["runs"], 1);
 }
