@@ -86,6 +86,19 @@ pub struct Setup {
     pub seed: u64,
 }
 
+#[cfg(test)]
+impl Setup {
+    /// The setup of the tests' reports: `model` in lock-step, seed 1.
+    pub(crate) fn for_tests(experiment: &str, model: &str) -> Self {
+        Self {
+            experiment: experiment.into(),
+            model: model.into(),
+            mode: "lockstep".into(),
+            seed: 1,
+        }
+    }
+}
+
 /// `pushlearn experiment push-task` (all variants but constant feedback).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PushReport {
@@ -267,12 +280,7 @@ mod tests {
             .flat_map(|&n| (0..2).map(move |f| job(n, f, variant == Variant::TwoObjects)))
             .collect();
         PushReport {
-            setup: Setup {
-                experiment: "push-task".into(),
-                model: "gate".into(),
-                mode: "lockstep".into(),
-                seed: 1,
-            },
+            setup: Setup::for_tests("push-task", "gate"),
             variant: variant.as_str().into(),
             folds: 2,
             train_runs: train_runs.to_vec(),

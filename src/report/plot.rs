@@ -1087,12 +1087,7 @@ mod tests {
             })
             .collect();
         PushReport {
-            setup: Setup {
-                experiment: "push-task".into(),
-                model: "gate".into(),
-                mode: "lockstep".into(),
-                seed: 1,
-            },
+            setup: Setup::for_tests("push-task", "gate"),
             variant: "random".into(),
             folds,
             train_runs: train_runs.to_vec(),
@@ -1165,12 +1160,7 @@ mod tests {
         };
         let runs: Vec<MttRun> = (0..runs_per_target).map(run).collect();
         MttReport {
-            setup: Setup {
-                experiment: "move-to-target".into(),
-                model: "gate".into(),
-                mode: "lockstep".into(),
-                seed: 1,
-            },
+            setup: Setup::for_tests("move-to-target", "gate"),
             repetitions: runs_per_target,
             max_steps: 3000,
             targets: vec![
