@@ -25,6 +25,7 @@ enum Command {
     Experiment(cli::experiment::ExperimentArgs),
     Learn(cli::learn::LearnArgs),
     View(cli::view::ViewArgs),
+    Report(cli::report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +41,7 @@ fn main() -> ExitCode {
         Command::Experiment(args) => cli::experiment::run(args),
         Command::Learn(args) => cli::learn::run(args),
         Command::View(args) => cli::view::run(args),
+        Command::Report(args) => cli::report::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -84,6 +84,11 @@ struct WorldArgs {
     /// Also write the results as JSON to FILE.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+
+    /// Also write the figures (PNG and SVG) into DIR, created if needed.
+    /// `pushlearn report plot FILE.json` draws them again from saved JSON.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -214,6 +219,27 @@ impl WorldArgs {
         }
         Ok(())
     }
+
+    /// Checks before the experiment runs that the figure directory can be
+    /// created, so that a typo does not cost a whole run.
+    fn check_plots(&self) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
+        }
+        Ok(())
+    }
+
+    fn write_plots(
+        &self,
+        plot: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>, report::plot::PlotError>,
+    ) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            let written = plot(dir)?;
+            eprintln!("wrote {} figures to {}", written.len(), dir.display());
+        }
+        Ok(())
+    }
 }
 
 /// A progress bar on stderr, hidden when stdout is not a terminal (reports
@@ -279,6 +305,7 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
         return draft_tables(args);
     }
     let variant = args.variant;
+    args.world.check_plots()?;
     let plan = args.world.plan(args.model, variant.scene())?;
     if variant == Variant::ConstantFeedback {
         if args.train_runs.is_some() {
@@ -288,6 +315,8 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
             args.model
                 .dispatch(&args.options, LOW_RATE_HZ, Feedback { plan: &plan })??;
         args.world.write_json(&report)?;
+        args.world
+            .write_plots(|dir| report::plot::feedback(&report, args.model, dir))?;
         let mut out = std::io::stdout().lock();
         table::feedback(&mut out, &report, args.model)?;
         return Ok(out.flush()?);
@@ -316,6 +345,8 @@ fn push_task(args: &PushTaskArgs) -> Result<()> {
     )??;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::push(&report, args.model, dir))?;
     let mut out = std::io::stdout().lock();
     table::push(&mut out, &report, args.model)?;
     draft::keypoint_section(&mut out, &report)?;
@@ -389,6 +420,7 @@ fn draft_tables(args: &PushTaskArgs) -> Result<()> {
 }
 
 fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
+    args.world.check_plots()?;
     let plan = args.world.plan(args.model, "one_block")?;
     let targets = if args.target.is_empty() {
         TARGETS.to_vec()
@@ -410,6 +442,8 @@ fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
     )??;
     bar.finish_and_clear();
     args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::move_to_target(&report, args.model, dir))?;
     let mut out = std::io::stdout().lock();
     table::move_to_target(&mut out, &report, args.model)?;
     Ok(out.flush()?)

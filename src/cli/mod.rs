@@ -3,6 +3,7 @@
 pub mod ctl;
 pub mod experiment;
 pub mod learn;
+pub mod report;
 pub mod view;
 
 /// Whether `err` comes from writing to a closed stdout pipe.

@@ -132,6 +132,44 @@ pub struct MttRun {
     pub ori_err: f64,
     /// The block's pose in the last message.
     pub final_block: ObjectState,
+    /// The block's error to the target during the run, for the figures.
+    #[serde(default)]
+    pub trace: ErrorTrace,
+}
+
+/// Messages between two points of an [`ErrorTrace`].
+pub const TRACE_EVERY: u64 = 10;
+
+/// The block's position and orientation error to the target on every
+/// [`TRACE_EVERY`]th message of a test run (steps 0, 10, 20, …) and on the
+/// one that ended it; rounded to 0.1 mm and 0.1 mrad, which is finer than
+/// any figure shows and keeps the JSON small.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ErrorTrace {
+    /// Steps (actions sent before the message) of the points.
+    pub steps: Vec<u64>,
+    pub pos_err: Vec<f64>,
+    pub ori_err: Vec<f64>,
+}
+
+impl ErrorTrace {
+    fn push(&mut self, step: u64, (pos_err, ori_err): (f64, f64)) {
+        let round = |v: f64| (v * 1e4).round() / 1e4;
+        self.steps.push(step);
+        self.pos_err.push(round(pos_err));
+        self.ori_err.push(round(ori_err));
+    }
+}
+
+/// The block's distance to the target and `|wrap(θ − θ_t)|` (§7.6), NaN
+/// without a block.
+fn target_errors(block: Option<ObjectState>, target: ObjectState) -> (f64, f64) {
+    block.map_or((f64::NAN, f64::NAN), |b| {
+        (
+            (b.x - target.x).hypot(b.y - target.y),
+            wrapped_angle_error(b.theta, target.theta),
+        )
+    })
 }
 
 /// The §4.3 handler for one job.
@@ -148,6 +186,7 @@ pub struct MttTask {
     pub nodes_after_test: Option<ModelStats>,
     /// Why the job could not go on (a refused target).
     pub error: Option<learner::TargetError>,
+    trace: ErrorTrace,
 }
 
 impl MttTask {
@@ -162,6 +201,7 @@ impl MttTask {
             nodes_after_training: None,
             nodes_after_test: None,
             error: None,
+            trace: ErrorTrace::default(),
         }
     }
 }
@@ -207,31 +247,26 @@ impl<M: Model> Task<M> for MttTask {
         let action = model.act(&mut self.rng);
         core.last_action = Some(action);
         core.send_move(action);
-        if model.has_target() && core.step_counter <= self.max_steps {
+        let steps = core.step_counter - 1;
+        let block = M::poses(world).blocks.get(&BLUE_ID).copied();
+        let errors = target_errors(block, self.target);
+        let running = model.has_target() && core.step_counter <= self.max_steps;
+        if !running || steps % TRACE_EVERY == 0 {
+            self.trace.push(steps, errors);
+        }
+        if running {
             return;
         }
         core.run_started = false;
         self.nodes_after_test = Some(model.stats());
-        let steps = core.step_counter - 1;
-        let block = M::poses(world).blocks.get(&BLUE_ID).copied();
-        let (pos_err, ori_err, final_block) = match block {
-            Some(b) => (
-                (b.x - self.target.x).hypot(b.y - self.target.y),
-                wrapped_angle_error(b.theta, self.target.theta),
-                b,
-            ),
-            None => (
-                f64::NAN,
-                f64::NAN,
-                ObjectState::new(f64::NAN, f64::NAN, f64::NAN),
-            ),
-        };
+        let (pos_err, ori_err) = errors;
         self.run = Some(MttRun {
             reached: steps < self.max_steps,
             steps,
             pos_err,
             ori_err,
-            final_block,
+            final_block: block.unwrap_or(ObjectState::new(f64::NAN, f64::NAN, f64::NAN)),
+            trace: std::mem::take(&mut self.trace),
         });
         core.finish();
     }
@@ -398,6 +433,11 @@ mod tests {
         // distance from its start to target 1.
         assert!((run.pos_err - (0.6f64).hypot(0.45)).abs() < 1e-9);
         assert!((run.ori_err - 2.1).abs() < 1e-9);
+        // Steps 0, 10, 20, 30 and the last one, 39.
+        assert_eq!(run.trace.steps, [0, 10, 20, 30, 39]);
+        assert_eq!(run.trace.pos_err.len(), 5);
+        assert!(run.trace.pos_err.iter().all(|&e| (e - 0.75).abs() < 1e-12));
+        assert!(run.trace.ori_err.iter().all(|&e| (e - 2.1).abs() < 1e-12));
     }
 
     #[test]
@@ -430,6 +470,7 @@ mod tests {
             pos_err,
             ori_err: pos_err / 10.0,
             final_block: ObjectState::default(),
+            trace: ErrorTrace::default(),
         };
         let s = TargetSummary::of(&[
             run(true, 1000, 0.0),

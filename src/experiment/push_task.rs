@@ -270,6 +270,19 @@ pub struct PushTask {
     previous_real: Option<Poses>,
     /// Selector samples of the test runs' real transitions.
     pub selection: SelectionCount,
+    /// The actual and predicted end configurations of the test runs, for
+    /// the snapshot figures; `None` where `errors` is `None`.
+    pub end_poses: Vec<Option<EndPoses>>,
+}
+
+/// A test run's end: the real state of the message that ended it and the
+/// chained prediction scored against it (`experiments.md` §7.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EndPoses {
+    /// The run's start x of the actuator.
+    pub x0: f64,
+    pub actual: Poses,
+    pub predicted: Poses,
 }
 
 /// How often the model's AC selector chose, for the real state and action
@@ -320,6 +333,7 @@ impl PushTask {
             keypoints_run: KeyPointRun::default(),
             previous_real: None,
             selection: SelectionCount::default(),
+            end_poses: Vec::new(),
         }
     }
 
@@ -360,13 +374,20 @@ impl<M: Model> Task<M> for PushTask {
                 let testing = self.train_run == self.n_train && self.test_run < n_test;
                 if testing {
                     // Scored before `reset_world` forgets the prediction (§7.2).
-                    let predicted = core.stepper.last_prediction().map(M::poses);
                     let actual = M::poses(world);
+                    let predicted = core.stepper.last_prediction().map(M::poses);
                     self.errors
                         .push(predicted.as_ref().map(|p| RunErrors::score(&actual, p)));
-                    self.score_test_message(model, actual, predicted);
+                    self.score_test_message(model, actual.clone(), predicted.clone());
                     self.keypoints.push(std::mem::take(&mut self.keypoints_run));
                     self.previous_real = None;
+                    let x0 = self.test_positions.get(self.test_run).copied();
+                    self.end_poses
+                        .push(predicted.zip(x0).map(|(predicted, x0)| EndPoses {
+                            x0,
+                            actual,
+                            predicted,
+                        }));
                 }
                 core.reset_world();
                 core.run_started = false;
@@ -419,6 +440,8 @@ pub struct PushJobResult {
     pub training_starts: Vec<f64>,
     /// Per test position, in order.
     pub errors: Vec<RunErrors>,
+    /// Per test position, in order.
+    pub end_poses: Vec<EndPoses>,
     pub nodes: ModelStats,
     pub counters: Counters,
     pub timing: super::link::Timing,
@@ -451,11 +474,14 @@ impl PushJobResult {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        // Present wherever an error is (both come from the same prediction).
+        let end_poses = task.end_poses.into_iter().flatten().collect();
         Ok(Self {
             n_train: job.n_train,
             fold: job.fold,
             training_starts: task.training_starts,
             errors,
+            end_poses,
             nodes: task.nodes.unwrap_or_default(),
             counters,
             timing,
@@ -519,6 +545,15 @@ pub struct CurveEntry {
     /// (interaction model only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub selection: Option<SelectionCount>,
+    /// Per fold (in fold order), the mean actuator error over its test
+    /// runs: the actuator prediction of one trained model, whose spread
+    /// over folds the learning-curve "std" hides.
+    #[serde(default)]
+    pub actuator_pos_err_by_fold: Vec<f64>,
+    /// The first fold's test-run end configurations, for the snapshot
+    /// figures.
+    #[serde(default)]
+    pub end_poses: Vec<EndPoses>,
 }
 
 /// Per body, the mean of each key-point score over `runs`.
@@ -627,6 +662,10 @@ pub fn summarise(
                 .then(|| block_curve(&positions, x0, RED_ID))
                 .transpose()?;
             let stats: Vec<&ModelStats> = jobs.iter().map(|j| &j.nodes).collect();
+            let actuator_pos_err_by_fold = jobs
+                .iter()
+                .map(|j| MeanStd::of(&j.errors.iter().map(|e| e.actuator).collect::<Vec<_>>()).mean)
+                .collect();
             Ok(CurveEntry {
                 train_runs: n,
                 blue,
@@ -642,6 +681,8 @@ pub fn summarise(
                         a
                     })
                     .filter(|c| c.samples > 0),
+                actuator_pos_err_by_fold,
+                end_poses: jobs[0].end_poses.clone(),
             })
         })
         .collect()
@@ -725,6 +766,12 @@ mod tests {
         }
         // The probe has no AC selector: nothing sampled.
         assert_eq!(task.selection, SelectionCount::default());
+        // Each scored run keeps its end: the real state and the prediction.
+        assert_eq!(task.end_poses.len(), 21);
+        let last = task.end_poses[20].as_ref().unwrap();
+        assert!((last.x0 - 0.35).abs() < 1e-12);
+        assert!((last.actual.actuator.y - last.predicted.actuator.y).abs() < 1e-9);
+        assert!(last.actual.actuator.y > 0.7, "{last:?}");
         // Every run: one resync. A test run also "updates" on its first
         // message (with training off that only moves the chain forward).
         assert_eq!(model.resets, 2 + 21);
@@ -874,6 +921,7 @@ mod tests {
             fold,
             training_starts: vec![0.0; n_train],
             errors,
+            end_poses: Vec::new(),
             nodes: ModelStats::default(),
             counters: Counters::default(),
             timing: Default::default(),

@@ -7,6 +7,7 @@
 //! the run went (`run`: wall-clock times, too-slow counts).
 
 pub mod draft;
+pub mod plot;
 pub mod reference;
 pub mod table;
 
@@ -86,6 +87,19 @@ pub struct Setup {
     pub seed: u64,
 }
 
+#[cfg(test)]
+impl Setup {
+    /// The setup of the tests' reports: `model` in lock-step, seed 1.
+    pub(crate) fn for_tests(experiment: &str, model: &str) -> Self {
+        Self {
+            experiment: experiment.into(),
+            model: model.into(),
+            mode: "lockstep".into(),
+            seed: 1,
+        }
+    }
+}
+
 /// `pushlearn experiment push-task` (all variants but constant feedback).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PushReport {
@@ -129,6 +143,65 @@ pub struct MttReport {
     pub max_steps: u64,
     pub targets: Vec<TargetEntry>,
     pub run: RunInfo,
+}
+
+/// Any report document, as read back from its JSON.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyReport {
+    Push(PushReport),
+    Feedback(FeedbackReport),
+    MoveToTarget(MttReport),
+}
+
+/// Why a saved report cannot be read back.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("not JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("not a pushlearn report: no \"experiment\" key")]
+    NoExperiment,
+    #[error("unknown experiment {0:?} (expected push-task or move-to-target)")]
+    UnknownExperiment(String),
+}
+
+impl AnyReport {
+    /// Parses a document written by `--json`, telling the kinds apart by
+    /// their `experiment` and `variant` keys.
+    ///
+    /// # Errors
+    /// Not JSON, or not one of the report documents.
+    pub fn from_json(text: &str) -> Result<Self, ReadError> {
+        let value: serde_json::Value = serde_json::from_str(text)?;
+        let experiment = value
+            .get("experiment")
+            .and_then(serde_json::Value::as_str)
+            .ok_or(ReadError::NoExperiment)?;
+        Ok(match experiment {
+            crate::experiment::push_task::EXPERIMENT => {
+                if value.get("variant").and_then(serde_json::Value::as_str)
+                    == Some(crate::experiment::push_task::Variant::ConstantFeedback.as_str())
+                {
+                    AnyReport::Feedback(serde_json::from_value(value)?)
+                } else {
+                    AnyReport::Push(serde_json::from_value(value)?)
+                }
+            }
+            crate::experiment::move_to_target::EXPERIMENT => {
+                AnyReport::MoveToTarget(serde_json::from_value(value)?)
+            }
+            other => return Err(ReadError::UnknownExperiment(other.to_owned())),
+        })
+    }
+
+    /// The report's setup (experiment, model, mode, seed).
+    #[must_use]
+    pub fn setup(&self) -> &Setup {
+        match self {
+            AnyReport::Push(r) => &r.setup,
+            AnyReport::Feedback(r) => &r.setup,
+            AnyReport::MoveToTarget(r) => &r.setup,
+        }
+    }
 }
 
 /// Writes `report` as pretty JSON to `path`.
@@ -185,6 +258,7 @@ mod tests {
             fold,
             training_starts: vec![0.0; n_train],
             errors,
+            end_poses: Vec::new(),
             nodes,
             counters: Counters {
                 messages: 100,
@@ -209,12 +283,7 @@ mod tests {
             .flat_map(|&n| (0..2).map(move |f| job(n, f, variant == Variant::TwoObjects)))
             .collect();
         PushReport {
-            setup: Setup {
-                experiment: "push-task".into(),
-                model: "gate".into(),
-                mode: "lockstep".into(),
-                seed: 1,
-            },
+            setup: Setup::for_tests("push-task", "gate"),
             variant: variant.as_str().into(),
             folds: 2,
             train_runs: train_runs.to_vec(),
@@ -275,6 +344,28 @@ mod tests {
     }
 
     #[test]
+    fn saved_reports_are_read_back_by_kind() {
+        let report = push_report(Variant::Random, &[1, 3]);
+        let text = serde_json::to_string(&report).unwrap();
+        assert_eq!(
+            AnyReport::from_json(&text).unwrap(),
+            AnyReport::Push(report)
+        );
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "juggling"}"#),
+            Err(ReadError::UnknownExperiment(e)) if e == "juggling"
+        ));
+        assert!(matches!(
+            AnyReport::from_json("{}"),
+            Err(ReadError::NoExperiment)
+        ));
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "move-to-target"}"#),
+            Err(ReadError::Json(_))
+        ));
+    }
+
+    #[test]
     fn two_object_json_adds_the_red_block() {
         let v = serde_json::to_value(push_report(Variant::TwoObjects, &[6])).unwrap();
         let r = &v["results"][0];
@@ -290,6 +381,7 @@ mod tests {
             pos_err: 0.5,
             ori_err: 0.1,
             final_block: ObjectState::new(0.1, 0.2, 0.3),
+            trace: Default::default(),
         };
         let report = MttReport {
             setup: Setup {

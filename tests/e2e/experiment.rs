@@ -93,9 +93,30 @@ fn push_task_over_sockets_is_plausible_and_identical_for_any_worker_count() {
         "--folds",
         "2",
     ];
+    let figures = dir.file("figures");
     let mut args = reduced.to_vec();
-    args.extend_from_slice(&["--workers", "2", "--json", &two]);
+    args.extend_from_slice(&["--workers", "2", "--json", &two, "--plots", &figures]);
     let table = succeeded(&experiment(&args));
+    // The figures, and the same ones again from the saved JSON.
+    let again = dir.file("again");
+    let listed = succeeded(&pushlearn(&["report", "plot", &two, "--out", &again]));
+    for stem in [
+        "curve",
+        "curve-interacting",
+        "positions-n1",
+        "positions-n3",
+        "snapshots-n1",
+        "snapshots-n3",
+    ] {
+        for ext in ["png", "svg"] {
+            let name = format!("push-task-gate-random-{stem}.{ext}");
+            let first = std::fs::read(Path::new(&figures).join(&name)).expect(&name);
+            assert!(first.len() > 1000, "{name}");
+            assert!(listed.contains(&name), "{name} not in\n{listed}");
+            let redrawn = std::fs::read(Path::new(&again).join(&name)).expect(&name);
+            assert_eq!(first, redrawn, "{name} differs when redrawn from JSON");
+        }
+    }
     assert!(table.contains("Learning curve"), "{table}");
     assert!(
         table.contains("[0.1405 ± 0.1292]"),
@@ -200,8 +221,18 @@ fn move_to_target_over_sockets_reports_each_run() {
         "1",
         "--json",
         &json,
+        "--plots",
+        &dir.file("figures"),
     ]));
     assert!(table.contains("Move to Target"), "{table}");
+    for name in ["errors", "final"] {
+        for ext in ["png", "svg"] {
+            let path = dir
+                .0
+                .join(format!("figures/move-to-target-gate-{name}.{ext}"));
+            assert!(path.is_file(), "{}", path.display());
+        }
+    }
     let v = read_json(&json);
     assert_eq!(v["experiment"], "move-to-target");
     let t = &v["targets"][0];
@@ -215,6 +246,20 @@ fn move_to_target_over_sockets_reports_each_run() {
     let pos = number(&run["pos_err"]);
     assert!(pos.is_finite() && pos > 0.01, "{run}");
     assert!((0.0..=std::f64::consts::PI).contains(&number(&run["ori_err"])));
+    // The error trace: every 10th step from 0, and the last one.
+    let trace_steps: Vec<u64> = run["trace"]["steps"]
+        .as_array()
+        .expect("trace")
+        .iter()
+        .filter_map(Value::as_u64)
+        .collect();
+    assert_eq!(trace_steps.first(), Some(&0));
+    assert_eq!(trace_steps.last(), Some(&steps));
+    let last_pos = run["trace"]["pos_err"]
+        .as_array()
+        .and_then(|v| v.last())
+        .map(number);
+    assert!(last_pos.is_some_and(|p| (p - pos).abs() < 1e-4), "{run}");
     assert_eq!(t["summary"]["runs"], 1);
 }
 
