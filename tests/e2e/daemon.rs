@@ -39,8 +39,13 @@ impl Daemon {
     /// Starts `pushlearn-sim serve --port 0 ARGS...` and waits for its
     /// `listening on` line.
     pub fn start(args: &[&str]) -> Daemon {
+        Daemon::start_on(0, args)
+    }
+
+    /// [`Daemon::start`] on `port` (e.g. a restarted world's).
+    pub fn start_on(port: u16, args: &[&str]) -> Daemon {
         let mut child = Command::new(binary())
-            .args(["serve", "--port", "0"])
+            .args(["serve", "--port", &port.to_string()])
             .args(args)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -84,8 +89,8 @@ impl Daemon {
         daemon
     }
 
-    /// Kills the daemon and returns its log.
-    fn stop(&mut self) -> String {
+    /// Kills the daemon (SIGKILL) and returns its log.
+    pub fn stop(&mut self) -> String {
         let _ = self.child.kill();
         let _ = self.child.wait();
         self.logs

@@ -12,3 +12,4 @@ mod ctl;
 mod docs;
 mod experiment;
 mod python;
+mod reliability;
