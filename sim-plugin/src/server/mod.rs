@@ -26,6 +26,7 @@ mod convert;
 mod gate;
 mod outbox;
 mod physics;
+pub mod untrusted;
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
