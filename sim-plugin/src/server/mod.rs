@@ -352,6 +352,16 @@ impl ServerHandle {
         self.shared.counters.snapshot()
     }
 
+    /// Fault injection for tests, reachable from no client message or flag:
+    /// after its next step the world finds `body` with a non-finite state,
+    /// as when the physics blows up (`docs/protocol.md` §6).
+    #[doc(hidden)]
+    pub fn provoke_blow_up(&self, body: &str) {
+        self.shared
+            .gate
+            .inject(gate::ToPhysics::BlowUp(body.to_owned()));
+    }
+
     /// Resolves when the daemon stops by itself (the physics thread failed)
     /// or [`ServerHandle::shutdown`] began.
     pub async fn stopped(&self) {

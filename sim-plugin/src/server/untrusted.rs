@@ -220,8 +220,14 @@ mod tests {
 
     /// Every kind of command with hostile values.
     fn message() -> impl Strategy<Value = pb::ClientMessage> {
-        (0u8..8, any::<u64>(), name(), [float(), float(), float(), float()], any::<u32>()).prop_map(
-            |(kind, seq, name, v, n)| match kind {
+        (
+            0u8..8,
+            any::<u64>(),
+            name(),
+            [float(), float(), float(), float()],
+            any::<u32>(),
+        )
+            .prop_map(|(kind, seq, name, v, n)| match kind {
                 0 => pb::ClientMessage::move_(seq, v[0], v[1]),
                 1 => pb::ClientMessage::set_pose(seq, name, [v[0], v[1], v[2]], v[3]),
                 2 => pb::ClientMessage::reset(seq),
@@ -230,8 +236,7 @@ mod tests {
                 5 => pb::ClientMessage::publish_rate(seq, n % 1200),
                 6 => pb::ClientMessage::latency_seed(seq, u64::from(n)),
                 _ => pb::ClientMessage::advance(seq),
-            },
-        )
+            })
     }
 
     fn stream(messages: &[pb::ClientMessage]) -> Vec<u8> {
