@@ -98,9 +98,8 @@ fn parse_action(text: &str) -> Result<Action, String> {
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
-    text.parse::<f64>()
+    parse_seconds_or_zero(text)
         .ok()
-        .and_then(|s| Duration::try_from_secs_f64(s).ok())
         .filter(|d| !d.is_zero())
         .ok_or_else(|| format!("'{text}' is not a positive number of seconds"))
 }
