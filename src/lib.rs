@@ -7,6 +7,7 @@
 //! * [`frame`]: world states as the learner sees them;
 //! * [`experiment`]: the thesis's experiments over the sockets;
 //! * [`learn`]: the learner daemon;
+//! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
 //! * [`models`]: the learners by name;
 //! * [`report`]: JSON documents and terminal tables beside the thesis's numbers;
 //! * [`view`]: the browser viewer (`pushlearn view`).
@@ -15,6 +16,7 @@ pub mod client;
 pub mod experiment;
 pub mod frame;
 pub mod learn;
+pub mod load;
 pub mod models;
 pub mod report;
 pub mod view;

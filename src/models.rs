@@ -161,6 +161,20 @@ impl ModelOptions {
         self.flags.iter().fold(self.config, |n, f| n | f.bit())
     }
 
+    /// The options in one canonical line (the bits as one number, however
+    /// they were given), e.g. stored with a learner's memory so that it is
+    /// never resumed under other options.
+    #[must_use]
+    pub fn canonical(&self) -> String {
+        format!(
+            "config {}, eta {}, selector {}, no-angular-velocity {}",
+            self.config_number(),
+            self.eta,
+            self.selector.as_str(),
+            self.no_angular_velocity
+        )
+    }
+
     /// Whether LOWFREQ is set.
     #[must_use]
     pub fn low_frequency(&self) -> bool {

@@ -223,6 +223,8 @@ pub struct World {
     /// Tag pairs (smaller first) the collider reported touching in the last
     /// step.
     touching: Vec<(u32, u32)>,
+    /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
+    blow_up: Option<usize>,
 }
 
 impl World {
@@ -279,6 +281,7 @@ impl World {
             publish_every: STEPS_PER_SECOND / scene.publish_rate_hz,
             ghosts: Vec::new(),
             touching: Vec::new(),
+            blow_up: None,
         };
         // The same routine as every Reset, so that a fresh world and a reset
         // one agree bit for bit (including ODE's internal geom order).
@@ -389,6 +392,21 @@ impl World {
         Ok(())
     }
 
+    /// Fault injection for tests, reachable from no command, flag or
+    /// message: the next step leaves `name` with a non-finite velocity, as
+    /// a diverging simulation would, to exercise the divergence reset of
+    /// [`World::step`]. (Driving ODE itself there is no option: values large
+    /// enough to overflow make it abort the process, hence the scene limits.)
+    #[doc(hidden)]
+    pub fn provoke_blow_up(&mut self, name: &str) -> Result<(), CommandError> {
+        let i = self
+            .scene
+            .body_index(name)
+            .ok_or_else(|| CommandError::UnknownBody(name.to_owned()))?;
+        self.blow_up = Some(i);
+        Ok(())
+    }
+
     fn set_ghost(
         &mut self,
         name: String,
@@ -454,6 +472,11 @@ impl World {
             surfaces.get(a, b)
         })?;
         self.step_count += 1;
+        if let Some(i) = self.blow_up.take() {
+            if let Ok(mut body) = self.ode.body_mut(self.bodies[i].handle) {
+                body.poison_for_test();
+            }
+        }
         if let Some(bad) = self.bodies.iter().find(|b| {
             self.ode.body(b.handle).map_or(true, |body| {
                 !(body.position().iter())
@@ -603,6 +626,36 @@ fn normalise(q: [f64; 4]) -> Option<[f64; 4]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_blow_up_resets_the_world_and_names_the_body() {
+        let mut world = World::new(&Scene::builtin("one_block").unwrap()).unwrap();
+        world
+            .apply(Command::Actuator {
+                mode: ActuatorMode::Move,
+                velocity: [0.0, 0.5, 0.0],
+            })
+            .unwrap();
+        for _ in 0..25 {
+            world.step().unwrap();
+        }
+        world.provoke_blow_up("blockA").unwrap();
+        let err = world.step().unwrap_err();
+        assert!(
+            matches!(&err, StepError::Diverged { step: 26, body } if body == "blockA"),
+            "{err}"
+        );
+        // Reset: back at the start, every value finite, stepping on.
+        assert_eq!(world.step_count(), 0);
+        let start = World::new(&Scene::builtin("one_block").unwrap())
+            .unwrap()
+            .snapshot();
+        assert_eq!(world.snapshot().bodies, start.bodies);
+        for _ in 0..10 {
+            world.step().unwrap();
+        }
+        assert_eq!(world.step_count(), 10);
+    }
 
     #[test]
     fn speed_clamp_keeps_direction() {

@@ -1,12 +1,15 @@
 //! `pushlearn learn`: the learner daemon.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
 use learner::{Action, Model, ObjectState};
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
-use pushlearn::learn::{serve, Learner, Policy, ServeOptions, Stop, WorkSummary};
+use pushlearn::learn::reconnect::{serve_resilient, Reconnect};
+use pushlearn::learn::state::{Durable, Opened, Settings, DEFAULT_SNAPSHOT_EVERY};
+use pushlearn::learn::{Learner, OnState, Policy, ServeOptions, Stop, WorkSummary};
 use pushlearn::models::{ModelKind, ModelOptions, WithModel};
 
 use super::experiment::{parse_numbers, parse_pose};
@@ -22,12 +25,18 @@ use super::experiment::{parse_numbers, parse_pose};
 /// view`). A lock-step world is advanced after every state; in a
 /// realtime world the work per message is measured against the 2/f budget
 /// (20 ms at 100 Hz). Stop with Ctrl-C: a summary follows.
+///
+/// With --state DIR the learner's memory is kept on disk (snapshots plus a
+/// checksummed journal of every state, docs/reliability.md): a daemon
+/// killed at any moment resumes where it left off. If the world goes away
+/// the daemon reconnects with backoff for up to --reconnect-for seconds.
 #[derive(Debug, Args)]
 #[command(
     group = clap::ArgGroup::new("policy").required(true).args(["action", "target"]),
     after_help = "Examples:\n  \
         pushlearn learn --action 0,0.5 --shadows\n  \
-        pushlearn learn --model interaction --target 0.6,0.7,-2.1 --report-every 5"
+        pushlearn learn --model interaction --target 0.6,0.7,-2.1 --report-every 5\n  \
+        pushlearn learn --action 0,0.5 --state ~/.pushlearn/gate-memory"
 )]
 pub struct LearnArgs {
     /// Address of the world daemon.
@@ -65,6 +74,27 @@ pub struct LearnArgs {
 
     #[command(flatten)]
     options: ModelOptions,
+
+    /// Keep the learner's memory in DIR (created if missing) and resume from
+    /// it: a snapshot plus a journal of every state since.
+    #[arg(long, value_name = "DIR")]
+    state: Option<PathBuf>,
+
+    /// With --state: write a snapshot every N journal records.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_SNAPSHOT_EVERY,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    snapshot_every: u64,
+
+    /// Reconnect to a lost world for up to SECONDS (0: stop instead).
+    #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_seconds_or_zero)]
+    reconnect_for: Duration,
+}
+
+fn parse_seconds_or_zero(text: &str) -> Result<Duration, String> {
+    text.parse::<f64>()
+        .ok()
+        .and_then(|s| Duration::try_from_secs_f64(s).ok())
+        .ok_or_else(|| format!("'{text}' is not a number of seconds"))
 }
 
 fn parse_action(text: &str) -> Result<Action, String> {
@@ -73,9 +103,8 @@ fn parse_action(text: &str) -> Result<Action, String> {
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
-    text.parse::<f64>()
+    parse_seconds_or_zero(text)
         .ok()
-        .and_then(|s| Duration::try_from_secs_f64(s).ok())
         .filter(|d| !d.is_zero())
         .ok_or_else(|| format!("'{text}' is not a positive number of seconds"))
 }
@@ -121,7 +150,7 @@ impl<'a> WithModel for Daemon<'a> {
 
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         let Daemon {
-            mut client,
+            client,
             policy,
             args,
         } = self;
@@ -131,41 +160,91 @@ impl<'a> WithModel for Daemon<'a> {
                 "pushlearn learn: {} model on scene {} ({} Hz, {}); Ctrl-C to stop",
                 args.model, hello.scene, hello.publish_rate, hello.timing_mode
             );
-            let mut learner = Learner::new(untrained, policy, args.shadows, args.seed);
-            let options = ServeOptions {
-                max_messages: args.messages,
-                report_every: args.report_every,
+            let fresh = || Learner::new(untrained, policy, args.shadows, args.seed);
+            let Some(dir) = &args.state else {
+                let mut learner = fresh();
+                attached(client, &mut learner, args).await?;
+                return finish(&learner, policy);
             };
-            let (stop, summary) = serve(&mut client, &mut learner, options, |s: &WorkSummary| {
-                eprintln!("{s}");
-            })
-            .await?;
-            println!(
-                "stopped ({}): {summary}",
-                match stop {
-                    Stop::Interrupted => "interrupted",
-                    Stop::MessageLimit => "message limit",
+            let settings = Settings {
+                model: args.model.to_string(),
+                publish_rate_hz: hello.publish_rate,
+                policy,
+                shadows: args.shadows,
+                seed: args.seed,
+                model_options: args.options.canonical(),
+            };
+            let (mut durable, opened) = Durable::open(dir, &settings, fresh, args.snapshot_every)
+                .with_context(|| {
+                format!("cannot use the learner memory in {}", dir.display())
+            })?;
+            match &opened {
+                Opened::Fresh => eprintln!("memory: new, in {}", dir.display()),
+                Opened::Resumed(recovery) => {
+                    eprintln!("memory: resumed from {}: {recovery}", dir.display());
                 }
-            );
-            if learner.parse_errors > 0 {
-                println!("{} world states could not be parsed", learner.parse_errors);
             }
-            if matches!(policy, Policy::Target(_)) {
-                println!(
-                    "target {}",
-                    if learner.reached() {
-                        "reached"
-                    } else {
-                        "not reached"
-                    }
-                );
-            }
-            println!(
-                "model: {}",
-                serde_json::to_string(&learner.model().stats())?
-            );
-            client.close().await?;
+            attached(client, &mut durable, args).await?;
+            finish(durable.learner(), policy)?;
+            let stored = durable.close()?;
+            println!("memory: {stored} records on disk in {}", dir.display());
             Ok(())
         })
     }
+}
+
+/// Serves until stopped, reconnecting as --reconnect-for allows.
+async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArgs) -> Result<()> {
+    let options = ServeOptions {
+        max_messages: args.messages,
+        report_every: args.report_every,
+    };
+    let reconnect = Reconnect::new(
+        args.connect.clone(),
+        (!args.reconnect_for.is_zero()).then_some(args.reconnect_for),
+    );
+    let served = serve_resilient(client, learner, options, &reconnect, |s: &WorkSummary| {
+        eprintln!("{s}");
+    })
+    .await?;
+    println!(
+        "stopped ({}): {}",
+        match served.stop {
+            Stop::Interrupted => "interrupted",
+            Stop::MessageLimit => "message limit",
+        },
+        served.summary
+    );
+    if served.reconnects > 0 || served.world_errors > 0 {
+        println!(
+            "{} states over {} reconnection(s); {} physics blow-up(s) reported by the world",
+            served.states, served.reconnects, served.world_errors
+        );
+    }
+    if let Some(client) = served.client {
+        client.close().await?;
+    }
+    Ok(())
+}
+
+/// The end-of-run report.
+fn finish<M: Model>(learner: &Learner<M>, policy: Policy) -> Result<()> {
+    if learner.parse_errors > 0 {
+        println!("{} world states could not be parsed", learner.parse_errors);
+    }
+    if matches!(policy, Policy::Target(_)) {
+        println!(
+            "target {}",
+            if learner.reached() {
+                "reached"
+            } else {
+                "not reached"
+            }
+        );
+    }
+    println!(
+        "model: {}",
+        serde_json::to_string(&learner.model().stats())?
+    );
+    Ok(())
 }

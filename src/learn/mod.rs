@@ -23,8 +23,11 @@ use crate::frame::frame_from_state;
 use crate::wire::pb::{self, client_message::Payload};
 use crate::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
 
+pub mod reconnect;
+pub mod state;
+
 /// How the daemon chooses its actions.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Policy {
     /// Always the same velocity.
     Fixed(Action),
@@ -39,10 +42,45 @@ pub enum LearnError {
     Client(#[from] ClientError),
     #[error("the model refused the target: {0}")]
     Target(#[from] TargetError),
+    #[error(transparent)]
+    State(#[from] state::StateError),
+}
+
+/// What [`serve`] hands each world state to: a [`Learner`], or one that
+/// also journals what it learns ([`state::Durable`]).
+pub trait OnState {
+    /// Handles one world state; returns the commands to send.
+    ///
+    /// # Errors
+    /// The model refuses its target, or the learner's memory cannot be kept.
+    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError>;
+
+    /// [`Learner::resync`].
+    ///
+    /// # Errors
+    /// The learner's memory cannot be kept.
+    fn resync(&mut self) -> Result<(), LearnError>;
+}
+
+impl<M: Model> OnState for Learner<M> {
+    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError> {
+        Ok(Learner::on_state(self, frame)?)
+    }
+
+    fn resync(&mut self) -> Result<(), LearnError> {
+        Learner::resync(self);
+        Ok(())
+    }
 }
 
 /// One model's online loop, without I/O.
-#[derive(Debug)]
+///
+/// Everything here influences future predictions or actions, so all of it is
+/// serialised into the daemon's persistent memory (`docs/reliability.md`):
+/// the model (which keeps the previous world itself), the generator's
+/// position, the action in force and the target bookkeeping.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
 pub struct Learner<M: Model> {
     model: M,
     policy: Policy,
@@ -115,6 +153,13 @@ impl<M: Model> Learner<M> {
             commands.push(shadows(&predicted, target));
         }
         Ok(commands)
+    }
+
+    /// Forgets the action in force, so that the next state re-synchronises
+    /// the model instead of training it on a transition across a gap (after
+    /// a reconnect or a restart) whose action is unknown.
+    pub fn resync(&mut self) {
+        self.last_action = None;
     }
 
     fn parse_error(&mut self, err: &ParseError) {
@@ -252,9 +297,9 @@ pub enum Stop {
 ///
 /// # Errors
 /// Socket errors, a refused command, a refused target.
-pub async fn serve<M: Model>(
+pub async fn serve(
     client: &mut SimClient,
-    learner: &mut Learner<M>,
+    learner: &mut impl OnState,
     options: ServeOptions,
     mut report: impl FnMut(&WorkSummary),
 ) -> Result<(Stop, WorkSummary), LearnError> {

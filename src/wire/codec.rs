@@ -220,6 +220,23 @@ pub fn encode_frame<T: Message>(message: &T) -> Result<Bytes, WireError> {
     Ok(dst.freeze())
 }
 
+/// Decodes a whole byte stream the way a connection reads it until the peer
+/// closes: the envelopes up to the first bad frame, and that frame's error
+/// (a stream cut mid-frame is [`WireError::Truncated`]). Never panics on any
+/// input: the code path under fuzzing (`docs/reliability.md`).
+pub fn decode_stream<T: Message + Default>(bytes: &[u8]) -> (Vec<T>, Option<WireError>) {
+    let mut decoder = FrameDecoder::<T>::new();
+    let mut buf = BytesMut::from(bytes);
+    let mut out = Vec::new();
+    loop {
+        match decoder.decode_eof(&mut buf) {
+            Ok(Some(message)) => out.push(message),
+            Ok(None) => return (out, None),
+            Err(err) => return (out, Some(err)),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use bytes::BufMut;
@@ -229,13 +246,10 @@ mod tests {
     use crate::wire::pb::{ClientMessage, ServerMessage};
 
     fn decode_all<T: Message + Default>(bytes: &[u8]) -> Result<Vec<T>, WireError> {
-        let mut decoder = FrameDecoder::<T>::new();
-        let mut buf = BytesMut::from(bytes);
-        let mut out = Vec::new();
-        while let Some(message) = decoder.decode_eof(&mut buf)? {
-            out.push(message);
+        match decode_stream(bytes) {
+            (messages, None) => Ok(messages),
+            (_, Some(err)) => Err(err),
         }
-        Ok(out)
     }
 
     /// An Error envelope whose encoding is exactly `size` bytes long.

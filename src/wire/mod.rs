@@ -19,7 +19,8 @@ pub mod pb;
 pub mod validate;
 
 pub use codec::{
-    encode_frame, FrameDecoder, FrameEncoder, WireError, LENGTH_PREFIX_SIZE, MAX_FRAME_SIZE,
+    decode_stream, encode_frame, FrameDecoder, FrameEncoder, WireError, LENGTH_PREFIX_SIZE,
+    MAX_FRAME_SIZE,
 };
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;

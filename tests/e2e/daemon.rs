@@ -28,31 +28,40 @@ pub fn binary() -> PathBuf {
 /// A running `pushlearn-sim`; killed when dropped.
 pub struct Daemon {
     pub addr: SocketAddr,
-    _process: Background,
+    process: Background,
 }
 
 impl Daemon {
     /// Starts `pushlearn-sim serve --port 0 ARGS...` and waits for its
     /// `listening on` line.
     pub fn start(args: &[&str]) -> Daemon {
+        Daemon::start_on(0, args)
+    }
+
+    /// [`Daemon::start`] on `port` (e.g. a restarted world's).
+    pub fn start_on(port: u16, args: &[&str]) -> Daemon {
         let mut command = Command::new(binary());
-        command.args(["serve", "--port", "0"]).args(args);
+        command
+            .args(["serve", "--port", &port.to_string()])
+            .args(args);
         let (mut process, line) = Background::start(command, "pushlearn-sim");
         match line
             .trim_end()
             .strip_prefix("listening on ")
             .and_then(|a| a.parse().ok())
         {
-            Some(addr) => Daemon {
-                addr,
-                _process: process,
-            },
+            Some(addr) => Daemon { addr, process },
             None => panic!(
                 "pushlearn-sim {args:?} did not say where it listens (first line {line:?}); \
                  its log:\n{}",
                 process.stop()
             ),
         }
+    }
+
+    /// Kills the daemon (SIGKILL) and returns its log.
+    pub fn stop(&mut self) -> String {
+        self.process.stop()
     }
 }
 

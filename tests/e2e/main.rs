@@ -13,4 +13,5 @@ mod ctl;
 mod docs;
 mod experiment;
 mod python;
+mod reliability;
 mod viewer;

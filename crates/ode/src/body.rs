@@ -197,6 +197,17 @@ impl<'w> BodyMut<'w> {
         Ok(())
     }
 
+    /// Fault injection for tests: makes the linear velocity NaN, the state a
+    /// diverged simulation leaves behind, so that a caller's divergence
+    /// handling can be tested. Never step the world before repairing the body
+    /// (e.g. by resetting it): ODE does not guard against NaN.
+    #[doc(hidden)]
+    pub fn poison_for_test(&mut self) {
+        // SAFETY: `raw` is a live body; ODE stores the values as given and
+        // reads them only when stepping, which the caller must not do first.
+        unsafe { ode_sys::dBodySetLinearVel(self.raw, f64::NAN, f64::NAN, f64::NAN) };
+    }
+
     pub fn set_angular_velocity(&mut self, w: [f64; 3]) -> Result<(), OdeError> {
         check_finite3("angular velocity", w)?;
         // SAFETY: `raw` is a live body; the values are finite.

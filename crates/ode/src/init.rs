@@ -46,7 +46,10 @@ pub(crate) fn ensure_thread() -> Result<(), OdeError> {
     if !INIT_OK.load(Ordering::Acquire) {
         return Err(OdeError::Ode("initialise the library (dInitODE2)"));
     }
-    THREAD.with(|t| {
+    // `try_with`: a world kept in a thread-local may be dropped after this
+    // thread's ODE data is gone (thread exit); the caller then leaks it
+    // rather than panic in a destructor (found by the daemon_bytes fuzzer).
+    let reached = THREAD.try_with(|t| {
         if t.allocated.get() {
             return Ok(());
         }
@@ -59,7 +62,10 @@ pub(crate) fn ensure_thread() -> Result<(), OdeError> {
         } else {
             Err(OdeError::Ode("allocate per-thread data"))
         }
-    })
+    });
+    reached.unwrap_or(Err(OdeError::Ode(
+        "reach per-thread data (the thread is exiting)",
+    )))
 }
 
 /// Held while ODE touches process-wide state (collision, stepping, the random
@@ -107,6 +113,28 @@ mod tests {
             THREAD.with(|t| t.allocated.get())
         });
         assert!(other.join().unwrap());
+    }
+
+    /// Regression (fuzz target daemon_bytes, which keeps its world in a
+    /// thread-local): a world dropped during thread exit, after ODE's
+    /// per-thread data, panicked in a destructor and aborted the process.
+    #[test]
+    fn a_world_dropped_at_thread_exit_does_not_panic() {
+        use std::cell::RefCell;
+        thread_local! {
+            static KEPT: RefCell<Option<crate::World>> = const { RefCell::new(None) };
+        }
+        let exited = std::thread::spawn(|| {
+            // Registered before ODE's per-thread data, so destroyed after it.
+            KEPT.with(|k| {
+                *k.borrow_mut() = Some(
+                    crate::World::new(crate::StepParams::gazebo(), crate::SpaceKind::Simple)
+                        .unwrap(),
+                );
+            });
+        })
+        .join();
+        assert!(exited.is_ok());
     }
 
     #[test]

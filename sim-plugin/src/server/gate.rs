@@ -68,6 +68,9 @@ impl Op {
 pub(super) enum ToPhysics {
     Command(Accepted),
     Stop,
+    /// Test fault injection ([`super::ServerHandle::provoke_blow_up`]);
+    /// no client message becomes one.
+    BlowUp(String),
 }
 
 /// Why a command was not accepted. The text is what the `Error` carries.
@@ -223,6 +226,11 @@ impl Gate {
     /// The physics thread took `n` accepted commands off the channel.
     pub fn taken(&self, n: usize) {
         self.queued.fetch_sub(n, Ordering::AcqRel);
+    }
+
+    /// Hands the physics thread a test fault (never a client's command).
+    pub fn inject(&self, fault: ToPhysics) {
+        let _ = self.lock().physics.send(fault);
     }
 
     /// Asks the physics thread to stop after what it is doing.

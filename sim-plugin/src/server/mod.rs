@@ -26,6 +26,7 @@ mod convert;
 mod gate;
 mod outbox;
 mod physics;
+pub mod untrusted;
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -349,6 +350,16 @@ impl ServerHandle {
     /// The counters so far.
     pub fn stats(&self) -> Stats {
         self.shared.counters.snapshot()
+    }
+
+    /// Fault injection for tests, reachable from no client message or flag:
+    /// after its next step the world finds `body` with a non-finite state,
+    /// as when the physics blows up (`docs/protocol.md` §6).
+    #[doc(hidden)]
+    pub fn provoke_blow_up(&self, body: &str) {
+        self.shared
+            .gate
+            .inject(gate::ToPhysics::BlowUp(body.to_owned()));
     }
 
     /// Resolves when the daemon stops by itself (the physics thread failed)

@@ -214,6 +214,10 @@ impl Physics {
                 self.apply(accepted);
                 Flow::Continue
             }
+            ToPhysics::BlowUp(body) => {
+                self.blow_up(&body);
+                Flow::Continue
+            }
         }
     }
 
@@ -223,8 +227,13 @@ impl Physics {
     /// commands, never on when they arrived.
     fn run_lockstep(&mut self) -> Result<(), StepError> {
         loop {
-            let Ok(ToPhysics::Command(accepted)) = self.inbox.recv() else {
-                return Ok(());
+            let accepted = match self.inbox.recv() {
+                Ok(ToPhysics::Command(accepted)) => accepted,
+                Ok(ToPhysics::BlowUp(body)) => {
+                    self.blow_up(&body);
+                    continue;
+                }
+                Ok(ToPhysics::Stop) | Err(_) => return Ok(()),
             };
             self.shared.gate.taken(1);
             if matches!(accepted.op, Op::Advance) {
@@ -273,6 +282,12 @@ impl Physics {
                 return Ok(());
             }
             offset += 1;
+        }
+    }
+
+    fn blow_up(&mut self, body: &str) {
+        if let Err(err) = self.world.provoke_blow_up(body) {
+            tracing::error!("cannot provoke a blow-up: {err}");
         }
     }
 

@@ -212,3 +212,49 @@ async fn random_frames_never_take_the_daemon_down() {
     }
     still_served(&mut bystander).await;
 }
+
+#[tokio::test]
+async fn a_physics_blow_up_resets_the_world_and_every_client_is_told() {
+    let server = start(realtime(FAST)).await;
+    let mut a = connect(&server).await;
+    let mut b = connect(&server).await;
+    a.command(Payload::move_(0.0, 0.5)).await.expect("move");
+    // Some way into the push, so that the reset is visible.
+    let mut before = a.next_state().await.expect("a state");
+    while before.step < 200 {
+        before = a.next_state().await.expect("a state");
+    }
+    server.provoke_blow_up("blockA");
+    for client in [&mut a, &mut b] {
+        let error = within("the blow-up's Error", async {
+            loop {
+                match client.next_state().await {
+                    Ok(_) => continue,
+                    Err(err) => break err,
+                }
+            }
+        })
+        .await;
+        assert!(
+            matches!(&error, pushlearn::client::ClientError::World { message }
+                if message.starts_with("physics blew up at step") && message.contains("blockA")),
+            "{error}"
+        );
+        // The world went on from its start, every value finite.
+        let after = client.next_state().await.expect("states go on");
+        assert!(
+            after.step < before.step,
+            "{} then {}",
+            before.step,
+            after.step
+        );
+        assert!(after.publish_seq > before.publish_seq);
+        for model in after.models() {
+            let pose = model.pose.expect("a pose");
+            let p = pose.position.expect("a position");
+            assert!([p.x, p.y, p.z].iter().all(|v| v.is_finite()), "{model:?}");
+        }
+    }
+    still_served(&mut a).await;
+    assert!(server.shutdown().await.is_ok());
+}

@@ -185,3 +185,34 @@ async fn lockstep_never_waits_for_a_slow_reader() {
     assert!(stats.states_dropped > 0, "{stats:?}");
     assert_eq!(stats.slow_disconnects, 0, "{stats:?}");
 }
+
+/// The reduced version of the documented 64-client, 60 s load run
+/// (`docs/reliability.md`): the same code, 2 s.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sixty_four_clients_at_100_hz_miss_nothing_and_memory_stays_bounded() {
+    let server = start(realtime(1000)).await;
+    let addr = server.local_addr().to_string();
+    let options = pushlearn::load::LoadOptions {
+        clients: 64,
+        duration: std::time::Duration::from_secs(2),
+        pid: None,
+        sample_every: std::time::Duration::from_millis(250),
+    };
+    let report = within("the load run", pushlearn::load::run_load(&addr, &options))
+        .await
+        .expect("load run");
+    assert!(report.controller.states > 0, "{report}");
+    assert_eq!(report.controller.missed, 0, "{report}");
+    assert_eq!(report.subscribers_lost, 0, "{report}");
+    assert!(report.subscriber_min_states > 0, "{report}");
+    let stats = server.stats();
+    assert_eq!((stats.states_dropped, stats.slow_disconnects), (0, 0));
+    // Bounded: whatever happens, 64 queues of 1024 states (about 0.3 KiB
+    // each) are all the daemon may hold on to; this process is the daemon
+    // and the 64 clients.
+    let rss: Vec<u64> = report.rss_kib.iter().map(|s| s.1).collect();
+    assert!(rss.len() >= 2, "{report}");
+    let growth = rss.iter().max().unwrap_or(&0) - rss[0];
+    assert!(growth < 64 * 1024, "RSS grew by {growth} KiB: {report}");
+    server.shutdown().await.expect("clean shutdown");
+}

@@ -64,6 +64,26 @@ enum CtlCommand {
         /// The script file.
         file: PathBuf,
     },
+
+    /// Load-test a realtime world: CLIENTS connections at once for SECONDS.
+    ///
+    /// The first connection sends a Move for every state, as a learner does;
+    /// the others only read. Prints the states each saw and missed, the
+    /// intervals between the controlling client's states against the 2/f
+    /// budget, and (with --pid) the daemon's resident memory over time.
+    /// For 100 states per wall-clock second start the world with
+    /// `pushlearn-sim serve --real-time-rate 1000`.
+    Load {
+        /// Connections in all, the controlling one included.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
+        clients: u64,
+        /// How long to run.
+        #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_seconds)]
+        seconds: Duration,
+        /// Process id of the world daemon, to sample its memory (Linux /proc).
+        #[arg(long)]
+        pid: Option<u32>,
+    },
 }
 
 /// A command for the world; the same set is accepted in `ctl run` scripts.
@@ -173,6 +193,25 @@ async fn execute(args: CtlArgs) -> Result<()> {
             action,
         }],
         CtlCommand::Run { file } => script::load(&file)?,
+        CtlCommand::Load {
+            clients,
+            seconds,
+            pid,
+        } => {
+            let options = pushlearn::load::LoadOptions {
+                clients: usize::try_from(clients).context("too many clients")?,
+                duration: seconds,
+                pid,
+                sample_every: Duration::from_secs(1),
+            };
+            let report = pushlearn::load::run_load(&args.addr, &options).await?;
+            if args.json {
+                println!("{}", serde_json::to_string(&report)?);
+            } else {
+                println!("{report}");
+            }
+            return Ok(());
+        }
     };
     // Clock-based seqs keep `applied_seq` left over from earlier ctl runs
     // below this run's seqs (pushlearn::client docs).

@@ -1,0 +1,358 @@
+//! Faults around `pushlearn learn`: killed with SIGKILL mid-training and
+//! restarted from its `--state` directory, and its world restarted under it.
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::thread;
+use std::time::{Duration, Instant};
+
+use learner::{Action, GateConfig, GateModel, Model};
+use pushlearn::client::SimClient;
+use pushlearn::learn::state::{recover, Settings};
+use pushlearn::learn::{serve, Learner, Policy, ServeOptions};
+use serde_json::Value;
+
+use crate::daemon::Daemon;
+use crate::experiment::TempDir;
+use crate::process::{run, text, CHILD_LIMIT};
+
+const ACTION: Action = Action { vx: 0.0, vy: 0.5 };
+
+/// `pushlearn learn` in the background, its stderr read line by line.
+struct Learn {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    log: Vec<String>,
+    output: Option<thread::JoinHandle<String>>,
+}
+
+impl Learn {
+    fn start(args: &[&str], log_filter: &str) -> Learn {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_pushlearn"))
+            .arg("learn")
+            .args(args)
+            .env("RUST_LOG", log_filter)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start pushlearn learn");
+        let mut stdout = child.stdout.take().expect("piped stdout");
+        let output = thread::spawn(move || {
+            let mut text = String::new();
+            let _ = std::io::Read::read_to_string(&mut stdout, &mut text);
+            text
+        });
+        let stderr = child.stderr.take().expect("piped stderr");
+        let (tx, lines) = mpsc::channel();
+        thread::spawn(move || {
+            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        Learn {
+            child,
+            lines,
+            log: Vec::new(),
+            output: Some(output),
+        }
+    }
+
+    /// Waits for a successful end; returns stdout.
+    fn finish(&mut self) -> String {
+        let deadline = Instant::now() + CHILD_LIMIT;
+        let status = loop {
+            while let Ok(line) = self.lines.try_recv() {
+                self.log.push(line);
+            }
+            match self.child.try_wait() {
+                Ok(Some(status)) => break status,
+                Ok(None) if Instant::now() < deadline => thread::sleep(Duration::from_millis(20)),
+                _ => panic!(
+                    "pushlearn learn did not end; its log:\n{}",
+                    self.log.join("\n")
+                ),
+            }
+        };
+        let stdout = self
+            .output
+            .take()
+            .and_then(|o| o.join().ok())
+            .unwrap_or_default();
+        assert!(
+            status.success(),
+            "pushlearn learn failed ({status}):\n{stdout}\n{}",
+            self.log.join("\n")
+        );
+        stdout
+    }
+
+    /// Reads the log until `found` returns something.
+    fn wait_for<T>(&mut self, what: &str, mut found: impl FnMut(&str) -> Option<T>) -> T {
+        let deadline = Instant::now() + CHILD_LIMIT;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.lines.recv_timeout(left) {
+                Ok(line) => {
+                    let line = plain(&line);
+                    let hit = found(&line);
+                    self.log.push(line);
+                    if let Some(hit) = hit {
+                        return hit;
+                    }
+                }
+                Err(_) => {
+                    let _ = self.child.kill();
+                    panic!(
+                        "pushlearn learn never logged {what}; its log:\n{}",
+                        self.log.join("\n")
+                    );
+                }
+            }
+        }
+    }
+}
+
+impl Drop for Learn {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `line` without terminal colour sequences (`ESC [ … m`).
+fn plain(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut chars = line.chars();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            for c in chars.by_ref() {
+                if c == 'm' {
+                    break;
+                }
+            }
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The learner `pushlearn learn --action 0,0.5` builds at 100 Hz.
+fn fresh() -> Learner<GateModel> {
+    Learner::new(
+        GateModel::new(GateConfig::hz100()),
+        Policy::Fixed(ACTION),
+        false,
+        1,
+    )
+}
+
+fn settings() -> Settings {
+    Settings {
+        model: "gate".into(),
+        publish_rate_hz: 100,
+        policy: Policy::Fixed(ACTION),
+        shadows: false,
+        seed: 1,
+        model_options: pushlearn::models::ModelOptions::default().canonical(),
+    }
+}
+
+/// An uninterrupted learner over the first `n` states of a fresh lock-step
+/// world driven with the same Move: the states the killed daemon saw.
+fn uninterrupted(n: u64) -> Learner<GateModel> {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    let mut learner = fresh();
+    runtime.block_on(async {
+        let mut client = SimClient::connect(world.addr).await.expect("connect");
+        let options = ServeOptions {
+            max_messages: Some(n),
+            report_every: None,
+        };
+        serve(&mut client, &mut learner, options, |_| {})
+            .await
+            .expect("reference run");
+    });
+    learner
+}
+
+fn segment(dir: &Path) -> std::path::PathBuf {
+    let mut logs: Vec<_> = std::fs::read_dir(dir)
+        .expect("state dir")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("log-"))
+        })
+        .collect();
+    logs.sort();
+    logs.pop().expect("a journal segment")
+}
+
+#[test]
+fn a_learner_killed_mid_training_resumes_bit_identically_and_cuts_a_torn_tail() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr.to_string();
+    let dir = TempDir::new("learn-state");
+    let state = dir.0.join("memory");
+    let state_arg = state.to_string_lossy().into_owned();
+    let args = [
+        "--connect",
+        &addr,
+        "--action",
+        "0,0.5",
+        "--state",
+        &state_arg,
+        "--snapshot-every",
+        "150",
+    ];
+    let mut learn = Learn::start(&args, "pushlearn::learn::state=trace");
+    // Acknowledged records, as the journal reports them after each fsync.
+    let acknowledged = learn.wait_for("400 acknowledged records", |line| {
+        let n: u64 = line
+            .split("acknowledged=")
+            .nth(1)?
+            .split_whitespace()
+            .next()?
+            .parse()
+            .ok()?;
+        (n >= 400).then_some(n)
+    });
+    learn.child.kill().expect("SIGKILL");
+    let _ = learn.child.wait();
+
+    let (recovered, recovery) = recover::<GateModel>(&state, &settings())
+        .expect("recoverable")
+        .expect("a stored learner");
+    assert!(
+        recovery.records() >= acknowledged,
+        "{recovery} but {acknowledged} were acknowledged"
+    );
+    let reference = uninterrupted(recovery.records());
+    let fingerprint = |l: &Learner<GateModel>| serde_json::to_string(l).expect("serialise");
+    assert!(
+        fingerprint(&recovered) == fingerprint(&reference),
+        "the recovered learner ({recovery}) differs from an uninterrupted one"
+    );
+    let probe = recovered
+        .model()
+        .parse(&learner::Frame {
+            objects: vec![
+                observation("actuator", 8, [0.0, 0.1, 0.03]),
+                observation("blockA", 15, [0.0, 0.25, 0.05]),
+            ],
+        })
+        .expect("probe frame");
+    let predict = |l: &Learner<GateModel>| {
+        let p = GateModel::poses(&l.model().predict(&probe, ACTION));
+        p.objects()
+            .map(|(id, s)| (id, s.x.to_bits(), s.y.to_bits(), s.theta.to_bits()))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(predict(&recovered), predict(&reference));
+
+    // A write torn by a crash: ten bytes of a record header.
+    let mut journal = std::fs::OpenOptions::new()
+        .append(true)
+        .open(segment(&state))
+        .expect("open the journal");
+    journal.write_all(&[0xAB; 10]).expect("tear the tail");
+    drop(journal);
+
+    let mut resumed = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    resumed.arg("learn").args(args).args(["--messages", "50"]);
+    let out = run(resumed);
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let records = recovery.records();
+    assert!(
+        stderr.contains(&format!(
+            "memory: resumed from {state_arg}: {records} records"
+        )) && stderr.contains("damaged journal tail cut")
+            && stderr.contains("a record header cut off after 10 of 16 bytes"),
+        "{stderr}"
+    );
+    // The resync the restart journalled, then 50 states.
+    let total = records + 1 + 50;
+    assert!(
+        stdout.contains(&format!("memory: {total} records on disk")),
+        "{stdout}"
+    );
+    let (_, again) = recover::<GateModel>(&state, &settings())
+        .expect("recoverable")
+        .expect("a stored learner");
+    assert_eq!((again.records(), again.cut), (total, None));
+}
+
+fn observation(name: &str, id: u32, position: [f64; 3]) -> learner::Observation {
+    learner::Observation {
+        name: name.into(),
+        id,
+        position,
+        orientation: [0.0, 0.0, 0.0, 1.0],
+    }
+}
+
+#[test]
+fn a_restarted_world_is_reconnected_with_backoff_and_the_model_resynchronised() {
+    let mut world = Daemon::start(&["--mode", "lockstep"]);
+    let port = world.addr.port();
+    let addr = world.addr.to_string();
+    let mut learn = Learn::start(
+        &[
+            "--connect",
+            &addr,
+            "--action",
+            "0,0.5",
+            "--messages",
+            "2000",
+            "--reconnect-for",
+            "30",
+        ],
+        "warn,pushlearn::client=debug",
+    );
+    // Some states into the run (a Move and an Advance per state), take the
+    // world away.
+    let mut sent = 0;
+    learn.wait_for("commands", |l| {
+        sent += usize::from(l.contains("send"));
+        (sent >= 40).then_some(())
+    });
+    world.stop();
+    learn.wait_for("the lost world", |l| {
+        l.contains("lost the world").then_some(())
+    });
+    learn.wait_for("a failed attempt with its backoff", |l| {
+        l.contains("reconnecting failed").then_some(())
+    });
+    let _world = Daemon::start_on(port, &["--mode", "lockstep"]);
+    learn.wait_for("the reconnection", |l| {
+        l.contains("reconnected to the world").then_some(())
+    });
+    let stdout = learn.finish();
+    assert!(
+        stdout.contains("2000 states over 1 reconnection(s)"),
+        "{stdout}"
+    );
+    // The model did not train on the transition across the gap: two of the
+    // states re-synchronised it, all others updated it.
+    let stats: Value = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("model: "))
+        .and_then(|json| serde_json::from_str(json).ok())
+        .unwrap_or_else(|| panic!("no model statistics in {stdout}"));
+    assert_eq!(
+        stats["maps"]["actuator"]["update_calls"].as_u64(),
+        Some(2000 - 2),
+        "{stdout}"
+    );
+}
