@@ -1,7 +1,7 @@
 //! Whole experiments: jobs built, spread over workers, gathered in job order
 //! and summarised into the report documents.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use learner::{Model, ObjectState};
@@ -9,6 +9,7 @@ use learner::{Model, ObjectState};
 use super::constant_feedback::FeedbackTask;
 use super::driver::{Driver, Task};
 use super::link::{Timing, WorldLink};
+use super::replay::RunCache;
 use super::move_to_target::{MttJob, MttJobResult, MttTask, TargetSummary};
 use super::nodes::NodeSummary;
 use super::push_task::{summarise, PushJob, PushJobResult, PushTask, Variant};
@@ -26,6 +27,11 @@ pub struct Plan {
     pub seed: u64,
     /// Name of the model, for the report.
     pub model: String,
+    /// Recorded runs to reuse, shared by the workers (and by experiments
+    /// given the same cache). Only used in [`Mode::Lockstep`], where a
+    /// world's states are a function of the commands since its last reset
+    /// (see [`super::replay`]); ignored in the other modes.
+    pub runs: Option<Arc<RunCache>>,
 }
 
 impl Plan {
@@ -43,8 +49,11 @@ impl Plan {
     }
 
     fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
-        let worker = Worker::start(&self.source, self.mode.pacing())?;
+        let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            worker.link.reuse_runs(Arc::clone(cache));
+        }
         Ok(worker)
     }
 
