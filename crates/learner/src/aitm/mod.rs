@@ -26,6 +26,7 @@ mod algorithm;
 pub(crate) mod distance;
 mod errors;
 mod hyperparams;
+mod index;
 
 #[cfg(test)]
 mod proptests;
