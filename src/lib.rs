@@ -13,6 +13,7 @@
 pub mod client;
 pub mod experiment;
 pub mod frame;
+pub mod latency;
 pub mod learn;
 pub mod models;
 pub mod report;

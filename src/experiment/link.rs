@@ -22,6 +22,7 @@ use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
 use super::ExperimentError;
 use crate::client::{ClientOptions, SimClient};
 use crate::frame::frame_from_state;
+use crate::latency::Latencies;
 use crate::wire::pb::client_message::Payload;
 use crate::wire::TimingMode;
 
@@ -55,6 +56,9 @@ pub struct Timing {
     pub busy_seconds: f64,
     /// The longest handling time, seconds.
     pub max_seconds: f64,
+    /// All handling times, for percentiles (not serialised).
+    #[serde(skip)]
+    pub histogram: Latencies,
 }
 
 impl Timing {
@@ -66,6 +70,7 @@ impl Timing {
         let s = took.as_secs_f64();
         self.busy_seconds += s;
         self.max_seconds = self.max_seconds.max(s);
+        self.histogram.record(took);
     }
 
     /// Fraction of messages that were too slow (0 without messages).
@@ -85,6 +90,7 @@ impl std::ops::AddAssign for Timing {
         self.too_slow += other.too_slow;
         self.busy_seconds += other.busy_seconds;
         self.max_seconds = self.max_seconds.max(other.max_seconds);
+        self.histogram += other.histogram;
     }
 }
 
@@ -291,6 +297,7 @@ async fn resync_world(
     }
     for (step, (batch, expected)) in path.steps.into_iter().enumerate() {
         let state = send_and_advance(client, cursor, batch).await?;
+        cursor.resimulated();
         if frame_from_state(&state) != *expected {
             return Err(ReplayError::Diverged { step }.into());
         }

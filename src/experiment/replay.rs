@@ -347,6 +347,11 @@ impl Cursor {
         self.real_rate = rate_after(self.real_rate, batch);
     }
 
+    /// Counts a state the real world produced again to resynchronise.
+    pub(crate) fn resimulated(&self) {
+        self.cache.simulated.fetch_add(1, Ordering::Relaxed);
+    }
+
     /// The frame the real world produced for the batch of the last
     /// [`Next::Simulate`]; recorded if the stream is inside the tree.
     pub(crate) fn simulated(&mut self, frame: Frame) -> Result<Arc<Frame>, ReplayError> {

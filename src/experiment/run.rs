@@ -44,6 +44,14 @@ impl Plan {
         }
     }
 
+    /// `run` with the states the worlds simulated, if runs were reused.
+    fn with_reuse(&self, mut run: RunInfo) -> RunInfo {
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            run.simulated_states = cache.counts().simulated;
+        }
+        run
+    }
+
     fn workers(&self) -> usize {
         self.source.max_workers(self.workers)
     }
@@ -125,12 +133,12 @@ pub fn push_task<M: Model>(
         folds,
         train_runs: train_runs.to_vec(),
         results: summarise(variant, train_runs, &results)?,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
             plan.workers().min(jobs.len()),
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }
 
@@ -172,12 +180,12 @@ pub fn constant_feedback<M: Model>(
         variant: Variant::ConstantFeedback.as_str().to_owned(),
         publish_rate_hz: LOW_RATE_HZ,
         runs: task.runs,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             [(counters, timing)],
             LOW_RATE_HZ,
             1,
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }
 
@@ -233,11 +241,11 @@ pub fn move_to_target<M: Model>(
         repetitions,
         max_steps,
         targets: entries,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
             plan.workers().min(jobs.len()),
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }

@@ -13,7 +13,7 @@ use super::index::KdIndex;
 /// Node count from which the winner search goes through the spatial index
 /// ([`KdIndex`]); below it the contiguous scan is as fast (aitm.md §7: the
 /// thesis's maps stay near 1100 nodes).
-pub(crate) const INDEX_MIN_NODES: usize = 512;
+pub const INDEX_MIN_NODES: usize = 512;
 
 /// Removed rows are kept as gaps until they outnumber the live ones (and
 /// this many), so that a removal does not move every later row.
@@ -140,10 +140,11 @@ impl Aitm {
         }
     }
 
-    /// Uses the spatial index from `nodes` nodes on (tests compare both
-    /// searches on small maps).
-    #[cfg(test)]
-    pub(crate) fn set_index_min(&mut self, nodes: usize) {
+    /// Searches winners through the spatial index once the map holds
+    /// `nodes` nodes (default [`INDEX_MIN_NODES`]; `usize::MAX`: always scan).
+    /// The answers are the same either way (aitm.md §7); only the time
+    /// differs.
+    pub fn set_index_min(&mut self, nodes: usize) {
         self.index_min = nodes;
         self.index = None;
         self.update_index_use();
