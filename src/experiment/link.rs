@@ -145,7 +145,8 @@ impl WorldLink {
     /// the commands, so nothing is reused there.
     pub fn reuse_runs(&mut self, cache: Arc<RunCache>) {
         if self.pacing == Pacing::Lockstep {
-            self.replay = Some((Cursor::new(cache), Vec::new()));
+            let rate = self.client.hello().publish_rate;
+            self.replay = Some((Cursor::new(cache, rate), Vec::new()));
         }
     }
 
@@ -250,7 +251,7 @@ async fn drive_replaying<M: Model, T: Task<M>>(
     let budget = budget(driver.publish_rate_hz());
     let mut timing = Timing::default();
     while !driver.is_done() {
-        let frame = match cursor.next(std::mem::take(pending))? {
+        let frame = match cursor.next(std::mem::take(pending)) {
             Next::Stored(frame) => frame,
             Next::Simulate { resync, batch } => {
                 if let Some(path) = resync {
@@ -288,12 +289,10 @@ async fn resync_world(
     cursor: &mut Cursor,
     path: Path,
 ) -> Result<(), ExperimentError> {
-    if let Some(rate) = path.rate {
-        let set_rate = vec![Payload::publish_rate(rate)];
-        cursor.sent(&set_rate);
-        for command in set_rate {
-            client.send(command).await?;
-        }
+    if cursor.needs_rate(path.rate) {
+        let set_rate = Payload::publish_rate(path.rate);
+        cursor.sent(std::slice::from_ref(&set_rate));
+        client.send(set_rate).await?;
     }
     for (step, (batch, expected)) in path.steps.into_iter().enumerate() {
         let state = send_and_advance(client, cursor, batch).await?;

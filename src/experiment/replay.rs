@@ -46,17 +46,13 @@ pub enum ReplayError {
          ({step} states after the reset): it is not deterministic; run with --no-reuse"
     )]
     Diverged { step: usize },
-    /// A recorded stream starts at the world's default publish rate, which
-    /// cannot be restored on a world whose rate was changed.
-    #[error("cannot restore the world's default publish rate to replay a recorded stream")]
-    DefaultRate,
 }
 
 /// How a node was reached: a root (rate in force and the reset batch) or a
 /// batch sent after its parent's frame.
 #[derive(Debug)]
 enum Edge {
-    Root { rate: Option<u32>, batch: Vec<Payload> },
+    Root { rate: u32, batch: Vec<Payload> },
     Child { parent: usize, batch: Vec<Payload> },
 }
 
@@ -75,7 +71,7 @@ struct Tree {
 }
 
 impl Tree {
-    fn root(&self, rate: Option<u32>, batch: &[Payload]) -> Option<usize> {
+    fn root(&self, rate: u32, batch: &[Payload]) -> Option<usize> {
         self.roots.iter().copied().find(|&n| {
             matches!(&self.nodes[n].edge, Edge::Root { rate: r, batch: b } if *r == rate && b == batch)
         })
@@ -148,7 +144,7 @@ impl Tree {
 
 /// See [`Tree::path`].
 pub(crate) struct Path {
-    pub(crate) rate: Option<u32>,
+    pub(crate) rate: u32,
     /// Batch to send, frame it must produce; the first is the root's.
     pub(crate) steps: Vec<(Vec<Payload>, Arc<Frame>)>,
 }
@@ -215,9 +211,9 @@ pub(crate) struct Cursor {
     /// The edge the next simulated frame is recorded under.
     recording: Option<Edge>,
     /// Publish rate in force in the driver's stream.
-    rate: Option<u32>,
-    /// Publish rate set on the real world.
-    real_rate: Option<u32>,
+    rate: u32,
+    /// Publish rate in force on the real world.
+    real_rate: u32,
     /// The node whose frame the real world produced last, nothing sent since.
     real_at: Option<usize>,
     /// Set for good once a batch made the stream depend on more than the
@@ -245,10 +241,10 @@ fn leaves_the_tree(batch: &[Payload]) -> bool {
 }
 
 /// The publish rate after `batch`, starting from `rate`.
-fn rate_after(rate: Option<u32>, batch: &[Payload]) -> Option<u32> {
+fn rate_after(rate: u32, batch: &[Payload]) -> u32 {
     batch.iter().fold(rate, |rate, p| match p {
         Payload::Control(c) => match c.action {
-            Some(Action::PublishRateHz(hz)) => Some(hz),
+            Some(Action::PublishRateHz(hz)) => hz,
             _ => rate,
         },
         _ => rate,
@@ -256,70 +252,64 @@ fn rate_after(rate: Option<u32>, batch: &[Payload]) -> Option<u32> {
 }
 
 impl Cursor {
-    /// A cursor for a fresh connection (the world's publish rate is its
-    /// default).
-    pub(crate) fn new(cache: Arc<RunCache>) -> Self {
+    /// A cursor for a connection to a world publishing at `rate` (its
+    /// Hello's).
+    pub(crate) fn new(cache: Arc<RunCache>, rate: u32) -> Self {
         Self {
             cache,
             at: None,
             recording: None,
-            rate: None,
-            real_rate: None,
+            rate,
+            real_rate: rate,
             real_at: None,
             live_only: false,
         }
     }
 
     /// The next state of the driver's stream after it sent `batch`.
-    ///
-    /// # Errors
-    /// [`ReplayError::DefaultRate`] (cannot happen for the experiments'
-    /// drivers, which set their rate in their first batch).
-    pub(crate) fn next(&mut self, batch: Vec<Payload>) -> Result<Next, ReplayError> {
+    pub(crate) fn next(&mut self, batch: Vec<Payload>) -> Next {
         let rate = self.rate;
         self.rate = rate_after(rate, &batch);
         if self.live_only || leaves_the_tree(&batch) {
             self.live_only = true;
-            let resync = self.resync_to(self.at)?;
+            let resync = self.resync_to(self.at);
             self.at = None;
             self.recording = None;
-            return Ok(Next::Simulate { resync, batch });
+            return Next::Simulate { resync, batch };
         }
         if is_root(&batch) {
             let found = self.cache.tree().root(rate, &batch);
             if let Some(n) = found {
-                return Ok(self.stored(n));
+                return self.stored(n);
             }
             // A reset needs no resynchronisation, only the same rate.
-            let resync = if self.real_rate == rate {
-                None
-            } else {
-                let rate = rate.ok_or(ReplayError::DefaultRate)?;
-                Some(Path {
-                    rate: Some(rate),
-                    steps: Vec::new(),
-                })
-            };
-            self.recording = Some(Edge::Root { rate, batch: batch.clone() });
-            return Ok(Next::Simulate { resync, batch });
+            let resync = (self.real_rate != rate).then(|| Path {
+                rate,
+                steps: Vec::new(),
+            });
+            self.recording = Some(Edge::Root {
+                rate,
+                batch: batch.clone(),
+            });
+            return Next::Simulate { resync, batch };
         }
         let Some(at) = self.at else {
             self.recording = None;
-            return Ok(Next::Simulate {
+            return Next::Simulate {
                 resync: None,
                 batch,
-            });
+            };
         };
         let found = self.cache.tree().child(at, &batch);
         if let Some(n) = found {
-            return Ok(self.stored(n));
+            return self.stored(n);
         }
-        let resync = self.resync_to(Some(at))?;
+        let resync = self.resync_to(Some(at));
         self.recording = Some(Edge::Child {
             parent: at,
             batch: batch.clone(),
         });
-        Ok(Next::Simulate { resync, batch })
+        Next::Simulate { resync, batch }
     }
 
     fn stored(&mut self, n: usize) -> Next {
@@ -329,16 +319,14 @@ impl Cursor {
     }
 
     /// The way to bring the real world to node `to`, if it is not there.
-    fn resync_to(&self, to: Option<usize>) -> Result<Option<Path>, ReplayError> {
-        let Some(to) = to else { return Ok(None) };
-        if self.real_at == Some(to) {
-            return Ok(None);
-        }
-        let path = self.cache.tree().path(to);
-        if path.rate != self.real_rate && path.rate.is_none() {
-            return Err(ReplayError::DefaultRate);
-        }
-        Ok(Some(path))
+    fn resync_to(&self, to: Option<usize>) -> Option<Path> {
+        let to = to?;
+        (self.real_at != Some(to)).then(|| self.cache.tree().path(to))
+    }
+
+    /// Whether the real world must be told `rate` before a resync path.
+    pub(crate) fn needs_rate(&self, rate: u32) -> bool {
+        self.real_rate != rate
     }
 
     /// Records that the real world received `batch` (resynchronisation
@@ -392,7 +380,7 @@ mod tests {
     }
 
     fn simulate(cursor: &mut Cursor, batch: Vec<Payload>, x: f64) -> Option<Path> {
-        match cursor.next(batch).expect("next") {
+        match cursor.next(batch) {
             Next::Simulate { resync, batch } => {
                 cursor.sent(&batch);
                 cursor.simulated(frame(x)).expect("record");
@@ -403,7 +391,7 @@ mod tests {
     }
 
     fn stored(cursor: &mut Cursor, batch: Vec<Payload>) -> Frame {
-        match cursor.next(batch).expect("next") {
+        match cursor.next(batch) {
             Next::Stored(f) => (*f).clone(),
             Next::Simulate { .. } => panic!("expected a stored frame"),
         }
@@ -427,7 +415,7 @@ mod tests {
     #[test]
     fn a_second_link_replays_what_the_first_recorded_and_resyncs_to_branch() {
         let cache = Arc::new(RunCache::new());
-        let mut first = Cursor::new(Arc::clone(&cache));
+        let mut first = Cursor::new(Arc::clone(&cache), 100);
         // Start of a job: outside the tree, live.
         assert!(simulate(&mut first, Vec::new(), 9.0).is_none());
         let startup = vec![
@@ -439,7 +427,7 @@ mod tests {
         assert!(simulate(&mut first, vec![Payload::move_(1.0, 0.0)], 0.1).is_none());
         assert!(simulate(&mut first, vec![Payload::move_(1.0, 0.0)], 0.2).is_none());
 
-        let mut second = Cursor::new(Arc::clone(&cache));
+        let mut second = Cursor::new(Arc::clone(&cache), 100);
         assert!(simulate(&mut second, Vec::new(), 5.0).is_none());
         assert_eq!(stored(&mut second, startup), frame(0.0));
         assert_eq!(stored(&mut second, vec![Payload::move_(1.0, 0.0)]), frame(0.1));
@@ -447,13 +435,11 @@ mod tests {
         let Next::Simulate {
             resync: Some(path),
             batch,
-        } = second
-            .next(vec![Payload::move_(0.5, 0.0)])
-            .expect("next")
+        } = second.next(vec![Payload::move_(0.5, 0.0)])
         else {
             panic!("expected a resynchronised simulation");
         };
-        assert_eq!(path.rate, None);
+        assert_eq!(path.rate, 100);
         assert_eq!(path.steps.len(), 2);
         assert_eq!(*path.steps[1].1, frame(0.1));
         second.sent(&batch);
@@ -465,8 +451,7 @@ mod tests {
                 simulated: 6
             }
         );
-        // The same rate is in force after the job: a later reset batch with
-        // rate 100 is a different root from the startup one.
+        // A later reset batch without a rate command is a root of its own.
         assert!(simulate(&mut first, reset_batch(), 0.0).is_none());
         assert_eq!(stored(&mut second, reset_batch()), frame(0.0));
     }
@@ -474,11 +459,11 @@ mod tests {
     #[test]
     fn a_different_frame_for_a_recorded_edge_is_divergence() {
         let cache = Arc::new(RunCache::new());
-        let mut a = Cursor::new(Arc::clone(&cache));
-        let mut b = Cursor::new(Arc::clone(&cache));
+        let mut a = Cursor::new(Arc::clone(&cache), 100);
+        let mut b = Cursor::new(Arc::clone(&cache), 100);
         // Both miss the same root at once (two workers), then report.
         for c in [&mut a, &mut b] {
-            assert!(matches!(c.next(reset_batch()), Ok(Next::Simulate { .. })));
+            assert!(matches!(c.next(reset_batch()), Next::Simulate { .. }));
         }
         a.simulated(frame(0.0)).expect("first record");
         assert_eq!(
@@ -490,7 +475,7 @@ mod tests {
     #[test]
     fn pausing_or_latency_seeds_switch_to_live_for_good() {
         let cache = Arc::new(RunCache::new());
-        let mut c = Cursor::new(Arc::clone(&cache));
+        let mut c = Cursor::new(Arc::clone(&cache), 100);
         simulate(&mut c, reset_batch(), 0.0);
         simulate(&mut c, vec![Payload::latency_seed(1)], 0.1);
         // Even a known root is simulated now.

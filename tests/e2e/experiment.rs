@@ -378,10 +378,12 @@ fn reused_lockstep_runs_give_bit_identical_results() {
         assert_eq!(text(&a), text(&b), "{model}");
         assert_eq!(a["run"]["messages"], b["run"]["messages"], "{model}");
         // Something was reused: the driver saw as many states, the worlds
-        // simulated fewer (the 21 test runs of each of the 4 jobs are the same).
+        // simulated fewer. The 4 jobs share their 21 test runs; the two
+        // workers' first jobs run at once and may both simulate them, so at
+        // most 6 training and 2 × 21 test runs of 90 are simulated.
         let states = number(&a["run"]["messages"]);
         let simulated = number(&a["run"]["simulated_states"]);
-        assert!(simulated > 0.0 && simulated < 0.5 * states, "{simulated} of {states}");
+        assert!(simulated > 0.0 && simulated < 0.6 * states, "{simulated} of {states}");
         assert_eq!(number(&b["run"]["simulated_states"]), states, "{model}");
     }
 }
