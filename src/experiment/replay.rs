@@ -78,9 +78,11 @@ impl Tree {
     }
 
     fn child(&self, parent: usize, batch: &[Payload]) -> Option<usize> {
-        self.nodes[parent].children.iter().copied().find(
-            |&n| matches!(&self.nodes[n].edge, Edge::Child { batch: b, .. } if b == batch),
-        )
+        self.nodes[parent]
+            .children
+            .iter()
+            .copied()
+            .find(|&n| matches!(&self.nodes[n].edge, Edge::Child { batch: b, .. } if b == batch))
     }
 
     /// Adds a frame, or checks it against the one another worker recorded
@@ -430,7 +432,10 @@ mod tests {
         let mut second = Cursor::new(Arc::clone(&cache), 100);
         assert!(simulate(&mut second, Vec::new(), 5.0).is_none());
         assert_eq!(stored(&mut second, startup), frame(0.0));
-        assert_eq!(stored(&mut second, vec![Payload::move_(1.0, 0.0)]), frame(0.1));
+        assert_eq!(
+            stored(&mut second, vec![Payload::move_(1.0, 0.0)]),
+            frame(0.1)
+        );
         // A new branch: the world must first replay the root and one batch.
         let Next::Simulate {
             resync: Some(path),

@@ -383,7 +383,10 @@ fn reused_lockstep_runs_give_bit_identical_results() {
         // most 6 training and 2 × 21 test runs of 90 are simulated.
         let states = number(&a["run"]["messages"]);
         let simulated = number(&a["run"]["simulated_states"]);
-        assert!(simulated > 0.0 && simulated < 0.6 * states, "{simulated} of {states}");
+        assert!(
+            simulated > 0.0 && simulated < 0.6 * states,
+            "{simulated} of {states}"
+        );
         assert_eq!(number(&b["run"]["simulated_states"]), states, "{model}");
     }
 }

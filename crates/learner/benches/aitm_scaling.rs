@@ -87,7 +87,11 @@ impl Samples {
 
     fn sample(&mut self) -> ([f64; 8], [f64; 3]) {
         let x = self.input();
-        let y = [self.rng.grid(0.04), self.rng.grid(0.04), self.rng.grid(0.04)];
+        let y = [
+            self.rng.grid(0.04),
+            self.rng.grid(0.04),
+            self.rng.grid(0.04),
+        ];
         (x, y)
     }
 }
@@ -170,7 +174,8 @@ fn main() -> std::io::Result<()> {
             }
         }
     }
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/aitm_scaling.csv");
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/aitm_scaling.csv");
     std::fs::File::create(&path)?.write_all(csv.as_bytes())?;
     println!("wrote {}", path.display());
     Ok(())

@@ -978,7 +978,11 @@ mod gap_tests {
             }
         }
         // 240 removed of 300: compacted on the way.
-        assert!(map.ids.len() < 300 && map.ids.len() >= map.len(), "{}", map.ids.len());
+        assert!(
+            map.ids.len() < 300 && map.ids.len() >= map.len(),
+            "{}",
+            map.ids.len()
+        );
         assert_eq!(map.len(), 60);
         for v in map.nodes() {
             fresh.ids.push(v.id);

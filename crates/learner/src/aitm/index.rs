@@ -206,9 +206,10 @@ impl KdIndex {
         loop {
             path.push(node);
             let b = node as usize * 2 * d;
-            for j in 0..d {
-                self.bbox[b + j] = self.bbox[b + j].min(x[j]);
-                self.bbox[b + d + j] = self.bbox[b + d + j].max(x[j]);
+            let (lo, hi) = self.bbox[b..b + 2 * d].split_at_mut(d);
+            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(x) {
+                *l = l.min(*v);
+                *h = h.max(*v);
             }
             match &mut self.nodes[node as usize] {
                 KdNode::Inner {
@@ -352,10 +353,7 @@ mod tests {
 
     fn point(dim: usize) -> impl Strategy<Value = Vec<i32>> {
         // Few distinct values: many exact ties and duplicates.
-        prop::collection::vec(
-            prop_oneof![3 => -3i32..=3, 1 => -2000i32..=2000],
-            dim,
-        )
+        prop::collection::vec(prop_oneof![3 => -3i32..=3, 1 => -2000i32..=2000], dim)
     }
 
     fn ops() -> impl Strategy<Value = (usize, Vec<Op>)> {
@@ -451,14 +449,23 @@ mod tests {
         }
         fn depth(index: &KdIndex, node: u32) -> usize {
             match &index.nodes[node as usize] {
-                KdNode::Inner { left, right, .. } => 1 + depth(index, *left).max(depth(index, *right)),
+                KdNode::Inner { left, right, .. } => {
+                    1 + depth(index, *left).max(depth(index, *right))
+                }
                 _ => 1,
             }
         }
         let limit = 2.0 * ((n as usize / LEAF_CAP + 1) as f64).log2() + 6.0;
-        assert!((depth(&index, index.root) as f64) <= limit, "{}", depth(&index, index.root));
+        assert!(
+            (depth(&index, index.root) as f64) <= limit,
+            "{}",
+            depth(&index, index.root)
+        );
         let (best, second) = index.nearest_two(&[7.0005], &w_in);
         // The two rows nearest to 7.0005, nearer first.
-        assert_eq!((best.map(|c| c.2), second.map(|c| c.2)), (Some(7000), Some(7001)));
+        assert_eq!(
+            (best.map(|c| c.2), second.map(|c| c.2)),
+            (Some(7000), Some(7001))
+        );
     }
 }
