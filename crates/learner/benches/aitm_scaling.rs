@@ -25,23 +25,9 @@ const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 const QUERIES: usize = 2_000;
 const UPDATES_PER_BATCH: usize = 100;
 
-/// SplitMix64: deterministic inputs without an extra dependency.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Uniform on the 3-decimal grid in [−r, r].
-    fn grid(&mut self, r: f64) -> f64 {
-        ((self.unit() * 2.0 - 1.0) * r * 1000.0).round() / 1000.0
-    }
-}
+#[path = "support/rng.rs"]
+mod rng;
+use rng::Rng;
 
 #[derive(Clone, Copy, PartialEq)]
 enum Shape {
@@ -52,7 +38,7 @@ enum Shape {
 /// An endless stream of (input, output) samples of one shape.
 struct Samples {
     shape: Shape,
-    rng: SplitMix,
+    rng: Rng,
     walk: [f64; 8],
     step: usize,
 }
@@ -61,7 +47,7 @@ impl Samples {
     fn new(shape: Shape, seed: u64) -> Self {
         Self {
             shape,
-            rng: SplitMix(seed),
+            rng: Rng(seed),
             walk: [0.0; 8],
             step: 0,
         }
@@ -70,14 +56,14 @@ impl Samples {
     fn input(&mut self) -> [f64; 8] {
         let mut x = [0.0; 8];
         match self.shape {
-            Shape::Uniform => x.iter_mut().for_each(|v| *v = self.rng.grid(1.0)),
+            Shape::Uniform => x.iter_mut().for_each(|v| *v = self.rng.grid(1000)),
             Shape::Runs => {
                 if self.step % 150 == 0 {
-                    self.walk.iter_mut().for_each(|v| *v = self.rng.grid(1.0));
+                    self.walk.iter_mut().for_each(|v| *v = self.rng.grid(1000));
                 }
                 self.step += 1;
                 for v in &mut self.walk {
-                    *v = ((*v + self.rng.grid(0.005)) * 1000.0).round() / 1000.0;
+                    *v = ((*v + self.rng.grid(5)) * 1000.0).round() / 1000.0;
                 }
                 x = self.walk;
             }
@@ -87,11 +73,7 @@ impl Samples {
 
     fn sample(&mut self) -> ([f64; 8], [f64; 3]) {
         let x = self.input();
-        let y = [
-            self.rng.grid(0.04),
-            self.rng.grid(0.04),
-            self.rng.grid(0.04),
-        ];
+        let y = [self.rng.grid(40), self.rng.grid(40), self.rng.grid(40)];
         (x, y)
     }
 }
