@@ -15,6 +15,7 @@
 pub mod client;
 pub mod experiment;
 pub mod frame;
+pub mod latency;
 pub mod learn;
 pub mod load;
 pub mod models;

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use learner::{Model, ObjectState};
 use pushlearn::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
 use pushlearn::experiment::push_task::{Protocol, Variant};
+use pushlearn::experiment::replay::RunCache;
 use pushlearn::experiment::run::{self, Plan};
 use pushlearn::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
 use pushlearn::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
@@ -76,6 +77,14 @@ struct WorldArgs {
     /// Its scene and timing mode must match the experiment.
     #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["workers", "sim_bin"])]
     connect: Option<String>,
+
+    /// In lockstep mode, simulate every run afresh instead of reusing the
+    /// states of an identical earlier run (same start, same commands since
+    /// the world's reset). Reuse gives bit-identical results, since a
+    /// lock-step world without latency is a function of those commands
+    /// (docs/performance.md); the other modes never reuse.
+    #[arg(long)]
+    no_reuse: bool,
 
     /// Seed of every random choice (training starts, exploration, latency).
     #[arg(long, default_value_t = 1)]
@@ -209,6 +218,8 @@ impl WorldArgs {
             source,
             seed: self.seed,
             model: model.as_str().to_owned(),
+            runs: (self.mode == Mode::Lockstep && !self.no_reuse)
+                .then(|| std::sync::Arc::new(RunCache::new())),
         })
     }
 

@@ -11,15 +11,18 @@
 //!   it comes and counts the messages whose handling took longer than the
 //!   original's budget of 2/f seconds (`experiments.md` §6).
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use learner::Model;
 use serde::{Deserialize, Serialize};
 
 use super::driver::{Driver, Task};
+use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
 use super::ExperimentError;
 use crate::client::{ClientOptions, SimClient};
 use crate::frame::frame_from_state;
+use crate::latency::Latencies;
 use crate::wire::pb::client_message::Payload;
 use crate::wire::TimingMode;
 
@@ -53,6 +56,9 @@ pub struct Timing {
     pub busy_seconds: f64,
     /// The longest handling time, seconds.
     pub max_seconds: f64,
+    /// All handling times, for percentiles (not serialised).
+    #[serde(skip)]
+    pub histogram: Latencies,
 }
 
 impl Timing {
@@ -64,6 +70,7 @@ impl Timing {
         let s = took.as_secs_f64();
         self.busy_seconds += s;
         self.max_seconds = self.max_seconds.max(s);
+        self.histogram.record(took);
     }
 
     /// Fraction of messages that were too slow (0 without messages).
@@ -83,6 +90,7 @@ impl std::ops::AddAssign for Timing {
         self.too_slow += other.too_slow;
         self.busy_seconds += other.busy_seconds;
         self.max_seconds = self.max_seconds.max(other.max_seconds);
+        self.histogram += other.histogram;
     }
 }
 
@@ -99,6 +107,9 @@ pub struct WorldLink {
     runtime: tokio::runtime::Runtime,
     client: SimClient,
     pacing: Pacing,
+    /// Set when recorded runs are reused (`lockstep` only; see
+    /// [`super::replay`]), with the batch the last driver left unsent.
+    replay: Option<(Cursor, Vec<Payload>)>,
 }
 
 impl WorldLink {
@@ -124,7 +135,19 @@ impl WorldLink {
             runtime,
             client,
             pacing,
+            replay: None,
         })
+    }
+
+    /// Serves states from `cache` where it has them and records the others
+    /// there (see [`super::replay`]). Only for a lock-step world without
+    /// latency emulation: in any other mode the stream depends on more than
+    /// the commands, so nothing is reused there.
+    pub fn reuse_runs(&mut self, cache: Arc<RunCache>) {
+        if self.pacing == Pacing::Lockstep {
+            let rate = self.client.hello().publish_rate;
+            self.replay = Some((Cursor::new(cache, rate), Vec::new()));
+        }
     }
 
     /// The scene the world reported in its Hello.
@@ -162,8 +185,15 @@ impl WorldLink {
             runtime,
             client,
             pacing,
+            replay,
         } = self;
-        runtime.block_on(drive(client, *pacing, driver, setup))
+        match replay {
+            Some((cursor, pending)) => {
+                pending.extend(setup);
+                runtime.block_on(drive_replaying(client, cursor, pending, driver))
+            }
+            None => runtime.block_on(drive(client, *pacing, driver, setup)),
+        }
     }
 
     /// Closes the connection.
@@ -206,6 +236,72 @@ async fn drive<M: Model, T: Task<M>>(
     // Surfaces a refusal of the last commands here rather than in the next job.
     client.sync().await?;
     Ok(timing)
+}
+
+/// [`drive`] in lock-step through a [`RunCache`]: states the cache holds
+/// are handed to the driver without touching the world. The driver's last
+/// commands stay in `pending` for the next job on this link, whose first
+/// state follows them as it would on the socket.
+async fn drive_replaying<M: Model, T: Task<M>>(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    pending: &mut Vec<Payload>,
+    driver: &mut Driver<M, T>,
+) -> Result<Timing, ExperimentError> {
+    let budget = budget(driver.publish_rate_hz());
+    let mut timing = Timing::default();
+    while !driver.is_done() {
+        let frame = match cursor.next(std::mem::take(pending)) {
+            Next::Stored(frame) => frame,
+            Next::Simulate { resync, batch } => {
+                if let Some(path) = resync {
+                    resync_world(client, cursor, path).await?;
+                }
+                let state = send_and_advance(client, cursor, batch).await?;
+                cursor.simulated(frame_from_state(&state))?
+            }
+        };
+        let received = Instant::now();
+        *pending = driver.on_state(&frame);
+        timing.record(received.elapsed(), budget);
+    }
+    Ok(timing)
+}
+
+/// Sends `batch`, then Advance; the state that covers the Advance.
+async fn send_and_advance(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    batch: Vec<Payload>,
+) -> Result<crate::wire::pb::WorldState, ExperimentError> {
+    cursor.sent(&batch);
+    for command in batch {
+        client.send(command).await?;
+    }
+    let advance = client.send(Payload::advance()).await?;
+    Ok(client.wait_applied(advance).await?)
+}
+
+/// Brings the world to the end of a recorded path: its rate, the reset
+/// batch and every batch since, each state checked against the record.
+async fn resync_world(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    path: Path,
+) -> Result<(), ExperimentError> {
+    if cursor.needs_rate(path.rate) {
+        let set_rate = Payload::publish_rate(path.rate);
+        cursor.sent(std::slice::from_ref(&set_rate));
+        client.send(set_rate).await?;
+    }
+    for (step, (batch, expected)) in path.steps.into_iter().enumerate() {
+        let state = send_and_advance(client, cursor, batch).await?;
+        cursor.resimulated();
+        if frame_from_state(&state) != *expected {
+            return Err(ReplayError::Diverged { step }.into());
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@
 //!   realtime;
 //! * [`workers`]: one world process per worker, jobs spread over workers
 //!   and gathered back in job order;
+//! * [`replay`]: recorded runs reused in `lockstep` mode;
 //! * [`run`]: whole experiments, from jobs to report documents;
 //! * [`seed`]: per-job seeds (§5); [`nodes`]: node statistics (§7.5).
 
@@ -16,6 +17,7 @@ pub mod link;
 pub mod move_to_target;
 pub mod nodes;
 pub mod push_task;
+pub mod replay;
 pub mod run;
 pub mod seed;
 pub mod workers;
@@ -135,6 +137,9 @@ pub enum ExperimentError {
     /// The model refused the target.
     #[error(transparent)]
     Target(#[from] learner::TargetError),
+    /// Reusing recorded runs failed (`replay`).
+    #[error(transparent)]
+    Replay(#[from] replay::ReplayError),
     /// A job ended without its results (a bug in a handler).
     #[error("{0}")]
     Incomplete(String),

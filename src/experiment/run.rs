@@ -1,7 +1,7 @@
 //! Whole experiments: jobs built, spread over workers, gathered in job order
 //! and summarised into the report documents.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use learner::{Model, ObjectState};
@@ -12,6 +12,7 @@ use super::link::{Timing, WorldLink};
 use super::move_to_target::{MttJob, MttJobResult, MttTask, TargetSummary};
 use super::nodes::NodeSummary;
 use super::push_task::{summarise, Protocol, PushJob, PushJobResult, PushTask, Variant};
+use super::replay::RunCache;
 use super::workers::{run_jobs, Worker, WorldSource};
 use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
 use crate::report::{FeedbackReport, MttReport, PushReport, RunInfo, Setup, TargetEntry};
@@ -26,6 +27,11 @@ pub struct Plan {
     pub seed: u64,
     /// Name of the model, for the report.
     pub model: String,
+    /// Recorded runs to reuse, shared by the workers (and by experiments
+    /// given the same cache). Only used in [`Mode::Lockstep`], where a
+    /// world's states are a function of the commands since its last reset
+    /// (see [`super::replay`]); ignored in the other modes.
+    pub runs: Option<Arc<RunCache>>,
 }
 
 impl Plan {
@@ -38,13 +44,24 @@ impl Plan {
         }
     }
 
+    /// `run` with the states the worlds simulated, if runs were reused.
+    fn with_reuse(&self, mut run: RunInfo) -> RunInfo {
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            run.simulated_states = cache.counts().simulated;
+        }
+        run
+    }
+
     fn workers(&self) -> usize {
         self.source.max_workers(self.workers)
     }
 
     fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
-        let worker = Worker::start(&self.source, self.mode.pacing())?;
+        let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            worker.link.reuse_runs(Arc::clone(cache));
+        }
         Ok(worker)
     }
 
@@ -117,12 +134,12 @@ pub fn push_task<M: Model>(
         folds,
         train_runs: train_runs.to_vec(),
         results: summarise(protocol, train_runs, &results)?,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
             plan.workers().min(jobs.len()),
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }
 
@@ -164,12 +181,12 @@ pub fn constant_feedback<M: Model>(
         variant: Variant::ConstantFeedback.as_str().to_owned(),
         publish_rate_hz: LOW_RATE_HZ,
         runs: task.runs,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             [(counters, timing)],
             LOW_RATE_HZ,
             1,
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }
 
@@ -225,11 +242,11 @@ pub fn move_to_target<M: Model>(
         repetitions,
         max_steps,
         targets: entries,
-        run: RunInfo::of(
+        run: plan.with_reuse(RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
             plan.workers().min(jobs.len()),
             started.elapsed().as_secs_f64(),
-        ),
+        )),
     })
 }

@@ -20,6 +20,7 @@ use crate::client::{ClientError, SimClient};
 use crate::experiment::driver::{ACTUATOR_Z, BLOCK_Z};
 use crate::experiment::link::budget;
 use crate::frame::frame_from_state;
+use crate::latency::{Latencies, LatencySummary};
 use crate::wire::pb::{self, client_message::Payload};
 use crate::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
 
@@ -178,6 +179,12 @@ impl<M: Model> Learner<M> {
     pub fn model(&self) -> &M {
         &self.model
     }
+
+    /// The model, for a learner that goes on elsewhere.
+    #[must_use]
+    pub fn into_model(self) -> M {
+        self.model
+    }
 }
 
 /// The predicted poses, and the blue block's target if there is one, as one
@@ -208,6 +215,8 @@ fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
 pub struct WorkTimes {
     micros: Vec<u64>,
     too_slow: u64,
+    /// The model's share (parse, update, act, predict): see [`crate::latency`].
+    model: Latencies,
 }
 
 /// A summary of [`WorkTimes`].
@@ -219,9 +228,18 @@ pub struct WorkSummary {
     pub p50_ms: f64,
     pub p99_ms: f64,
     pub max_ms: f64,
+    /// The model's work per message (parse, update, act, predict), without
+    /// the socket writes.
+    #[serde(default)]
+    pub model: LatencySummary,
 }
 
 impl WorkTimes {
+    /// Records the model's share of one message's work.
+    pub fn record_model(&mut self, took: Duration) {
+        self.model.record(took);
+    }
+
     /// Records one message's work.
     pub fn record(&mut self, took: Duration, budget: Duration) {
         self.micros
@@ -257,6 +275,7 @@ impl WorkTimes {
             p50_ms: rank(0.5),
             p99_ms: rank(0.99),
             max_ms: sorted.last().map_or(0.0, |&m| m as f64 / 1e3),
+            model: self.model.summary(),
         }
     }
 }
@@ -265,13 +284,14 @@ impl std::fmt::Display for WorkSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} messages, {} ({:.4} %) over budget; work per message p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms",
+            "{} messages, {} ({:.4} %) over budget; work per message p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms; model alone {}",
             self.messages,
             self.too_slow,
             100.0 * self.too_slow_fraction,
             self.p50_ms,
             self.p99_ms,
-            self.max_ms
+            self.max_ms,
+            self.model
         )
     }
 }
@@ -331,7 +351,11 @@ pub async fn serve(
             _ = &mut interrupt => break Stop::Interrupted,
         };
         let received = Instant::now();
-        for command in learner.on_state(&frame_from_state(&state))? {
+        let frame = frame_from_state(&state);
+        let modelled = Instant::now();
+        let commands = learner.on_state(&frame)?;
+        times.record_model(modelled.elapsed());
+        for command in commands {
             client.send(command).await?;
         }
         times.record(received.elapsed(), budget);

@@ -34,7 +34,16 @@ pub struct RunInfo {
     /// 2/f (`experiments.md` §6).
     pub budget_seconds: f64,
     pub mean_handling_ms: f64,
+    /// Median and 99th percentile of the handling times (within 1/16).
+    #[serde(default)]
+    pub p50_handling_us: f64,
+    #[serde(default)]
+    pub p99_handling_us: f64,
     pub max_handling_ms: f64,
+    /// World states the worlds simulated: `messages` without reuse, fewer
+    /// when lockstep runs were replayed (docs/performance.md).
+    #[serde(default)]
+    pub simulated_states: u64,
     /// Messages dropped after resets and repositionings.
     pub ignored: u64,
     /// Failed start-position checks (each answered by a SetPose).
@@ -70,6 +79,9 @@ impl RunInfo {
             too_slow_fraction: timing.too_slow_fraction(),
             budget_seconds: budget(publish_rate_hz).as_secs_f64(),
             mean_handling_ms: mean * 1e3,
+            simulated_states: timing.messages,
+            p50_handling_us: timing.histogram.summary().p50_us,
+            p99_handling_us: timing.histogram.summary().p99_us,
             max_handling_ms: timing.max_seconds * 1e3,
             ignored: counters.ignored,
             reset_errors: counters.reset_errors,
@@ -271,6 +283,7 @@ mod tests {
                 too_slow: 1,
                 busy_seconds: 0.1,
                 max_seconds: 0.03,
+                ..Timing::default()
             },
             keypoints: Vec::new(),
             selection: Default::default(),

@@ -335,12 +335,15 @@ pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "{} messages in {:.1} s on {} worker(s); handling {:.3} ms mean, {:.3} ms max; \
-         {} ({:.4} %) over the {:.0} ms budget [thesis: well under 0.1 %]",
+        "{} messages in {:.1} s on {} worker(s); handling {:.3} ms mean, p50 {:.1} µs, \
+         p99 {:.1} µs, {:.3} ms max; {} ({:.4} %) over the {:.0} ms budget \
+         [thesis: well under 0.1 %]",
         run.messages,
         run.wall_seconds,
         run.workers,
         run.mean_handling_ms,
+        run.p50_handling_us,
+        run.p99_handling_us,
         run.max_handling_ms,
         run.too_slow,
         100.0 * run.too_slow_fraction,

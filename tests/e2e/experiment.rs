@@ -468,3 +468,51 @@ fn draft_protocol_reports_key_point_scores_and_selector_agreement() {
         text(&refused.stderr)
     );
 }
+
+/// docs/performance.md: in lockstep mode runs are simulated once and
+/// replayed to every job that repeats them (the 21 test runs of every fold;
+/// a training run for both models). The report must be bit-identical to
+/// simulating every run afresh — every error and node statistic, compared
+/// as their exact JSON representations — for both models and any number of
+/// workers.
+#[test]
+fn reused_lockstep_runs_give_bit_identical_results() {
+    let dir = TempDir::new("reuse");
+    for model in ["gate", "interaction"] {
+        let (reused, fresh) = (dir.file("reused.json"), dir.file("fresh.json"));
+        let common = [
+            "push-task",
+            "--model",
+            model,
+            "--mode",
+            "lockstep",
+            "--train-runs",
+            "1,2",
+            "--folds",
+            "2",
+        ];
+        let mut args = common.to_vec();
+        args.extend_from_slice(&["--workers", "2", "--json", &reused]);
+        succeeded(&experiment(&args));
+        let mut args = common.to_vec();
+        args.extend_from_slice(&["--no-reuse", "--workers", "1", "--json", &fresh]);
+        succeeded(&experiment(&args));
+        let (a, b) = (read_json(&reused), read_json(&fresh));
+        // serde_json prints each f64 in its shortest exact form, so equal
+        // text means equal bits.
+        let text = |v: &Value| serde_json::to_string(&v["results"]).expect("serialises");
+        assert_eq!(text(&a), text(&b), "{model}");
+        assert_eq!(a["run"]["messages"], b["run"]["messages"], "{model}");
+        // Something was reused: the driver saw as many states, the worlds
+        // simulated fewer. The 4 jobs share their 21 test runs; the two
+        // workers' first jobs run at once and may both simulate them, so at
+        // most 6 training and 2 × 21 test runs of 90 are simulated.
+        let states = number(&a["run"]["messages"]);
+        let simulated = number(&a["run"]["simulated_states"]);
+        assert!(
+            simulated > 0.0 && simulated < 0.6 * states,
+            "{simulated} of {states}"
+        );
+        assert_eq!(number(&b["run"]["simulated_states"]), states, "{model}");
+    }
+}

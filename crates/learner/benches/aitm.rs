@@ -12,28 +12,9 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use learner::aitm::{Aitm, AitmConfig, QueryMode};
 
-/// SplitMix64: deterministic inputs without an extra dependency.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A 3-decimal value in [−half, half].
-    fn grid(&mut self, half: i64) -> f64 {
-        let k = (self.next() % (2 * half as u64 + 1)) as i64 - half;
-        k as f64 / 1000.0
-    }
-
-    fn vec(&mut self, dim: usize, half: i64) -> Vec<f64> {
-        (0..dim).map(|_| self.grid(half)).collect()
-    }
-}
+#[path = "support/rng.rs"]
+mod rng;
+use rng::Rng;
 
 fn grown(mode: QueryMode, dim: usize, nodes: usize, rng: &mut Rng) -> Aitm {
     let mut map = Aitm::new(AitmConfig::regressor(mode), dim, 3);

@@ -1,5 +1,6 @@
 //! The AITM data structure, query and update (aitm.md §1–§5).
 
+use std::borrow::Cow;
 use std::collections::BTreeSet;
 
 use serde::{Deserialize, Serialize};
@@ -7,6 +8,16 @@ use serde::{Deserialize, Serialize};
 use super::distance::{lr_distance, lr_sq_norm, pairwise_sq_sum, ranking_distance};
 use super::errors::AitmError;
 use super::hyperparams::{AitmConfig, QueryMode};
+use super::index::KdIndex;
+
+/// Node count from which the winner search goes through the spatial index
+/// ([`KdIndex`]); below it the contiguous scan is as fast (aitm.md §7: the
+/// thesis's maps stay near 1100 nodes).
+pub const INDEX_MIN_NODES: usize = 512;
+
+/// Removed rows are kept as gaps until they outnumber the live ones (and
+/// this many), so that a removal does not move every later row.
+const COMPACT_MIN_GAPS: usize = 64;
 
 /// Identifier of a node, unique within one map (aitm.md §1: a per-map counter
 /// starting at 0, incremented per insertion). Ids are never reused.
@@ -52,10 +63,15 @@ pub(crate) struct Ranking {
 /// vectors, one row per node, so that the nearest-node scan walks contiguous
 /// memory.
 ///
+/// Removed nodes leave gaps (rows marked dead) until compaction, and maps of
+/// [`INDEX_MIN_NODES`] nodes or more keep a spatial index of their inputs;
+/// neither is visible: equality, views and the serialised form only see the
+/// live nodes in order.
+///
 /// Serialising and deserialising (e.g. through `serde_json` with its
 /// `float_roundtrip` feature) reproduces the map bit for bit; deserialisation
 /// checks the structural invariants and rejects inconsistent data.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(try_from = "AitmState")]
 pub struct Aitm {
     config: AitmConfig,
@@ -72,6 +88,33 @@ pub struct Aitm {
     w_out: Vec<f64>,
     a: Vec<f64>,
     neighbours: Vec<BTreeSet<NodeId>>,
+    /// Whether each row holds a node (false: a removed node's gap).
+    alive: Vec<bool>,
+    /// Number of live rows.
+    live: usize,
+    /// Live rows with a non-finite input (the index handles finite ones).
+    nonfinite: usize,
+    /// Node count from which the index is used.
+    index_min: usize,
+    index: Option<KdIndex>,
+}
+
+impl PartialEq for Aitm {
+    fn eq(&self, other: &Self) -> bool {
+        self.config == other.config
+            && self.input_dim == other.input_dim
+            && self.output_dim == other.output_dim
+            && self.update_calls == other.update_calls
+            && self.inserts == other.inserts
+            && self.len() == other.len()
+            && self.nodes().zip(other.nodes()).all(|(a, b)| {
+                a.id == b.id
+                    && a.w_in == b.w_in
+                    && a.w_out == b.w_out
+                    && a.a == b.a
+                    && a.neighbours == b.neighbours
+            })
+    }
 }
 
 impl Aitm {
@@ -89,6 +132,33 @@ impl Aitm {
             w_out: Vec::new(),
             a: Vec::new(),
             neighbours: Vec::new(),
+            alive: Vec::new(),
+            live: 0,
+            nonfinite: 0,
+            index_min: INDEX_MIN_NODES,
+            index: None,
+        }
+    }
+
+    /// Searches winners through the spatial index once the map holds
+    /// `nodes` nodes (default [`INDEX_MIN_NODES`]; `usize::MAX`: always scan).
+    /// The answers are the same either way (aitm.md §7); only the time
+    /// differs.
+    pub fn set_index_min(&mut self, nodes: usize) {
+        self.index_min = nodes;
+        self.index = None;
+        self.update_index_use();
+    }
+
+    /// Builds the index once the map is large enough.
+    fn update_index_use(&mut self) {
+        if self.index.is_none() && self.input_dim > 0 && self.live >= self.index_min {
+            let alive = &self.alive;
+            self.index = Some(KdIndex::build(
+                self.input_dim,
+                &self.w_in,
+                (0..alive.len()).filter(|&i| alive[i]),
+            ));
         }
     }
 
@@ -109,13 +179,13 @@ impl Aitm {
 
     /// Current number of nodes.
     pub fn len(&self) -> usize {
-        self.ids.len()
+        self.live
     }
 
     /// Whether the map has no nodes (it was never trained: training never
     /// removes the last two nodes).
     pub fn is_empty(&self) -> bool {
-        self.ids.is_empty()
+        self.live == 0
     }
 
     /// Update calls, inserts and current node count.
@@ -128,8 +198,10 @@ impl Aitm {
     }
 
     /// The nodes in node order.
-    pub fn nodes(&self) -> impl ExactSizeIterator<Item = NodeView<'_>> + '_ {
-        (0..self.len()).map(move |i| self.view(i))
+    pub fn nodes(&self) -> impl Iterator<Item = NodeView<'_>> + '_ {
+        (0..self.ids.len())
+            .filter(move |&i| self.alive[i])
+            .map(move |i| self.view(i))
     }
 
     /// The node with this id, if it exists.
@@ -279,6 +351,34 @@ impl Aitm {
     ///
     /// Any faster search (spatial index) must return exactly this.
     pub(crate) fn rank_two(&self, x: &[f64]) -> Option<Ranking> {
+        if let Some(index) = &self.index {
+            if self.nonfinite == 0 && x.iter().all(|v| v.is_finite()) {
+                return self.rank_two_indexed(index, x);
+            }
+        }
+        self.rank_two_scan(x)
+    }
+
+    /// The ids of the winner and second winner (tests: positions are rows,
+    /// which include the gaps of removed nodes).
+    #[cfg(test)]
+    pub(crate) fn ranked_ids(&self, x: &[f64], scan: bool) -> Option<(NodeId, Option<NodeId>)> {
+        let r = if scan {
+            self.rank_two_scan(x)
+        } else {
+            self.rank_two(x)
+        }?;
+        Some((self.ids[r.winner], r.second.map(|s| self.ids[s])))
+    }
+
+    /// Whether the winner search currently goes through the index.
+    #[cfg(test)]
+    pub(crate) fn is_indexed(&self) -> bool {
+        self.index.is_some()
+    }
+
+    /// [`Aitm::rank_two`] by the brute-force scan of aitm.md §2.
+    pub(crate) fn rank_two_scan(&self, x: &[f64]) -> Option<Ranking> {
         // The instances' input sizes get a loop with the dimension known at
         // compile time (same arithmetic, unrolled).
         match self.input_dim {
@@ -286,14 +386,35 @@ impl Aitm {
             8 => self.rank_two_fixed::<8>(x),
             10 => self.rank_two_fixed::<10>(x),
             n => rank_rows(
-                (0..self.len()).map(|i| pairwise_sq_sum(&self.w_in[i * n..(i + 1) * n], x)),
+                (0..self.ids.len())
+                    .filter(|&i| self.alive[i])
+                    .map(|i| (i, pairwise_sq_sum(&self.w_in[i * n..(i + 1) * n], x))),
             ),
         }
     }
 
     fn rank_two_fixed<const N: usize>(&self, x: &[f64]) -> Option<Ranking> {
         let x = &x[..N];
-        rank_rows(self.w_in.chunks_exact(N).map(|row| pairwise_sq_sum(row, x)))
+        let rows = self.w_in.chunks_exact(N).enumerate();
+        if self.live == self.ids.len() {
+            rank_rows(rows.map(|(i, row)| (i, pairwise_sq_sum(row, x))))
+        } else {
+            rank_rows(
+                rows.filter(|(i, _)| self.alive[*i])
+                    .map(|(i, row)| (i, pairwise_sq_sum(row, x))),
+            )
+        }
+    }
+
+    /// [`Aitm::rank_two`] through the index (finite inputs only; the scan
+    /// ranks NaN distances).
+    fn rank_two_indexed(&self, index: &KdIndex, x: &[f64]) -> Option<Ranking> {
+        debug_assert_eq!(index.len(), self.live);
+        let (best, second) = index.nearest_two(x, &self.w_in);
+        best.map(|(_, _, winner)| Ranking {
+            winner,
+            second: second.map(|(_, _, s)| s),
+        })
     }
 
     fn check_input(&self, x: &[f64]) {
@@ -317,7 +438,7 @@ impl Aitm {
     }
 
     fn position(&self, id: NodeId) -> Option<usize> {
-        self.ids.binary_search(&id).ok()
+        self.ids.binary_search(&id).ok().filter(|&i| self.alive[i])
     }
 
     fn w_in_row(&self, i: usize) -> &[f64] {
@@ -454,8 +575,16 @@ impl Aitm {
                 })
                 .collect()
         };
+        let was_finite = self.w_in_row(c).iter().all(|v| v.is_finite());
+        if let Some(index) = &mut self.index {
+            index.remove(c);
+        }
         for (w, d) in self.w_in[c * n..(c + 1) * n].iter_mut().zip(&dw) {
             *w += d;
+        }
+        self.track_finite(c, was_finite);
+        if let Some(index) = &mut self.index {
+            index.insert(c, &self.w_in);
         }
         for ((w, er), ad) in self.w_out_row_mut(c).iter_mut().zip(&err).zip(&a_dw) {
             *w += p.eta_out * er + ad;
@@ -527,14 +656,65 @@ impl Aitm {
         self.remove_row(i);
     }
 
-    /// Removes node `i` keeping the order of the others.
+    /// Counts row `c`'s input as finite or not after it changed.
+    fn track_finite(&mut self, c: usize, was_finite: bool) {
+        let finite = self.w_in_row(c).iter().all(|v| v.is_finite());
+        match (was_finite, finite) {
+            (true, false) => self.nonfinite += 1,
+            (false, true) => self.nonfinite -= 1,
+            _ => {}
+        }
+    }
+
+    /// Removes node `i`, keeping the order of the others: its row becomes a
+    /// gap, and the gaps are squeezed out once they outnumber the nodes.
     fn remove_row(&mut self, i: usize) {
+        self.alive[i] = false;
+        self.neighbours[i].clear();
+        self.live -= 1;
+        if !self.w_in_row(i).iter().all(|v| v.is_finite()) {
+            self.nonfinite -= 1;
+        }
+        if let Some(index) = &mut self.index {
+            index.remove(i);
+        }
+        let gaps = self.ids.len() - self.live;
+        if gaps > self.live && gaps >= COMPACT_MIN_GAPS {
+            self.compact();
+        }
+    }
+
+    /// Drops the gaps of removed nodes (row positions change; callers look
+    /// positions up again after any removal) and rebuilds the index.
+    fn compact(&mut self) {
         let (n, m) = (self.input_dim, self.output_dim);
-        self.ids.remove(i);
-        self.w_in.drain(i * n..(i + 1) * n);
-        self.w_out.drain(i * m..(i + 1) * m);
-        self.a.drain(i * n * m..(i + 1) * n * m);
-        self.neighbours.remove(i);
+        let alive = std::mem::take(&mut self.alive);
+        let keep = |v: &mut Vec<f64>, width: usize| {
+            let mut row = 0;
+            v.retain(|_| {
+                let k = alive[row / width.max(1)];
+                row += 1;
+                k
+            });
+        };
+        if n > 0 {
+            keep(&mut self.w_in, n);
+        }
+        if m > 0 {
+            keep(&mut self.w_out, m);
+        }
+        if n * m > 0 {
+            keep(&mut self.a, n * m);
+        }
+        let mut k = alive.iter();
+        self.ids.retain(|_| *k.next().unwrap_or(&false));
+        let mut k = alive.iter();
+        self.neighbours.retain(|_| *k.next().unwrap_or(&false));
+        self.alive = vec![true; self.live];
+        if self.index.is_some() {
+            self.index = None;
+            self.update_index_use();
+        }
     }
 
     /// Appends a node for (x, y), optionally connected to `edge_to`.
@@ -552,8 +732,18 @@ impl Aitm {
         self.a
             .extend(std::iter::repeat_n(0.0, self.input_dim * self.output_dim));
         self.neighbours.push(BTreeSet::new());
+        self.alive.push(true);
+        self.live += 1;
+        let row = self.ids.len() - 1;
+        if !x.iter().all(|v| v.is_finite()) {
+            self.nonfinite += 1;
+        }
+        match &mut self.index {
+            Some(index) => index.insert(row, &self.w_in),
+            None => self.update_index_use(),
+        }
         if let Some(other) = edge_to.and_then(|o| self.position(o)) {
-            self.connect(self.len() - 1, other);
+            self.connect(row, other);
         }
     }
 
@@ -577,7 +767,7 @@ impl Aitm {
 /// differences in row order (aitm.md §2): distances are the square roots,
 /// compared exactly, ties to the earlier row, NaN after every number.
 #[inline(always)]
-fn rank_rows(sq_sums: impl Iterator<Item = f64>) -> Option<Ranking> {
+fn rank_rows(sq_sums: impl Iterator<Item = (usize, f64)>) -> Option<Ranking> {
     /// Position, squared-distance sum and distance of a candidate.
     type Candidate = (usize, f64, f64);
     fn closer(d: f64, current: Option<Candidate>) -> bool {
@@ -588,7 +778,7 @@ fn rank_rows(sq_sums: impl Iterator<Item = f64>) -> Option<Ranking> {
     }
     let mut best: Option<Candidate> = None;
     let mut second: Option<Candidate> = None;
-    for (i, sum) in sq_sums.enumerate() {
+    for (i, sum) in sq_sums {
         // Exact shortcut: the square root is monotone, so a sum above the
         // second winner's gives a distance at least as large, and an equal
         // distance loses the tie to the earlier second winner. Only the
@@ -647,26 +837,50 @@ fn pow10(e: f64) -> f64 {
     }
 }
 
-/// The serialised form, validated before it becomes an [`Aitm`]. Field names
-/// and order match `Aitm`'s derived `Serialize`.
-#[derive(Deserialize)]
-struct AitmState {
-    config: AitmConfig,
+/// The serialised form, validated before it becomes an [`Aitm`]: the live
+/// nodes in order, without gaps or index.
+#[derive(Serialize, Deserialize)]
+struct AitmState<'a> {
+    config: Cow<'a, AitmConfig>,
     input_dim: usize,
     output_dim: usize,
     update_calls: u64,
     inserts: u64,
-    ids: Vec<NodeId>,
-    w_in: Vec<f64>,
-    w_out: Vec<f64>,
-    a: Vec<f64>,
-    neighbours: Vec<BTreeSet<NodeId>>,
+    ids: Cow<'a, [NodeId]>,
+    w_in: Cow<'a, [f64]>,
+    w_out: Cow<'a, [f64]>,
+    a: Cow<'a, [f64]>,
+    neighbours: Cow<'a, [BTreeSet<NodeId>]>,
 }
 
-impl TryFrom<AitmState> for Aitm {
+impl Serialize for Aitm {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        if self.live == self.ids.len() {
+            AitmState {
+                config: Cow::Borrowed(&self.config),
+                input_dim: self.input_dim,
+                output_dim: self.output_dim,
+                update_calls: self.update_calls,
+                inserts: self.inserts,
+                ids: Cow::Borrowed(&self.ids),
+                w_in: Cow::Borrowed(&self.w_in),
+                w_out: Cow::Borrowed(&self.w_out),
+                a: Cow::Borrowed(&self.a),
+                neighbours: Cow::Borrowed(&self.neighbours),
+            }
+            .serialize(serializer)
+        } else {
+            let mut compact = self.clone();
+            compact.compact();
+            compact.serialize(serializer)
+        }
+    }
+}
+
+impl TryFrom<AitmState<'_>> for Aitm {
     type Error = AitmError;
 
-    fn try_from(s: AitmState) -> Result<Self, Self::Error> {
+    fn try_from(s: AitmState<'_>) -> Result<Self, Self::Error> {
         use AitmError::InconsistentState as Bad;
         let count = s.ids.len();
         let rows = |dim: usize| count.checked_mul(dim);
@@ -704,17 +918,94 @@ impl TryFrom<AitmState> for Aitm {
                 }
             }
         }
-        Ok(Self {
-            config: s.config,
+        let nonfinite = s
+            .w_in
+            .chunks(s.input_dim.max(1))
+            .take(count)
+            .filter(|row| !row.iter().all(|v| v.is_finite()))
+            .count();
+        let mut map = Self {
+            config: s.config.into_owned(),
             input_dim: s.input_dim,
             output_dim: s.output_dim,
             update_calls: s.update_calls,
             inserts: s.inserts,
-            ids: s.ids,
-            w_in: s.w_in,
-            w_out: s.w_out,
-            a: s.a,
-            neighbours: s.neighbours,
-        })
+            ids: s.ids.into_owned(),
+            w_in: s.w_in.into_owned(),
+            w_out: s.w_out.into_owned(),
+            a: s.a.into_owned(),
+            neighbours: s.neighbours.into_owned(),
+            alive: vec![true; count],
+            live: count,
+            nonfinite: if s.input_dim == 0 { 0 } else { nonfinite },
+            index_min: INDEX_MIN_NODES,
+            index: None,
+        };
+        // The index is not serialised: rebuilt here, it returns the same
+        // rankings as the scan (and as the index of the saved map).
+        map.update_index_use();
+        Ok(map)
+    }
+}
+
+#[cfg(test)]
+mod gap_tests {
+    use super::*;
+    use crate::aitm::{AitmConfig, QueryMode};
+
+    /// Removals leave gaps, compaction squeezes them out, and neither changes
+    /// what the map answers or how it serialises.
+    #[test]
+    fn gaps_and_compaction_are_invisible() {
+        let mut map = Aitm::new(AitmConfig::regressor(QueryMode::Winner), 2, 1);
+        map.set_index_min(100);
+        for k in 0..300u32 {
+            let x = [f64::from(k % 17) * 0.01, f64::from(k / 17) * 0.01];
+            map.insert(&x, &[f64::from(k)], None);
+        }
+        map.update_calls = 300;
+        assert!(map.is_indexed());
+        let mut fresh = Aitm::new(AitmConfig::regressor(QueryMode::Winner), 2, 1);
+        let mut deleted_rows = 0;
+        for id in 0..300u64 {
+            if id % 5 != 0 {
+                map.delete(id);
+                deleted_rows += 1;
+            }
+            if deleted_rows == 100 {
+                // Gaps still in place: 100 of 300 rows.
+                assert_eq!(map.ids.len(), 300);
+            }
+        }
+        // 240 removed of 300: compacted on the way.
+        assert!(
+            map.ids.len() < 300 && map.ids.len() >= map.len(),
+            "{}",
+            map.ids.len()
+        );
+        assert_eq!(map.len(), 60);
+        for v in map.nodes() {
+            fresh.ids.push(v.id);
+            fresh.w_in.extend_from_slice(v.w_in);
+            fresh.w_out.extend_from_slice(v.w_out);
+            fresh.a.extend_from_slice(v.a);
+            fresh.neighbours.push(v.neighbours.clone());
+            fresh.alive.push(true);
+            fresh.live += 1;
+        }
+        fresh.inserts = map.inserts;
+        fresh.update_calls = map.update_calls;
+        assert_eq!(fresh, map);
+        let text = serde_json::to_string(&map).expect("serialises");
+        assert_eq!(text, serde_json::to_string(&fresh).expect("serialises"));
+        let restored: Aitm = serde_json::from_str(&text).expect("deserialises");
+        assert_eq!(restored, map);
+        for probe in [[0.0, 0.0], [0.05, 0.051], [0.16, 0.17], [0.3, -0.2]] {
+            let expected = fresh.ranked_ids(&probe, true);
+            assert!(expected.is_some_and(|(_, s)| s.is_some()));
+            assert_eq!(map.ranked_ids(&probe, false), expected);
+            assert_eq!(map.ranked_ids(&probe, true), expected);
+            assert_eq!(restored.ranked_ids(&probe, true), expected);
+        }
     }
 }

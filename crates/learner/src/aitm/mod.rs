@@ -26,12 +26,13 @@ mod algorithm;
 pub(crate) mod distance;
 mod errors;
 mod hyperparams;
+mod index;
 
 #[cfg(test)]
 mod proptests;
 #[cfg(test)]
 mod tests;
 
-pub use algorithm::{Aitm, MapStats, NodeId, NodeView};
+pub use algorithm::{Aitm, MapStats, NodeId, NodeView, INDEX_MIN_NODES};
 pub use errors::AitmError;
 pub use hyperparams::{AitmConfig, AitmParams, QueryMode, EPS_MAX, SIGMA};

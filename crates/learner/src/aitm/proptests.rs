@@ -100,11 +100,10 @@ fn check_invariants(map: &Aitm) -> Result<(), TestCaseError> {
 }
 
 /// Reference ranking: a stable sort of the ranking distances.
-fn reference_ranking(map: &Aitm, x: &[f64]) -> Option<(usize, Option<usize>)> {
-    let mut order: Vec<(usize, f64)> = map
+fn reference_ranking(map: &Aitm, x: &[f64]) -> Option<(NodeId, Option<NodeId>)> {
+    let mut order: Vec<(NodeId, f64)> = map
         .nodes()
-        .enumerate()
-        .map(|(i, v)| (i, ranking_distance(v.w_in, x)))
+        .map(|v| (v.id, ranking_distance(v.w_in, x)))
         .collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1));
     let first = order.first()?.0;
@@ -133,8 +132,32 @@ proptest! {
                 for mode in [QueryMode::Winner, QueryMode::BestTwo, QueryMode::Neighbour] {
                     prop_assert!(map.query_mode(probe, mode).iter().all(|v| v.is_finite()));
                 }
-                let r = map.rank_two(probe).map(|r| (r.winner, r.second));
-                prop_assert_eq!(r, reference_ranking(&map, probe));
+                prop_assert_eq!(map.ranked_ids(probe, true), reference_ranking(&map, probe));
+            }
+        }
+    }
+
+    /// aitm.md §7: the spatial index returns exactly the scan's winner and
+    /// second winner, and a map searching through it evolves bit for bit
+    /// like one that scans, through insertions, deletions (gaps and their
+    /// compaction) and, with η > 0, moving nodes.
+    #[test]
+    fn the_index_ranks_exactly_like_the_scan(sc in scenario(), eta in prop_oneof![Just(0.0), Just(0.5)]) {
+        let mut params = sc.params;
+        params.eta_in = eta;
+        params.eta_out = eta;
+        let config = params.check().expect("valid rates");
+        let mut scan = Aitm::new(config, sc.input_dim, sc.output_dim);
+        let mut indexed = scan.clone();
+        indexed.set_index_min(0);
+        scan.set_index_min(usize::MAX);
+        for (x, y) in &sc.samples {
+            scan.update(x, y);
+            indexed.update(x, y);
+            prop_assert_eq!(json(&indexed), json(&scan));
+            prop_assert_eq!(indexed.is_indexed(), sc.input_dim > 0);
+            for probe in sc.probes.iter().chain(std::iter::once(x)) {
+                prop_assert_eq!(indexed.ranked_ids(probe, false), scan.ranked_ids(probe, true));
             }
         }
     }

@@ -251,7 +251,9 @@ impl AcSelector for Aitm {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum Selector {
-    Aitm(Aitm),
+    /// Boxed: the AITM with its spatial index is several times larger than
+    /// the other selectors.
+    Aitm(Box<Aitm>),
     Tree(TreeSelector),
     IncrementalTree(HoeffdingTree),
     Nearest(NearestSelector),
@@ -262,11 +264,11 @@ impl Selector {
     #[must_use]
     pub fn new(kind: SelectorKind) -> Self {
         match kind {
-            SelectorKind::Aitm => Selector::Aitm(Aitm::new(
+            SelectorKind::Aitm => Selector::Aitm(Box::new(Aitm::new(
                 AitmConfig::classifier(),
                 INTERACTION_INPUT_DIM,
                 1,
-            )),
+            ))),
             SelectorKind::Tree => Selector::Tree(TreeSelector::new()),
             SelectorKind::IncrementalTree => Selector::IncrementalTree(HoeffdingTree::new(
                 INTERACTION_INPUT_DIM,
@@ -291,14 +293,14 @@ impl Selector {
     #[must_use]
     pub fn aitm(&self) -> Option<&Aitm> {
         match self {
-            Selector::Aitm(m) => Some(m),
+            Selector::Aitm(m) => Some(m.as_ref()),
             _ => None,
         }
     }
 
     fn inner(&self) -> &dyn AcSelector {
         match self {
-            Selector::Aitm(s) => s,
+            Selector::Aitm(s) => s.as_ref(),
             Selector::Tree(s) => s,
             Selector::IncrementalTree(s) => s,
             Selector::Nearest(s) => s,
@@ -307,7 +309,7 @@ impl Selector {
 
     fn inner_mut(&mut self) -> &mut dyn AcSelector {
         match self {
-            Selector::Aitm(s) => s,
+            Selector::Aitm(s) => s.as_mut(),
             Selector::Tree(s) => s,
             Selector::IncrementalTree(s) => s,
             Selector::Nearest(s) => s,

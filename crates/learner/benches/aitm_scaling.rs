@@ -1,0 +1,164 @@
+//! How AITM query and update time grow with the node count (aitm.md §7;
+//! issue "memory that does not slow down"): maps of 1 k, 10 k, 100 k and
+//! 1 M nodes, searched through the spatial index, and the brute-force scan
+//! beside it up to 100 k.
+//!
+//! `cargo bench -p learner --bench aitm_scaling` prints a table and writes
+//! `target/aitm_scaling.csv`. Not criterion: an update grows the map, so
+//! each timed batch runs on a fresh copy of the map (the copy is not timed),
+//! and building a million-node map once is all the setup it needs.
+//!
+//! Inputs are 8-dimensional like the object predictors' φ, outputs
+//! 3-dimensional (BESTTWO), on the 3-decimal grid:
+//! * `uniform`: every component uniform in [−1, 1] (the hard case for any
+//!   spatial index: no structure at all);
+//! * `runs`: points along random walks of 150 steps (as the inputs of push
+//!   runs lie along trajectories), starting uniform in [−1, 1]⁸.
+
+use std::hint::black_box;
+use std::io::Write;
+use std::time::Instant;
+
+use learner::aitm::{Aitm, AitmConfig, QueryMode};
+
+const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
+const QUERIES: usize = 2_000;
+const UPDATES_PER_BATCH: usize = 100;
+
+#[path = "support/rng.rs"]
+mod rng;
+use rng::Rng;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Shape {
+    Uniform,
+    Runs,
+}
+
+/// An endless stream of (input, output) samples of one shape.
+struct Samples {
+    shape: Shape,
+    rng: Rng,
+    walk: [f64; 8],
+    step: usize,
+}
+
+impl Samples {
+    fn new(shape: Shape, seed: u64) -> Self {
+        Self {
+            shape,
+            rng: Rng(seed),
+            walk: [0.0; 8],
+            step: 0,
+        }
+    }
+
+    fn input(&mut self) -> [f64; 8] {
+        let mut x = [0.0; 8];
+        match self.shape {
+            Shape::Uniform => x.iter_mut().for_each(|v| *v = self.rng.grid(1000)),
+            Shape::Runs => {
+                if self.step % 150 == 0 {
+                    self.walk.iter_mut().for_each(|v| *v = self.rng.grid(1000));
+                }
+                self.step += 1;
+                for v in &mut self.walk {
+                    *v = ((*v + self.rng.grid(5)) * 1000.0).round() / 1000.0;
+                }
+                x = self.walk;
+            }
+        }
+        x
+    }
+
+    fn sample(&mut self) -> ([f64; 8], [f64; 3]) {
+        let x = self.input();
+        let y = [self.rng.grid(40), self.rng.grid(40), self.rng.grid(40)];
+        (x, y)
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// Mean ns per query over `QUERIES` probes.
+fn time_queries(map: &Aitm, probes: &[[f64; 8]]) -> f64 {
+    let start = Instant::now();
+    for p in probes {
+        black_box(map.query(black_box(p)));
+    }
+    start.elapsed().as_nanos() as f64 / probes.len() as f64
+}
+
+/// Median over batches of the mean ns per update, each batch on a copy.
+fn time_updates(map: &Aitm, samples: &mut Samples, batches: usize) -> f64 {
+    let mut per_batch = Vec::with_capacity(batches);
+    for _ in 0..batches {
+        let mut copy = map.clone();
+        // A clone has no spare capacity: its first insertion reallocates
+        // every row, which is the clone's cost, not an update's.
+        let (x, y) = samples.sample();
+        copy.update(&x, &y);
+        let batch: Vec<_> = (0..UPDATES_PER_BATCH).map(|_| samples.sample()).collect();
+        let start = Instant::now();
+        for (x, y) in &batch {
+            copy.update(black_box(x), black_box(y));
+        }
+        per_batch.push(start.elapsed().as_nanos() as f64 / UPDATES_PER_BATCH as f64);
+    }
+    median(per_batch)
+}
+
+fn main() -> std::io::Result<()> {
+    let mut csv = String::from("shape,nodes,search,query_ns,update_ns\n");
+    println!("shape    nodes      search  query µs  update µs");
+    for (shape, name) in [(Shape::Runs, "runs"), (Shape::Uniform, "uniform")] {
+        let mut map = Aitm::new(AitmConfig::regressor(QueryMode::BestTwo), 8, 3);
+        let mut train = Samples::new(shape, 1);
+        let mut fresh = Samples::new(shape, 2);
+        let mut first = None;
+        for n in SIZES {
+            while map.len() < n {
+                let (x, y) = train.sample();
+                map.update(&x, &y);
+            }
+            let probes: Vec<[f64; 8]> = (0..QUERIES).map(|_| fresh.input()).collect();
+            let batches = if n >= 1_000_000 { 5 } else { 20 };
+            let mut searches = vec![("index", usize::MIN)];
+            if n <= 100_000 {
+                searches.push(("scan", usize::MAX));
+            }
+            for (search, threshold) in searches {
+                let mut m = map.clone();
+                m.set_index_min(threshold);
+                let q = time_queries(&m, &probes);
+                let u = time_updates(&m, &mut fresh, batches);
+                println!(
+                    "{name:8} {:>9} {search:6} {:9.2} {:10.2}",
+                    m.len(),
+                    q / 1e3,
+                    u / 1e3
+                );
+                csv.push_str(&format!("{name},{},{search},{q:.0},{u:.0}\n", m.len()));
+                if search == "index" {
+                    match first {
+                        None => first = Some((q, u)),
+                        Some((q1, u1)) if n == SIZES[3] => println!(
+                            "{name}: 1 M / 1 k ratio: query {:.2}, update {:.2}",
+                            q / q1,
+                            u / u1
+                        ),
+                        Some(_) => {}
+                    }
+                }
+            }
+        }
+    }
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/aitm_scaling.csv");
+    std::fs::File::create(&path)?.write_all(csv.as_bytes())?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
