@@ -51,7 +51,7 @@ pub struct DraftRow {
 /// The draft's rows, in its order, with its numbers (Tables 6.1 and 6.2).
 ///
 /// Row names, as we read them (the draft defines none of the abbreviations;
-/// docs/results-draft.md gives the reasons):
+/// docs/results.md, "The thesis draft's variants", gives the reasons):
 /// * "Pairwise AC DT": the pairwise interaction model with Abstract
 ///   Collections and the decision-tree selector (draft §3.2, §4.2);
 /// * "Gate HG HA": the gate model with hard-coded gate (bit 32) and
