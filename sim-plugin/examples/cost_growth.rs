@@ -1,10 +1,14 @@
 //! How the per-message work of each model grows with experience
 //! (docs/performance.md §5): both models learn the same push-task training
-//! runs of the in-process world, one after the other; after each run this
-//! writes the model's node count (all maps) and the p50/p99 of that run's
-//! per-message work, then draws `cost-growth.{png,svg}`:
+//! runs of the in-process world, one after the other; after every window of
+//! runs this writes the model's node count (all maps) and the p50/p99 of the
+//! window's per-message work as CSV, then draws `cost-growth.{png,svg}`:
 //!
 //!   cargo run --release -p sim-plugin --example cost_growth -- --runs 300
+//!
+//! One point per window of `--window` runs (the node count at its end, the
+//! percentiles over all its messages): a single run's 150 messages make a
+//! noisy p99 on a shared machine.
 //!
 //! Per-message work is what the learner daemon does with a parsed state
 //! (`src/learn/mod.rs`): `update` (or `reset_objects` on a run's first
@@ -44,6 +48,9 @@ struct Args {
     /// Where the measurements go as CSV.
     #[arg(long, default_value = "target/cost_growth.csv")]
     csv: PathBuf,
+    /// Runs per point.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u64).range(1..))]
+    window: u64,
     /// Seed of the training starts.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -54,6 +61,8 @@ struct Learner<M: Model> {
     name: &'static str,
     model: M,
     rng: ChaCha8Rng,
+    /// Per-message times of the current window.
+    times: Latencies,
 }
 
 impl<M: Model> Learner<M> {
@@ -62,12 +71,12 @@ impl<M: Model> Learner<M> {
             name,
             model,
             rng: ChaCha8Rng::seed_from_u64(1),
+            times: Latencies::default(),
         }
     }
 
     /// Learns one recorded run, timing every message's work.
-    fn learn(&mut self, frames: &[Frame], runs: usize) -> anyhow::Result<CostPoint> {
-        let mut times = Latencies::default();
+    fn learn(&mut self, frames: &[Frame]) -> anyhow::Result<()> {
         let target = Target::new(BLUE_ID, TARGETS[0]);
         self.model.set_training(true);
         for (k, frame) in frames.iter().take(MESSAGES_PER_RUN).enumerate() {
@@ -88,16 +97,22 @@ impl<M: Model> Learner<M> {
             }
             std::hint::black_box(self.model.act(&mut self.rng));
             std::hint::black_box(self.model.predict(&world, PUSH_ACTION));
-            times.record(start.elapsed());
+            self.times.record(start.elapsed());
         }
+        Ok(())
+    }
+
+    /// The point of the window that ends after `runs` runs; starts the next.
+    fn point(&mut self, runs: usize) -> CostPoint {
+        let times = std::mem::take(&mut self.times);
         let us = |q: f64| times.quantile(q).as_secs_f64() * 1e6;
-        Ok(CostPoint {
+        CostPoint {
             model: self.name.to_owned(),
             runs,
             nodes: self.model.stats().maps.values().map(|m| m.nodes).sum(),
             p50_us: us(0.5),
             p99_us: us(0.99),
-        })
+        }
     }
 }
 
@@ -114,9 +129,14 @@ fn main() -> anyhow::Result<()> {
             &mut world,
             eval::random_training_start(starts.random::<f64>()),
         );
-        let g = gate.learn(&frames, run)?;
-        let i = interaction.learn(&frames, run)?;
-        if run % 25 == 0 || run == args.runs {
+        gate.learn(&frames)?;
+        interaction.learn(&frames)?;
+        if run as u64 % args.window != 0 && run != args.runs {
+            continue;
+        }
+        let g = gate.point(run);
+        let i = interaction.point(run);
+        if run % 50 == 0 || run == args.runs {
             eprintln!(
                 "run {run}/{}: gate {} nodes p50 {:.1} µs p99 {:.1} µs; interaction {} nodes p50 {:.1} µs p99 {:.1} µs",
                 args.runs, g.nodes, g.p50_us, g.p99_us, i.nodes, i.p50_us, i.p99_us
@@ -128,8 +148,8 @@ fn main() -> anyhow::Result<()> {
     std::fs::write(&args.csv, plot::cost_csv(&points))
         .with_context(|| format!("cannot write {}", args.csv.display()))?;
     let title = format!(
-        "Per-message work (update + act + predict) against node count, {} push-task training runs",
-        args.runs
+        "Per-message work (update + act + predict) against node count: {} push-task training runs, a point per {}",
+        args.runs, args.window
     );
     for path in plot::cost_growth(&points, &title, &args.figures)? {
         eprintln!("wrote {}", path.display());
