@@ -12,13 +12,28 @@
 //!
 //! Criterion's throughput is in runs, so "elem/s" is runs of 150 messages
 //! per second; time / 150 is the cost of one message.
+//!
+//! The `sim_overhead` group measures issue 7 item 4 (docs/performance.md §4):
+//! physics steps per wall-clock second of the same 1500 steps (the push from
+//! x0 = 0.105 for 1.5 s of simulated time) at 100 Hz (150 messages of 10
+//! steps) and at 10 Hz (15 messages of 100 steps):
+//!
+//! * `in_process/<hz>`: the world stepped directly, and every published
+//!   snapshot turned into the daemon's message and framed, i.e. the
+//!   daemon's own publish work without the socket;
+//! * `socket/<hz>`: a lock-step `pushlearn-sim` server whose one client
+//!   advances as fast as it can and decodes every state.
+//!
+//! Criterion's throughput is in steps, so "elem/s" is physics steps per
+//! second and socket / in_process is the ratio the issue asks for (≥ 0.9).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use pushlearn::client::{ClientError, SimClient};
+use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::{self, client_message::Payload};
-use sim_plugin::server::{Config, Server, ServerHandle, Timing};
+use sim_plugin::server::{state_message, Config, Server, ServerHandle, Timing};
 use sim_plugin::sweep::run;
-use sim_plugin::{Scene, SweepOptions, World};
+use sim_plugin::{ActuatorMode, Command, Scene, SweepOptions, World};
 use tokio::net::TcpListener;
 
 const MESSAGES: u32 = 150;
@@ -40,12 +55,13 @@ async fn socket_run(client: &mut SimClient, x0: f64) -> Result<pb::WorldState, C
     Ok(last)
 }
 
-async fn lockstep_server(scene: Scene) -> (ServerHandle, SimClient) {
+async fn lockstep_server(scene: Scene, publish_rate_hz: Option<u32>) -> (ServerHandle, SimClient) {
     let Ok(listener) = TcpListener::bind("127.0.0.1:0").await else {
         panic!("cannot bind 127.0.0.1:0");
     };
     let config = Config {
         timing: Timing::Lockstep { latency: None },
+        publish_rate_hz,
         ..Config::new(scene)
     };
     let server = match Server::start(listener, config).await {
@@ -82,7 +98,7 @@ fn runs(c: &mut Criterion) {
     else {
         panic!("cannot build a tokio runtime");
     };
-    let (server, mut client) = runtime.block_on(lockstep_server(scene));
+    let (server, mut client) = runtime.block_on(lockstep_server(scene, None));
     group.bench_function("socket", |b| {
         b.iter(|| runtime.block_on(socket_run(&mut client, std::hint::black_box(X0))))
     });
@@ -92,5 +108,116 @@ fn runs(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, runs);
+/// Simulated steps in one overhead run, at every publish rate.
+const OVERHEAD_STEPS: u32 = 1500;
+const STEPS_PER_SECOND: u32 = 1000;
+
+/// The socket run's commands applied in-process, then `OVERHEAD_STEPS`
+/// steps, every published snapshot turned into the daemon's framed message.
+/// Returns the last step, to check that both sides stepped as many steps.
+fn in_process_run(world: &mut World, rate_hz: u32, x0: f64) -> u64 {
+    let commands = [
+        Command::SetPublishRate(rate_hz),
+        Command::Actuator {
+            mode: ActuatorMode::Move,
+            velocity: [0.0; 3],
+        },
+        Command::Reset,
+        Command::Unpause,
+        Command::SetPose {
+            name: "actuator".into(),
+            position: [x0, 0.0, 0.03],
+            orientation: [0.0, 0.0, 0.0, 1.0],
+        },
+        Command::Actuator {
+            mode: ActuatorMode::Move,
+            velocity: [0.0, 0.5, 0.0],
+        },
+    ];
+    for command in commands {
+        if let Err(err) = world.apply(command) {
+            panic!("in-process command: {err}");
+        }
+    }
+    let messages = OVERHEAD_STEPS * rate_hz / STEPS_PER_SECOND;
+    let (mut published, mut last_step) = (0, 0);
+    while published < messages {
+        match world.step() {
+            Ok(Some(snapshot)) => {
+                published += 1;
+                last_step = snapshot.step;
+                let message = state_message(&snapshot, u64::from(published), 0);
+                std::hint::black_box(encode_frame(&message).is_ok());
+            }
+            Ok(None) => {}
+            Err(err) => panic!("in-process step: {err}"),
+        }
+    }
+    last_step
+}
+
+/// The same run over the socket: the client only advances and decodes.
+async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u64 {
+    for payload in [
+        Payload::move_(0.0, 0.0),
+        Payload::reset(),
+        Payload::set_pose("actuator", [x0, 0.0, 0.03], 0.0),
+        Payload::move_(0.0, 0.5),
+    ] {
+        if let Err(err) = client.send(payload).await {
+            panic!("socket command: {err}");
+        }
+    }
+    let mut last_step = 0;
+    for _ in 0..OVERHEAD_STEPS * rate_hz / STEPS_PER_SECOND {
+        match client.command_and_wait_applied(Payload::advance()).await {
+            Ok(state) => last_step = state.step,
+            Err(err) => panic!("socket advance: {err}"),
+        }
+    }
+    last_step
+}
+
+fn overhead(c: &mut Criterion) {
+    let Ok(scene) = Scene::builtin("one_block") else {
+        panic!("the embedded scene does not parse");
+    };
+    let Ok(runtime) = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+    else {
+        panic!("cannot build a tokio runtime");
+    };
+    let mut group = c.benchmark_group("sim_overhead");
+    group.throughput(Throughput::Elements(u64::from(OVERHEAD_STEPS)));
+    group.sample_size(20);
+    for rate_hz in [100, 10] {
+        let Ok(mut world) = World::new(&scene) else {
+            panic!("the world does not build");
+        };
+        let (server, mut client) = runtime.block_on(lockstep_server(scene.clone(), Some(rate_hz)));
+        // Both sides must step the same steps, or the ratio means nothing.
+        let in_process = in_process_run(&mut world, rate_hz, X0);
+        let socket = runtime.block_on(socket_overhead_run(&mut client, rate_hz, X0));
+        assert_eq!(in_process, socket, "steps differ at {rate_hz} Hz");
+        group.bench_function(format!("in_process/{rate_hz}hz"), |b| {
+            b.iter(|| in_process_run(&mut world, rate_hz, std::hint::black_box(X0)))
+        });
+        group.bench_function(format!("socket/{rate_hz}hz"), |b| {
+            b.iter(|| {
+                runtime.block_on(socket_overhead_run(
+                    &mut client,
+                    rate_hz,
+                    std::hint::black_box(X0),
+                ))
+            })
+        });
+        if let Err(err) = runtime.block_on(server.shutdown()) {
+            panic!("server shutdown: {err}");
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, runs, overhead);
 criterion_main!(benches);

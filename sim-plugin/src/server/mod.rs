@@ -273,6 +273,18 @@ impl Shared {
     }
 }
 
+/// The message the daemon publishes for `snapshot`: the per-publish work
+/// beyond stepping (the writer then frames it). Public so that the overhead
+/// bench (`benches/round_trip.rs`) can charge the same work to the world
+/// stepped in-process.
+pub fn state_message(
+    snapshot: &crate::world::Snapshot,
+    publish_seq: u64,
+    applied_seq: u64,
+) -> pb::ServerMessage {
+    convert::world_state(snapshot, publish_seq, applied_seq).into()
+}
+
 /// The daemon.
 pub struct Server;
 

@@ -19,7 +19,7 @@ use tokio::sync::oneshot;
 use tokio_util::sync::CancellationToken;
 
 use super::gate::{Accepted, Op, ToPhysics};
-use super::{convert, Config, Latency, ServerError, Shared, Timing};
+use super::{Config, Latency, ServerError, Shared, Timing};
 use crate::world::{Command, StepError, World};
 
 /// In realtime mode, how far the world may fall behind its schedule (after
@@ -324,8 +324,8 @@ impl Physics {
         match self.world.step() {
             Ok(Some(snapshot)) => {
                 self.publish_seq += 1;
-                let state = convert::world_state(&snapshot, self.publish_seq, self.applied_seq);
-                self.shared.broadcast_state(&Arc::new(state.into()));
+                let state = super::state_message(&snapshot, self.publish_seq, self.applied_seq);
+                self.shared.broadcast_state(&Arc::new(state));
                 Ok(true)
             }
             Ok(None) => Ok(false),
