@@ -105,6 +105,16 @@ fn assert_action(got: Action, want: (f64, f64)) {
     );
 }
 
+/// The model's AITM selector (the models built here use the default one).
+fn aitm_of(m: &InteractionModel) -> &crate::aitm::Aitm {
+    m.aitm_selector().expect("the AITM selector")
+}
+
+/// The AITM selector's node labels, in node order.
+fn selector_labels(m: &InteractionModel) -> Vec<f64> {
+    aitm_of(m).nodes().map(|n| n.w_out[0]).collect()
+}
+
 // ---------------------------------------------------------------- world (§2)
 
 #[test]
@@ -174,23 +184,12 @@ fn acs_are_created_per_new_changed_set_with_ids_in_creation_order() {
         .collect();
     assert_eq!(updates, vec![2, 1, 1]);
     // The ACS and the AIM see every episode.
-    assert_eq!(
-        m.aitm_selector()
-            .expect("the AITM selector")
-            .stats()
-            .update_calls,
-        4
-    );
+    assert_eq!(aitm_of(&m).stats().update_calls, 4);
     assert!(m.selector_trained());
     // Selector nodes store the AC ids as labels. Episode 3 starts where
     // episode 2 did (same input) with label 0: that node's 1 becomes
     // trunc(0.5) = 0. Episode 4's new input inserts label 2.
-    let labels: Vec<f64> = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .map(|n| n.w_out[0])
-        .collect();
+    let labels = selector_labels(&m);
     assert_eq!(labels, [0.0, 0.0, 2.0]);
 }
 
@@ -220,12 +219,7 @@ fn the_training_input_is_the_old_state_and_the_action_in_the_old_frame() {
     m.update(&new, a);
     let x = old.states[&KEY].input(a);
     assert_ne!(x, new.states[&KEY].input(a));
-    let acs_node = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .next()
-        .expect("node");
+    let acs_node = aitm_of(&m).nodes().next().expect("node");
     assert_eq!(acs_node.w_in, &x[..]);
     let ac = &m.collections()[0];
     let ac_node = ac.forward().nodes().next().expect("node");
@@ -301,13 +295,7 @@ fn training_off_only_moves_the_states_forward() {
     m.reset_objects(&w0);
     m.update(&w1, Action::new(0.0, 0.5));
     assert!(m.collections().is_empty());
-    assert_eq!(
-        m.aitm_selector()
-            .expect("the AITM selector")
-            .stats()
-            .update_calls,
-        0
-    );
+    assert_eq!(aitm_of(&m).stats().update_calls, 0);
     assert!(!m.selector_trained());
     assert_eq!(m.inverse_model().prototype_count(), 0);
     assert_eq!(m.current_states()[&KEY], w1.states[&KEY]);
@@ -327,13 +315,7 @@ fn a_pair_seen_for_the_first_time_is_stored_without_training() {
     let mut two = poses((0.0, 0.25, 0.0), (0.0, 0.005, 0.0));
     two.blocks.insert(RED_ID, ObjectState::new(-0.6, 0.35, 0.0));
     m.update(&InteractionWorld::from_poses(two), Action::new(0.0, 0.5));
-    assert_eq!(
-        m.aitm_selector()
-            .expect("the AITM selector")
-            .stats()
-            .update_calls,
-        1
-    );
+    assert_eq!(aitm_of(&m).stats().update_calls, 1);
     assert_eq!(m.current_states().len(), 4);
 }
 
@@ -351,33 +333,15 @@ fn acs_labels_are_truncated_integers() {
     episode(&mut m, &b, &changed(&b, &[(5, 0.005)]), far); // AC 1 at x_far
     episode(&mut m, &b, &changed(&b, &[(5, 0.005), (6, 0.005)]), a); // AC 2 at x_a
     assert_eq!(m.collections().len(), 3);
-    assert_eq!(
-        m.aitm_selector().expect("the AITM selector").stats().nodes,
-        2
-    );
-    let labels: Vec<f64> = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .map(|n| n.w_out[0])
-        .collect();
+    assert_eq!(aitm_of(&m).stats().nodes, 2);
+    let labels = selector_labels(&m);
     // Node 0 held 0, was hit by label 2: 0 + 0.5·2 = 1 exactly, stays 1.
     assert_eq!(labels, vec![1.0, 1.0]);
     episode(&mut m, &b, &changed(&b, &[(6, 0.005)]), a); // label 0 at x_a: 1 → 0.5 → 0
-    let labels: Vec<f64> = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .map(|n| n.w_out[0])
-        .collect();
+    let labels = selector_labels(&m);
     assert_eq!(labels, vec![0.0, 1.0]);
     episode(&mut m, &b, &changed(&b, &[(5, 0.005)]), a); // label 1 at x_a: 0 → 0.5 → 0
-    let labels: Vec<f64> = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .map(|n| n.w_out[0])
-        .collect();
+    let labels = selector_labels(&m);
     assert_eq!(labels, vec![0.0, 1.0]);
     // Prediction selects AC 0 ({6}), not the fractional "0.5".
     let p = m.predict_state(&b, a);
@@ -417,14 +381,9 @@ fn acs_labels_of_ten_and_more_need_an_error_above_ten_to_insert() {
         );
     }
     assert_eq!(m.collections().len(), 12);
-    let stats = m.aitm_selector().expect("the AITM selector").stats();
+    let stats = aitm_of(&m).stats();
     assert_eq!((stats.update_calls, stats.nodes), (12, 10));
-    let labels: Vec<f64> = m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .nodes()
-        .map(|n| n.w_out[0])
-        .collect();
+    let labels = selector_labels(&m);
     assert_eq!(labels, (0..10).map(f64::from).collect::<Vec<_>>());
     // At AC 10's own training input the selector answers AC 9 ({2, 6}).
     let p = m.predict_state(&b, Action::new(0.0, 1.0));
@@ -582,13 +541,7 @@ fn reset_objects_replaces_all_states_and_update_keeps_unseen_ones() {
     // No training happened in reset.
     m.set_training(true);
     m.reset_objects(&two);
-    assert_eq!(
-        m.aitm_selector()
-            .expect("the AITM selector")
-            .stats()
-            .update_calls,
-        0
-    );
+    assert_eq!(aitm_of(&m).stats().update_calls, 0);
 }
 
 // ------------------------------------------------------------ statistics (§6)
@@ -618,10 +571,7 @@ fn statistics_cover_every_map_and_both_ac_column_definitions() {
     }
     let s = m.stats();
     assert_eq!(s.extra[stat_keys::AC_COUNT], 2.0);
-    assert_eq!(
-        s.maps[stat_keys::ACS],
-        m.aitm_selector().expect("the AITM selector").stats()
-    );
+    assert_eq!(s.maps[stat_keys::ACS], aitm_of(&m).stats());
     assert_eq!(s.maps[stat_keys::ACS].update_calls, 7);
     assert_eq!(s.labels["ac/0"], "6");
     assert_eq!(s.labels["ac/1"], "5");
@@ -959,15 +909,8 @@ fn a_fresh_model_is_untrained() {
     assert_eq!(m.config(), &InteractionConfig::hz10());
     assert!(m.collections().is_empty() && !m.selector_trained());
     assert!(m.current_states().is_empty() && m.target().is_none());
-    assert_eq!(
-        m.aitm_selector().expect("the AITM selector").input_dim(),
-        10
-    );
-    assert!(m
-        .aitm_selector()
-        .expect("the AITM selector")
-        .config()
-        .is_classifier());
+    assert_eq!(aitm_of(&m).input_dim(), 10);
+    assert!(aitm_of(&m).config().is_classifier());
     let json = serde_json::to_string(&m).expect("serialise");
     let back: InteractionModel = serde_json::from_str(&json).expect("an untrained snapshot");
     assert_eq!(back, m);
