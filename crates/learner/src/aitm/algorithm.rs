@@ -410,7 +410,7 @@ impl Aitm {
     /// ranks NaN distances).
     fn rank_two_indexed(&self, index: &KdIndex, x: &[f64]) -> Option<Ranking> {
         debug_assert_eq!(index.len(), self.live);
-        let (best, second) = index.nearest_two(x, &self.w_in);
+        let (best, second) = index.nearest_two(x);
         best.map(|(_, _, winner)| Ranking {
             winner,
             second: second.map(|(_, _, s)| s),

@@ -11,14 +11,33 @@
 //!
 //! Leaves hold up to [`LEAF_CAP`] rows; a fuller leaf is split at the median
 //! of its widest axis. Insertions that end too deep rebuild the subtree at
-//! the highest unbalanced ancestor (scapegoat rule), so the depth stays
-//! logarithmic whatever the insertion order. Removal takes a row out of its
-//! leaf; bounding boxes only ever grow, so they stay conservative.
+//! the lowest unbalanced ancestor (scapegoat rule, with the row count of
+//! every subtree kept in its node), so the depth stays logarithmic whatever
+//! the insertion order. Removal takes a row out of its leaf; bounding boxes
+//! only ever grow, so they stay conservative.
+//!
+//! The layout is chosen for maps that outgrow the caches (aitm.md §7: the
+//! thesis's named weakness is a memory that slows down as it grows). A
+//! search touches a few dozen nodes and leaves wherever they lie, so each
+//! touch should cost as few cache misses as possible:
+//! * a leaf keeps its own copy of its rows' inputs, contiguous in a slab of
+//!   fixed-size slots, so scanning a leaf streams one block instead of
+//!   fetching every row from wherever `w_in` keeps it;
+//! * the two children of a node are allocated as a pair, so the two boxes a
+//!   visit compares are adjacent in memory;
+//! * nodes are small plain values (no per-leaf heap allocation).
+//!
+//! The copies cost `dim` values per row on top of `w_in`; the map keeps
+//! them in step by removing a row before its input changes and inserting it
+//! again afterwards.
 
 use super::distance::pairwise_sq_sum;
 
-/// Rows per leaf before it is split.
-const LEAF_CAP: usize = 16;
+/// Rows per leaf before it is split. With a leaf's inputs contiguous, a
+/// longer leaf costs little to scan and saves a tree level, which is a
+/// cache miss in a large map: `cargo bench -p learner --bench aitm_scaling`
+/// was fastest at 1 M nodes with 32 (of 16, 32, 64) and no slower at 1 k.
+const LEAF_CAP: usize = 32;
 
 /// Scapegoat balance: a child holding more than this share of its parent's
 /// rows marks the parent for rebuilding.
@@ -33,17 +52,31 @@ const MARGIN: f64 = 1.0 - 1e-9;
 
 const NONE: u32 = u32::MAX;
 
-#[derive(Clone, Debug)]
-enum KdNode {
-    Leaf(Vec<u32>),
+/// The root's slot; every other node is one of a pair of siblings at
+/// `(2k + 1, 2k + 2)`.
+const ROOT: u32 = 0;
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    /// Children at `children` and `children + 1`; inserted rows go left when
+    /// their `axis` component is below `split`.
     Inner {
-        axis: usize,
+        axis: u32,
         split: f64,
-        left: u32,
-        right: u32,
+        children: u32,
     },
-    /// A slot on the free list.
+    /// Rows and inputs in slab slot `slot`.
+    Leaf { slot: u32, len: u32 },
+    /// On the free list (with its sibling).
     Free,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    kind: Kind,
+    parent: u32,
+    /// Rows in the subtree.
+    count: u32,
 }
 
 /// A candidate: distance, sum of squares, row.
@@ -57,18 +90,22 @@ pub(crate) fn ranks_before(a: Candidate, b: Candidate) -> bool {
 }
 
 /// The k-d tree; rows are identified by their index into the map's flat
-/// `w_in` (which the caller passes to every operation).
+/// `w_in` (which the caller passes whenever rows are added).
 #[derive(Clone, Debug)]
 pub(crate) struct KdIndex {
     dim: usize,
-    nodes: Vec<KdNode>,
+    nodes: Vec<Node>,
     /// `2·dim` values per node: lower corner, then upper corner.
     bbox: Vec<f64>,
-    free: Vec<u32>,
-    root: u32,
+    /// Free sibling pairs, by their first node.
+    free_pairs: Vec<u32>,
+    /// `LEAF_CAP` rows per slot.
+    slab_rows: Vec<u32>,
+    /// `LEAF_CAP · dim` inputs per slot, the copies of the rows' inputs.
+    slab_inputs: Vec<f64>,
+    free_slots: Vec<u32>,
     /// Leaf of each row, `NONE` if the row is not in the tree.
     leaf_of: Vec<u32>,
-    len: usize,
 }
 
 impl KdIndex {
@@ -76,33 +113,52 @@ impl KdIndex {
     pub(crate) fn build(dim: usize, w_in: &[f64], rows: impl Iterator<Item = usize>) -> Self {
         let mut index = Self {
             dim,
-            nodes: Vec::new(),
-            bbox: Vec::new(),
-            free: Vec::new(),
-            root: NONE,
+            nodes: vec![Node {
+                kind: Kind::Free,
+                parent: NONE,
+                count: 0,
+            }],
+            bbox: vec![0.0; 2 * dim],
+            free_pairs: Vec::new(),
+            slab_rows: Vec::new(),
+            slab_inputs: Vec::new(),
+            free_slots: Vec::new(),
             leaf_of: Vec::new(),
-            len: 0,
         };
         let mut all: Vec<u32> = rows.map(|r| r as u32).collect();
-        index.len = all.len();
-        let root = index.alloc();
-        index.build_into(root, &mut all, w_in);
-        index.root = root;
+        index.build_into(ROOT, &mut all, w_in);
         index
     }
 
     /// Number of rows in the tree.
     pub(crate) fn len(&self) -> usize {
-        self.len
+        self.nodes[ROOT as usize].count as usize
     }
 
-    fn alloc(&mut self) -> u32 {
-        if let Some(slot) = self.free.pop() {
+    fn alloc_pair(&mut self) -> u32 {
+        if let Some(first) = self.free_pairs.pop() {
+            return first;
+        }
+        let first = self.nodes.len() as u32;
+        let free = Node {
+            kind: Kind::Free,
+            parent: NONE,
+            count: 0,
+        };
+        self.nodes.extend([free, free]);
+        self.bbox.extend(std::iter::repeat_n(0.0, 4 * self.dim));
+        first
+    }
+
+    fn alloc_slot(&mut self) -> u32 {
+        if let Some(slot) = self.free_slots.pop() {
             return slot;
         }
-        self.nodes.push(KdNode::Free);
-        self.bbox.extend(std::iter::repeat_n(0.0, 2 * self.dim));
-        (self.nodes.len() - 1) as u32
+        let slot = (self.slab_rows.len() / LEAF_CAP) as u32;
+        self.slab_rows.extend([NONE; LEAF_CAP]);
+        self.slab_inputs
+            .extend(std::iter::repeat_n(0.0, LEAF_CAP * self.dim));
+        slot
     }
 
     fn row<'a>(&self, w_in: &'a [f64], r: u32) -> &'a [f64] {
@@ -110,17 +166,34 @@ impl KdIndex {
         &w_in[r * self.dim..(r + 1) * self.dim]
     }
 
-    fn set_leaf(&mut self, node: u32, rows: &[u32]) {
-        for &r in rows {
-            let r = r as usize;
-            if r >= self.leaf_of.len() {
-                self.leaf_of.resize(r + 1, NONE);
-            }
-            self.leaf_of[r] = node;
-        }
+    /// The inputs stored in `slot` at position `k`.
+    fn slab_input(&self, slot: u32, k: usize) -> &[f64] {
+        let at = (slot as usize * LEAF_CAP + k) * self.dim;
+        &self.slab_inputs[at..at + self.dim]
     }
 
-    /// Builds a balanced subtree over `rows` into slot `node`.
+    fn note_leaf(&mut self, r: u32, leaf: u32) {
+        let r = r as usize;
+        if r >= self.leaf_of.len() {
+            self.leaf_of.resize(r + 1, NONE);
+        }
+        self.leaf_of[r] = leaf;
+    }
+
+    /// Appends row `r` to leaf `node` (which has room).
+    fn push_to_leaf(&mut self, node: u32, r: u32, x: &[f64]) {
+        let Kind::Leaf { slot, len } = self.nodes[node as usize].kind else {
+            unreachable!("rows are only pushed to leaves");
+        };
+        let k = slot as usize * LEAF_CAP + len as usize;
+        self.slab_rows[k] = r;
+        self.slab_inputs[k * self.dim..(k + 1) * self.dim].copy_from_slice(x);
+        self.nodes[node as usize].kind = Kind::Leaf { slot, len: len + 1 };
+        self.note_leaf(r, node);
+    }
+
+    /// Builds a balanced subtree over `rows` into node `node`, whose parent
+    /// link is already set.
     fn build_into(&mut self, node: u32, rows: &mut [u32], w_in: &[f64]) {
         let d = self.dim;
         let (mut lo, mut hi) = (vec![f64::INFINITY; d], vec![f64::NEG_INFINITY; d]);
@@ -133,66 +206,74 @@ impl KdIndex {
         let b = node as usize * 2 * d;
         self.bbox[b..b + d].copy_from_slice(&lo);
         self.bbox[b + d..b + 2 * d].copy_from_slice(&hi);
-        let widest = (0..d)
-            .map(|j| (j, hi[j] - lo[j]))
-            .filter(|(_, w)| *w > 0.0)
-            .max_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((axis, _)) = widest.filter(|_| rows.len() > LEAF_CAP) else {
-            // Small, or all rows at one point: a leaf.
-            self.set_leaf(node, rows);
-            self.nodes[node as usize] = KdNode::Leaf(rows.to_vec());
+        self.nodes[node as usize].count = rows.len() as u32;
+        if rows.len() <= LEAF_CAP {
+            let slot = self.alloc_slot();
+            self.nodes[node as usize].kind = Kind::Leaf { slot, len: 0 };
+            for &r in rows.iter() {
+                self.push_to_leaf(node, r, &w_in[r as usize * d..(r as usize + 1) * d]);
+            }
             return;
-        };
+        }
+        // The widest axis; rows all at one point (a zero-width box) are
+        // still split by count, as a leaf has a fixed capacity.
+        let axis = (0..d)
+            .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
+            .unwrap_or(0);
         let mid = rows.len() / 2;
         let key = |r: &u32| w_in[*r as usize * d + axis];
         rows.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
         let split = key(&rows[mid]);
         let (left_rows, right_rows) = rows.split_at_mut(mid);
-        let (left, right) = (self.alloc(), self.alloc());
-        self.build_into(left, left_rows, w_in);
-        self.build_into(right, right_rows, w_in);
-        self.nodes[node as usize] = KdNode::Inner {
-            axis,
+        let children = self.alloc_pair();
+        self.nodes[node as usize].kind = Kind::Inner {
+            axis: axis as u32,
             split,
-            left,
-            right,
+            children,
         };
+        for child in [children, children + 1] {
+            self.nodes[child as usize].parent = node;
+        }
+        self.build_into(children, left_rows, w_in);
+        self.build_into(children + 1, right_rows, w_in);
     }
 
     fn rows_below(&self, node: u32, out: &mut Vec<u32>) {
-        match &self.nodes[node as usize] {
-            KdNode::Leaf(rows) => out.extend_from_slice(rows),
-            KdNode::Inner { left, right, .. } => {
-                self.rows_below(*left, out);
-                self.rows_below(*right, out);
+        match self.nodes[node as usize].kind {
+            Kind::Leaf { slot, len } => {
+                let at = slot as usize * LEAF_CAP;
+                out.extend_from_slice(&self.slab_rows[at..at + len as usize]);
             }
-            KdNode::Free => {}
+            Kind::Inner { children, .. } => {
+                self.rows_below(children, out);
+                self.rows_below(children + 1, out);
+            }
+            Kind::Free => {}
         }
     }
 
-    fn count_below(&self, node: u32) -> usize {
-        match &self.nodes[node as usize] {
-            KdNode::Leaf(rows) => rows.len(),
-            KdNode::Inner { left, right, .. } => self.count_below(*left) + self.count_below(*right),
-            KdNode::Free => 0,
-        }
-    }
-
+    /// Frees every node and slot below `node` and `node`'s own slot.
     fn release_below(&mut self, node: u32) {
-        if let KdNode::Inner { left, right, .. } =
-            std::mem::replace(&mut self.nodes[node as usize], KdNode::Free)
-        {
-            self.release_below(left);
-            self.release_below(right);
-            self.free.push(left);
-            self.free.push(right);
+        match self.nodes[node as usize].kind {
+            Kind::Leaf { slot, .. } => self.free_slots.push(slot),
+            Kind::Inner { children, .. } => {
+                self.release_below(children);
+                self.release_below(children + 1);
+                for child in [children, children + 1] {
+                    self.nodes[child as usize].kind = Kind::Free;
+                }
+                self.free_pairs.push(children);
+            }
+            Kind::Free => {}
         }
+        self.nodes[node as usize].kind = Kind::Free;
     }
 
-    /// Rebuilds the subtree at `node` in place.
-    fn rebuild(&mut self, node: u32, w_in: &[f64]) {
-        let mut rows = Vec::new();
+    /// Rebuilds the subtree at `node` in place, with `extra` rows added.
+    fn rebuild(&mut self, node: u32, extra: Option<u32>, w_in: &[f64]) {
+        let mut rows = Vec::with_capacity(self.nodes[node as usize].count as usize + 1);
         self.rows_below(node, &mut rows);
+        rows.extend(extra);
         self.release_below(node);
         self.build_into(node, &mut rows, w_in);
     }
@@ -201,57 +282,52 @@ impl KdIndex {
     pub(crate) fn insert(&mut self, r: usize, w_in: &[f64]) {
         let d = self.dim;
         let x = &w_in[r * d..(r + 1) * d];
-        let mut path = Vec::new();
-        let mut node = self.root;
+        let mut node = ROOT;
+        let mut depth = 1;
         loop {
-            path.push(node);
             let b = node as usize * 2 * d;
             let (lo, hi) = self.bbox[b..b + 2 * d].split_at_mut(d);
             for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(x) {
                 *l = l.min(*v);
                 *h = h.max(*v);
             }
-            match &mut self.nodes[node as usize] {
-                KdNode::Inner {
+            self.nodes[node as usize].count += 1;
+            match self.nodes[node as usize].kind {
+                Kind::Inner {
                     axis,
                     split,
-                    left,
-                    right,
-                } => node = if x[*axis] < *split { *left } else { *right },
-                KdNode::Leaf(rows) => {
-                    rows.push(r as u32);
+                    children,
+                } => {
+                    node = children + u32::from(x[axis as usize] >= split);
+                    depth += 1;
+                }
+                Kind::Leaf { len, .. } => {
+                    if (len as usize) < LEAF_CAP {
+                        self.push_to_leaf(node, r as u32, x);
+                    } else {
+                        // The count already includes `r`; the rebuild sets
+                        // it again from the rows.
+                        self.rebuild(node, Some(r as u32), w_in);
+                        depth += 1;
+                    }
                     break;
                 }
-                KdNode::Free => unreachable!("the path only reaches live nodes"),
+                Kind::Free => unreachable!("the path only reaches live nodes"),
             }
         }
-        self.set_leaf(node, &[r as u32]);
-        self.len += 1;
-        if matches!(&self.nodes[node as usize], KdNode::Leaf(rows) if rows.len() > LEAF_CAP) {
-            self.rebuild(node, w_in);
-        }
-        // Scapegoat: too deep for the size means some ancestor is unbalanced.
-        let limit = 2.0 * ((self.len / LEAF_CAP + 1) as f64).log2() + 4.0;
-        if path.len() as f64 > limit {
-            let mut size = self.count_below(*path.last().unwrap_or(&self.root));
-            for pair in path.windows(2).rev() {
-                let (parent, child) = (pair[0], pair[1]);
-                let sibling = match &self.nodes[parent as usize] {
-                    KdNode::Inner { left, right, .. } => {
-                        if *left == child {
-                            *right
-                        } else {
-                            *left
-                        }
-                    }
-                    _ => break,
-                };
-                let parent_size = size + self.count_below(sibling);
-                if size as f64 > ALPHA * parent_size as f64 {
-                    self.rebuild(parent, w_in);
+        // Scapegoat: too deep for the size means some ancestor is
+        // unbalanced; rebuild the first one found walking up.
+        let limit = 2.0 * ((self.len() / LEAF_CAP + 1) as f64).log2() + 4.0;
+        if f64::from(depth) > limit {
+            let mut child = node;
+            while let Some(parent) = Some(self.nodes[child as usize].parent).filter(|&p| p != NONE)
+            {
+                let parent_count = f64::from(self.nodes[parent as usize].count);
+                if f64::from(self.nodes[child as usize].count) > ALPHA * parent_count {
+                    self.rebuild(parent, None, w_in);
                     break;
                 }
-                size = parent_size;
+                child = parent;
             }
         }
     }
@@ -261,13 +337,31 @@ impl KdIndex {
         let Some(&leaf) = self.leaf_of.get(r).filter(|&&l| l != NONE) else {
             return;
         };
-        if let KdNode::Leaf(rows) = &mut self.nodes[leaf as usize] {
-            if let Some(k) = rows.iter().position(|&x| x as usize == r) {
-                rows.swap_remove(k);
-                self.len -= 1;
-            }
-        }
         self.leaf_of[r] = NONE;
+        let Kind::Leaf { slot, len } = self.nodes[leaf as usize].kind else {
+            return;
+        };
+        let at = slot as usize * LEAF_CAP;
+        let Some(k) = self.slab_rows[at..at + len as usize]
+            .iter()
+            .position(|&x| x as usize == r)
+        else {
+            return;
+        };
+        // Swap-remove in both halves of the slot.
+        let last = len as usize - 1;
+        self.slab_rows.swap(at + k, at + last);
+        let d = self.dim;
+        if k != last {
+            self.slab_inputs
+                .copy_within((at + last) * d..(at + last + 1) * d, (at + k) * d);
+        }
+        self.nodes[leaf as usize].kind = Kind::Leaf { slot, len: len - 1 };
+        let mut node = leaf;
+        while node != NONE {
+            self.nodes[node as usize].count -= 1;
+            node = self.nodes[node as usize].parent;
+        }
     }
 
     /// Lower bound of the squared distance from `x` to node's box.
@@ -292,25 +386,33 @@ impl KdIndex {
 
     /// The winner and second winner among the rows in the tree, exactly as
     /// the brute-force scan ranks them, for a finite `x` and finite rows.
-    pub(crate) fn nearest_two(
-        &self,
-        x: &[f64],
-        w_in: &[f64],
-    ) -> (Option<Candidate>, Option<Candidate>) {
+    pub(crate) fn nearest_two(&self, x: &[f64]) -> (Option<Candidate>, Option<Candidate>) {
         let mut best: Option<Candidate> = None;
         let mut second: Option<Candidate> = None;
-        let mut stack: Vec<(u32, f64)> = vec![(self.root, self.lower_bound(self.root, x))];
+        // Every distance in a box is ≥ √bound: strictly farther than the
+        // second winner cannot rank, not even by a tie.
+        let hopeless =
+            |bound: f64, second: Option<Candidate>| second.is_some_and(|s| bound.sqrt() > s.0);
+        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        stack.push((ROOT, self.lower_bound(ROOT, x)));
         while let Some((node, bound)) = stack.pop() {
-            // Every distance in the box is ≥ √bound: strictly farther than
-            // the second winner cannot rank, not even by a tie.
-            if second.is_some_and(|s| bound.sqrt() > s.0) {
+            if hopeless(bound, second) {
                 continue;
             }
-            match &self.nodes[node as usize] {
-                KdNode::Leaf(rows) => {
-                    for &r in rows {
-                        let sum = pairwise_sq_sum(self.row(w_in, r), x);
-                        let c = (sum.sqrt(), sum, r as usize);
+            match self.nodes[node as usize].kind {
+                Kind::Leaf { slot, len } => {
+                    let at = slot as usize * LEAF_CAP;
+                    for k in 0..len as usize {
+                        let sum = pairwise_sq_sum(self.slab_input(slot, k), x);
+                        let row = self.slab_rows[at + k] as usize;
+                        // Exact shortcut: a larger sum cannot give a smaller
+                        // root, but its root can be equal and then a row
+                        // before the second winner's wins the tie (the scan
+                        // meets rows in order; the tree does not).
+                        if second.is_some_and(|s| sum > s.1 && row > s.2) {
+                            continue;
+                        }
+                        let c = (sum.sqrt(), sum, row);
                         if best.is_none_or(|b| ranks_before(c, b)) {
                             second = best;
                             best = Some(c);
@@ -319,21 +421,127 @@ impl KdIndex {
                         }
                     }
                 }
-                KdNode::Inner { left, right, .. } => {
-                    let (bl, br) = (self.lower_bound(*left, x), self.lower_bound(*right, x));
+                Kind::Inner { children, .. } => {
+                    let (left, right) = (children, children + 1);
+                    let (bl, br) = (self.lower_bound(left, x), self.lower_bound(right, x));
                     // The nearer box is searched first (pushed last).
-                    if bl <= br {
-                        stack.push((*right, br));
-                        stack.push((*left, bl));
+                    let (near, far) = if bl <= br {
+                        ((left, bl), (right, br))
                     } else {
-                        stack.push((*left, bl));
-                        stack.push((*right, br));
+                        ((right, br), (left, bl))
+                    };
+                    if !hopeless(far.1, second) {
+                        stack.push(far);
+                    }
+                    if !hopeless(near.1, second) {
+                        stack.push(near);
                     }
                 }
-                KdNode::Free => {}
+                Kind::Free => {}
             }
         }
         (best, second)
+    }
+}
+
+#[cfg(test)]
+impl KdIndex {
+    /// Checks every invariant the search relies on against `w_in` and the
+    /// set of live rows, naming the first one broken.
+    pub(crate) fn check(&self, w_in: &[f64], live: &[usize]) -> Result<(), String> {
+        let mut seen = Vec::new();
+        self.check_node(ROOT, NONE, w_in, &mut seen)?;
+        seen.sort_unstable();
+        let live: Vec<u32> = live.iter().map(|&r| r as u32).collect();
+        if seen != live {
+            return Err(format!("rows in the tree {seen:?}, live rows {live:?}"));
+        }
+        for (r, &leaf) in self.leaf_of.iter().enumerate() {
+            let listed = leaf != NONE;
+            if listed != live.binary_search(&(r as u32)).is_ok() {
+                return Err(format!("row {r}: leaf_of {leaf} disagrees with liveness"));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_node(
+        &self,
+        node: u32,
+        parent: u32,
+        w_in: &[f64],
+        seen: &mut Vec<u32>,
+    ) -> Result<(), String> {
+        let d = self.dim;
+        let n = self.nodes[node as usize];
+        if n.parent != parent {
+            return Err(format!(
+                "node {node}: parent {} instead of {parent}",
+                n.parent
+            ));
+        }
+        let before = seen.len();
+        match n.kind {
+            Kind::Leaf { slot, len } => {
+                if len as usize > LEAF_CAP {
+                    return Err(format!("leaf {node} holds {len} rows"));
+                }
+                for k in 0..len as usize {
+                    let r = self.slab_rows[slot as usize * LEAF_CAP + k];
+                    if self.slab_input(slot, k) != self.row(w_in, r) {
+                        return Err(format!("leaf {node}: the copy of row {r} is stale"));
+                    }
+                    if self.leaf_of[r as usize] != node {
+                        return Err(format!("row {r}: leaf_of is not leaf {node}"));
+                    }
+                    let b = node as usize * 2 * d;
+                    let inside = self
+                        .row(w_in, r)
+                        .iter()
+                        .enumerate()
+                        .all(|(j, v)| self.bbox[b + j] <= *v && *v <= self.bbox[b + d + j]);
+                    if !inside {
+                        return Err(format!("row {r} lies outside the box of leaf {node}"));
+                    }
+                    seen.push(r);
+                }
+            }
+            Kind::Inner { children, .. } => {
+                for child in [children, children + 1] {
+                    self.check_node(child, node, w_in, seen)?;
+                    let (b, c) = (node as usize * 2 * d, child as usize * 2 * d);
+                    let nested = (0..d).all(|j| {
+                        self.bbox[b + j] <= self.bbox[c + j]
+                            && self.bbox[c + d + j] <= self.bbox[b + d + j]
+                    });
+                    if !nested && self.nodes[child as usize].count > 0 {
+                        return Err(format!("the box of {child} leaves its parent's"));
+                    }
+                }
+            }
+            Kind::Free => return Err(format!("free node {node} in the tree")),
+        }
+        if seen.len() - before != n.count as usize {
+            return Err(format!(
+                "node {node} counts {} rows, holds {}",
+                n.count,
+                seen.len() - before
+            ));
+        }
+        Ok(())
+    }
+
+    /// Nodes on the longest path from the root to a leaf.
+    pub(crate) fn depth(&self) -> usize {
+        fn below(index: &KdIndex, node: u32) -> usize {
+            match index.nodes[node as usize].kind {
+                Kind::Inner { children, .. } => {
+                    1 + below(index, children).max(below(index, children + 1))
+                }
+                _ => 1,
+            }
+        }
+        below(self, ROOT)
     }
 }
 
@@ -425,7 +633,7 @@ mod tests {
                     }
                     Op::Query(p) => {
                         let x = scale(&p);
-                        let (best, second) = index.nearest_two(&x, &w_in);
+                        let (best, second) = index.nearest_two(&x);
                         prop_assert_eq!(
                             (best.map(|c| c.2), second.map(|c| c.2)),
                             brute(dim, &w_in, &alive, &x)
@@ -433,6 +641,9 @@ mod tests {
                     }
                 }
                 prop_assert_eq!(index.len(), live(&alive).len());
+                if let Err(broken) = index.check(&w_in, &live(&alive)) {
+                    prop_assert!(false, "{}", broken);
+                }
             }
         }
     }
@@ -447,21 +658,13 @@ mod tests {
         for r in 0..n as usize {
             index.insert(r, &w_in);
         }
-        fn depth(index: &KdIndex, node: u32) -> usize {
-            match &index.nodes[node as usize] {
-                KdNode::Inner { left, right, .. } => {
-                    1 + depth(index, *left).max(depth(index, *right))
-                }
-                _ => 1,
-            }
-        }
         let limit = 2.0 * ((n as usize / LEAF_CAP + 1) as f64).log2() + 6.0;
-        assert!(
-            (depth(&index, index.root) as f64) <= limit,
-            "{}",
-            depth(&index, index.root)
+        assert!(index.depth() as f64 <= limit, "{}", index.depth());
+        assert_eq!(
+            index.check(&w_in, &(0..n as usize).collect::<Vec<_>>()),
+            Ok(())
         );
-        let (best, second) = index.nearest_two(&[7.0005], &w_in);
+        let (best, second) = index.nearest_two(&[7.0005]);
         // The two rows nearest to 7.0005, nearer first.
         assert_eq!(
             (best.map(|c| c.2), second.map(|c| c.2)),
