@@ -1328,6 +1328,22 @@ mod tests {
         text.matches(&format!("<{tag}")).count()
     }
 
+    /// The SVG's polylines of stroke width 2: data lines and legend
+    /// samples (the mesh is thinner).
+    fn thick_polylines(svg: &str) -> Vec<&str> {
+        svg.split("<polyline")
+            .skip(1)
+            .filter(|l| l.contains("stroke-width=\"2\""))
+            .collect()
+    }
+
+    /// Points of one polyline from [`thick_polylines`].
+    fn polyline_points(line: &str) -> usize {
+        line.split("points=\"").nth(1).map_or(0, |p| {
+            p.split('"').next().unwrap_or("").split_whitespace().count()
+        })
+    }
+
     fn is_png(path: &Path) -> bool {
         std::fs::read(path)
             .unwrap()
@@ -1683,19 +1699,10 @@ mod tests {
         // runs index lines join their three sizes (sorted by node count),
         // every other line two points.
         let svg = std::fs::read_to_string(&written[1]).unwrap();
-        let thick: Vec<&str> = svg
-            .split("<polyline")
-            .skip(1)
-            .filter(|l| l.contains("stroke-width=\"2\""))
-            .collect();
+        let thick = thick_polylines(&svg);
         assert_eq!(thick.len(), 2 * 9);
-        let points = |l: &&str| {
-            l.split("points=\"").nth(1).map_or(0, |p| {
-                p.split('"').next().unwrap_or("").split_whitespace().count()
-            })
-        };
-        assert_eq!(thick.iter().filter(|l| points(l) == 3).count(), 4);
-        assert_eq!(thick.iter().filter(|l| points(l) == 2).count(), 14);
+        let with = |n| thick.iter().filter(|l| polyline_points(l) == n).count();
+        assert_eq!((with(3), with(2)), (4, 14));
         assert!(svg.contains("uniform inputs") && svg.contains("scan: query near"));
         assert!(aitm_scaling(&[], &dir).is_err());
         let _ = std::fs::remove_dir_all(&dir);
@@ -1733,18 +1740,9 @@ mod tests {
         // samples, the only polylines of stroke width 2 (the mesh is thinner);
         // gate's data lines join its two points.
         let svg = std::fs::read_to_string(&written[1]).unwrap();
-        let thick: Vec<&str> = svg
-            .split("<polyline")
-            .skip(1)
-            .filter(|l| l.contains("stroke-width=\"2\""))
-            .collect();
+        let thick = thick_polylines(&svg);
         assert_eq!(thick.len(), 8);
-        let gate_points = |l: &&&str| {
-            l.contains("stroke=\"#1F77B4\"")
-                && l.split("points=\"").nth(1).map_or(0, |p| {
-                    p.split('"').next().unwrap_or("").split_whitespace().count()
-                }) == 2
-        };
+        let gate_points = |l: &&&str| l.contains("stroke=\"#1F77B4\"") && polyline_points(l) == 2;
         assert_eq!(thick.iter().filter(gate_points).count(), 4);
         assert!(svg.contains("p99 per message") && svg.contains("interaction"));
         let _ = std::fs::remove_dir_all(&dir);
