@@ -24,9 +24,9 @@
 //! * `socket/<hz>`: a lock-step `pushlearn-sim` server whose one client
 //!   runs a closed loop: one Advance, wait for its state, decode it, repeat;
 //! * `socket_pipelined/<hz>`: the same server and run, but the client keeps
-//!   `PIPELINE_DEPTH` Advances outstanding (protocol.md §3: several Advances
-//!   in a row run as many intervals), so the physics need not wait for the
-//!   client between intervals: the daemon's own overhead;
+//!   `PIPELINE_DEPTH` Advances outstanding (docs/protocol.md §5: several
+//!   Advances in a row run as many intervals), so the physics need not wait
+//!   for the client between intervals: the daemon's own overhead;
 //! * `tcp_round_trip_floor`: one bare round trip over 127.0.0.1 between two
 //!   threads with blocking std sockets and TCP_NODELAY, the request the size
 //!   of an Advance frame and the reply the size of a state frame: what the
@@ -197,10 +197,11 @@ async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u
 }
 
 /// Advances the pipelined client keeps outstanding. Two keep the physics
-/// busy as long as a round trip (state out, next Advance in) takes less than
-/// an interval's work: while the physics runs interval k + 1, state k
-/// travels to the client and Advance k + 2 travels back. More would only
-/// wait in the physics thread's channel.
+/// busy as long as a round trip (state out, next Advance in: ≈ 60 µs here)
+/// takes less than an interval's work (≈ 80 µs at 100 Hz): while the
+/// physics runs interval k + 1, state k travels to the client and Advance
+/// k + 2 travels back. More only wait in the physics thread's channel (4
+/// measured the same as 2, docs/performance.md §4).
 const PIPELINE_DEPTH: u32 = 2;
 
 /// The same run over the socket, pipelined: `PIPELINE_DEPTH` Advances

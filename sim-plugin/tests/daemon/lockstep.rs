@@ -220,9 +220,10 @@ async fn push_states(queued: bool) -> Vec<pb::WorldState> {
 
 #[tokio::test]
 async fn queued_advances_give_the_states_of_advances_one_at_a_time() {
-    // protocol.md §3: several Advances in a row run as many intervals, and
-    // a command sent between them applies at its place in the stream, even
-    // though it reaches the world while earlier intervals still wait to run.
+    // docs/protocol.md §5: several Advances in a row run as many intervals,
+    // and a command sent between them applies at its place in the stream,
+    // even though it reaches the world while earlier intervals still wait to
+    // run.
     let (queued, one_at_a_time) = tokio::join!(push_states(true), push_states(false));
     assert_eq!(queued.len(), 40);
     assert!(
