@@ -22,10 +22,22 @@
 //!   snapshot turned into the daemon's message and framed, i.e. the
 //!   daemon's own publish work without the socket;
 //! * `socket/<hz>`: a lock-step `pushlearn-sim` server whose one client
-//!   advances as fast as it can and decodes every state.
+//!   runs a closed loop: one Advance, wait for its state, decode it, repeat;
+//! * `socket_pipelined/<hz>`: the same server and run, but the client keeps
+//!   `PIPELINE_DEPTH` Advances outstanding (docs/protocol.md §5: several
+//!   Advances in a row run as many intervals), so the physics need not wait
+//!   for the client between intervals: the daemon's own overhead;
+//! * `tcp_round_trip_floor`: one bare round trip over 127.0.0.1 between two
+//!   threads with blocking std sockets and TCP_NODELAY, the request the size
+//!   of an Advance frame and the reply the size of a state frame: what the
+//!   kernel alone charges a closed loop per message, whatever the daemon does.
 //!
 //! Criterion's throughput is in steps, so "elem/s" is physics steps per
-//! second and socket / in_process is the ratio the issue asks for (≥ 0.9).
+//! second and socket*/in_process is the ratio the issue asks for (≥ 0.9);
+//! `tcp_round_trip_floor` counts round trips instead.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener as StdTcpListener, TcpStream as StdTcpStream};
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use pushlearn::client::{ClientError, SimClient};
@@ -156,8 +168,8 @@ fn in_process_run(world: &mut World, rate_hz: u32, x0: f64) -> u64 {
     last_step
 }
 
-/// The same run over the socket: the client only advances and decodes.
-async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u64 {
+/// The run's commands before its first Advance, sent without waiting.
+async fn start_overhead_run(client: &mut SimClient, x0: f64) {
     for payload in [
         Payload::move_(0.0, 0.0),
         Payload::reset(),
@@ -168,6 +180,12 @@ async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u
             panic!("socket command: {err}");
         }
     }
+}
+
+/// The same run over the socket, closed loop: the client only advances and
+/// decodes, one Advance at a time.
+async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u64 {
+    start_overhead_run(client, x0).await;
     let mut last_step = 0;
     for _ in 0..OVERHEAD_STEPS * rate_hz / STEPS_PER_SECOND {
         match client.command_and_wait_applied(Payload::advance()).await {
@@ -176,6 +194,95 @@ async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u
         }
     }
     last_step
+}
+
+/// Advances the pipelined client keeps outstanding. Two keep the physics
+/// busy as long as a round trip (state out, next Advance in: ≈ 60 µs here)
+/// takes less than an interval's work (≈ 80 µs at 100 Hz): while the
+/// physics runs interval k + 1, state k travels to the client and Advance
+/// k + 2 travels back. More only wait in the physics thread's channel (4
+/// measured the same as 2, docs/performance.md §4).
+const PIPELINE_DEPTH: u32 = 2;
+
+/// The same run over the socket, pipelined: `PIPELINE_DEPTH` Advances
+/// outstanding, one more sent as each state arrives and is decoded.
+async fn socket_pipelined_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u64 {
+    start_overhead_run(client, x0).await;
+    let messages = OVERHEAD_STEPS * rate_hz / STEPS_PER_SECOND;
+    let mut sent = 0;
+    while sent < messages.min(PIPELINE_DEPTH) {
+        if let Err(err) = client.send(Payload::advance()).await {
+            panic!("socket advance: {err}");
+        }
+        sent += 1;
+    }
+    let mut last_step = 0;
+    for _ in 0..messages {
+        match client.next_state().await {
+            Ok(state) => last_step = state.step,
+            Err(err) => panic!("socket state: {err}"),
+        }
+        if sent < messages {
+            if let Err(err) = client.send(Payload::advance()).await {
+                panic!("socket advance: {err}");
+            }
+            sent += 1;
+        }
+    }
+    last_step
+}
+
+/// The frames the floor exchanges: an Advance as the client sends it, and a
+/// state of the overhead run as the daemon sends it, with seqs of the size
+/// they reach during a bench run (about a million).
+fn floor_frames(scene: &Scene) -> (Vec<u8>, Vec<u8>) {
+    const SEQ: u64 = 1 << 20;
+    let advance = pb::ClientMessage::new(SEQ, Payload::advance());
+    let Ok(mut world) = World::new(scene) else {
+        panic!("the world does not build");
+    };
+    let snapshot = loop {
+        match world.step() {
+            Ok(Some(snapshot)) => break snapshot,
+            Ok(None) => {}
+            Err(err) => panic!("step: {err}"),
+        }
+    };
+    let state = state_message(&snapshot, SEQ, SEQ);
+    match (encode_frame(&advance), encode_frame(&state)) {
+        (Ok(advance), Ok(state)) => (advance.to_vec(), state.to_vec()),
+        _ => panic!("the frames do not encode"),
+    }
+}
+
+/// A blocking echo peer for the floor: reads a request of `request_len`
+/// bytes, answers `reply`, until the client hangs up.
+fn floor_peer(request_len: usize, reply: Vec<u8>) -> (StdTcpStream, std::thread::JoinHandle<()>) {
+    let Ok(listener) = StdTcpListener::bind("127.0.0.1:0") else {
+        panic!("cannot bind 127.0.0.1:0");
+    };
+    let Ok(addr) = listener.local_addr() else {
+        panic!("no local address");
+    };
+    let peer = std::thread::spawn(move || {
+        let Ok((mut stream, _)) = listener.accept() else {
+            panic!("accept failed");
+        };
+        let _ = stream.set_nodelay(true);
+        let mut request = vec![0; request_len];
+        while stream.read_exact(&mut request).is_ok() {
+            if stream.write_all(&reply).is_err() {
+                break;
+            }
+        }
+    });
+    let Ok(client) = StdTcpStream::connect(addr) else {
+        panic!("cannot connect to the floor peer");
+    };
+    if let Err(err) = client.set_nodelay(true) {
+        panic!("TCP_NODELAY: {err}");
+    }
+    (client, peer)
 }
 
 fn overhead(c: &mut Criterion) {
@@ -200,6 +307,11 @@ fn overhead(c: &mut Criterion) {
         let in_process = in_process_run(&mut world, rate_hz, X0);
         let socket = runtime.block_on(socket_overhead_run(&mut client, rate_hz, X0));
         assert_eq!(in_process, socket, "steps differ at {rate_hz} Hz");
+        let pipelined = runtime.block_on(socket_pipelined_run(&mut client, rate_hz, X0));
+        assert_eq!(
+            in_process, pipelined,
+            "pipelined steps differ at {rate_hz} Hz"
+        );
         group.bench_function(format!("in_process/{rate_hz}hz"), |b| {
             b.iter(|| in_process_run(&mut world, rate_hz, std::hint::black_box(X0)))
         });
@@ -212,11 +324,44 @@ fn overhead(c: &mut Criterion) {
                 ))
             })
         });
+        group.bench_function(format!("socket_pipelined/{rate_hz}hz"), |b| {
+            b.iter(|| {
+                runtime.block_on(socket_pipelined_run(
+                    &mut client,
+                    rate_hz,
+                    std::hint::black_box(X0),
+                ))
+            })
+        });
         if let Err(err) = runtime.block_on(server.shutdown()) {
             panic!("server shutdown: {err}");
         }
     }
+
+    let (advance, state) = floor_frames(&scene);
+    eprintln!(
+        "tcp_round_trip_floor: {} B request, {} B reply",
+        advance.len(),
+        state.len()
+    );
+    let (mut stream, peer) = floor_peer(advance.len(), state.clone());
+    let mut reply = vec![0; state.len()];
+    group.throughput(Throughput::Elements(1));
+    group.bench_function("tcp_round_trip_floor", |b| {
+        b.iter(|| {
+            if let Err(err) = stream.write_all(&advance) {
+                panic!("floor request: {err}");
+            }
+            if let Err(err) = stream.read_exact(&mut reply) {
+                panic!("floor reply: {err}");
+            }
+        })
+    });
     group.finish();
+    drop(stream);
+    if peer.join().is_err() {
+        panic!("the floor peer panicked");
+    }
 }
 
 criterion_group!(benches, runs, overhead);

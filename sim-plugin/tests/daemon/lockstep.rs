@@ -179,3 +179,56 @@ async fn commands_keep_their_order_behind_a_delayed_move() {
             .expect("advance");
     }
 }
+
+/// The push's states with its Advances sent one at a time (each after the
+/// previous state) or queued all at once, a Move between the two halves.
+async fn push_states(queued: bool) -> Vec<pb::WorldState> {
+    const HALF: usize = 20;
+    let server = start(lockstep()).await;
+    let mut client = connect(&server).await;
+    let mut states = Vec::new();
+    for payload in [
+        Payload::set_pose("actuator", [0.105, 0.0, 0.03], 0.0),
+        Payload::move_(0.0, 0.5),
+    ] {
+        client.send(payload).await.expect("command");
+    }
+    for half in 0..2 {
+        if half == 1 {
+            client.send(Payload::move_(0.2, -0.3)).await.expect("move");
+        }
+        for _ in 0..HALF {
+            if queued {
+                client.send(Payload::advance()).await.expect("advance");
+            } else {
+                states.push(
+                    client
+                        .command_and_wait_applied(Payload::advance())
+                        .await
+                        .expect("advance"),
+                );
+            }
+        }
+    }
+    if queued {
+        for _ in 0..2 * HALF {
+            states.push(client.next_state().await.expect("state"));
+        }
+    }
+    states
+}
+
+#[tokio::test]
+async fn queued_advances_give_the_states_of_advances_one_at_a_time() {
+    // docs/protocol.md §5: several Advances in a row run as many intervals,
+    // and a command sent between them applies at its place in the stream,
+    // even though it reaches the world while earlier intervals still wait to
+    // run.
+    let (queued, one_at_a_time) = tokio::join!(push_states(true), push_states(false));
+    assert_eq!(queued.len(), 40);
+    assert!(
+        queued.windows(2).all(|w| w[1].step == w[0].step + 10),
+        "one interval per Advance"
+    );
+    assert_eq!(queued, one_at_a_time);
+}
