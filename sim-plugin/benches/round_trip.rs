@@ -196,13 +196,14 @@ async fn socket_overhead_run(client: &mut SimClient, rate_hz: u32, x0: f64) -> u
     last_step
 }
 
-/// Advances the pipelined client keeps outstanding. Two keep the physics
-/// busy as long as a round trip (state out, next Advance in: ≈ 60 µs here)
-/// takes less than an interval's work (≈ 80 µs at 100 Hz): while the
-/// physics runs interval k + 1, state k travels to the client and Advance
-/// k + 2 travels back. More only wait in the physics thread's channel (4
-/// measured the same as 2, docs/performance.md §4).
-const PIPELINE_DEPTH: u32 = 2;
+/// Advances the pipelined client keeps outstanding. The daemon wakes its
+/// writer once per two states while Advances are queued (physics.rs,
+/// `MAX_UNWOKEN_STATES`), so a state can reach the client one interval late
+/// and its answer must still arrive before the queue runs dry: with a round
+/// trip (≈ 60 µs here) shorter than an interval's work (≈ 80 µs at 100 Hz),
+/// 4 keep the physics busy; 2 left it waiting behind every pair
+/// (docs/performance.md §4).
+const PIPELINE_DEPTH: u32 = 4;
 
 /// The same run over the socket, pipelined: `PIPELINE_DEPTH` Advances
 /// outstanding, one more sent as each state arrives and is decoded.

@@ -224,6 +224,14 @@ impl Counters {
     }
 }
 
+/// When a published state's writers are woken.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Wake {
+    Now,
+    /// By a later [`Shared::wake_writers`].
+    Later,
+}
+
 /// What the connections, the gate and the physics thread share.
 struct Shared {
     gate: gate::Gate,
@@ -234,12 +242,23 @@ struct Shared {
 }
 
 impl Shared {
-    /// Queues a published state for every client (never waits).
-    fn broadcast_state(&self, state: &Arc<pb::ServerMessage>) {
+    /// Queues a published state for every client (never waits) and wakes
+    /// their writers now, or leaves that to [`Shared::wake_writers`].
+    fn broadcast_state(&self, state: &Arc<pb::ServerMessage>, wake: Wake) {
         Counters::add(&self.counters.published, 1);
         let now = Instant::now();
-        self.clients
-            .for_each(|outbox| self.count(outbox, outbox.push_state(state, now)));
+        self.clients.for_each(|outbox| {
+            let pushed = match wake {
+                Wake::Now => outbox.push_state(state, now),
+                Wake::Later => outbox.queue_state(state, now),
+            };
+            self.count(outbox, pushed);
+        });
+    }
+
+    /// Wakes every client's writer for what is queued.
+    fn wake_writers(&self) {
+        self.clients.for_each(outbox::Outbox::wake);
     }
 
     /// Queues an `Error` for every client.

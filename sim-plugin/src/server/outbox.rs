@@ -96,8 +96,23 @@ impl Outbox {
         self.queue.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
-    /// Queues a published state (see the module docs for a full queue).
+    /// Queues a published state (see the module docs for a full queue) and
+    /// wakes the writer.
     pub fn push_state(&self, state: &Arc<pb::ServerMessage>, now: Instant) -> Pushed {
+        let pushed = self.queue_state(state, now);
+        self.wake();
+        pushed
+    }
+
+    /// Wakes the writer for whatever is queued.
+    pub fn wake(&self) {
+        self.ready.notify_one();
+    }
+
+    /// Queues a published state without waking the writer: the caller wakes
+    /// it soon after with [`Outbox::wake`] (the physics thread, to wake an
+    /// idle writer once for several states).
+    pub fn queue_state(&self, state: &Arc<pb::ServerMessage>, now: Instant) -> Pushed {
         let mut queue = self.lock();
         if queue.closing {
             return Pushed::Closed;
@@ -115,8 +130,6 @@ impl Outbox {
             }
         }
         queue.items.push_back(state.clone());
-        drop(queue);
-        self.ready.notify_one();
         pushed
     }
 

@@ -19,13 +19,23 @@ use tokio::sync::oneshot;
 use tokio_util::sync::CancellationToken;
 
 use super::gate::{Accepted, Op, ToPhysics};
-use super::{Config, Latency, ServerError, Shared, Timing};
+use super::{Config, Latency, ServerError, Shared, Timing, Wake};
 use crate::world::{Command, StepError, World};
 
 /// In realtime mode, how far the world may fall behind its schedule (after
 /// the machine stalled) before it gives up catching up: it then continues
 /// at the normal pace from now instead of stepping a long burst.
 const MAX_LAG: Duration = Duration::from_millis(100);
+
+/// In lock-step, how many published states may wait for their writers'
+/// wake-up while the physics runs on. Waking an idle writer thread costs the
+/// waker ≈ 9 µs on a virtual machine whose idle vCPUs halt (docs/
+/// performance.md §4), a tenth of a 100 Hz interval's work; a client that
+/// keeps Advances queued gets its states in pairs instead, each pair at
+/// most one interval late. A client that waits for each state before it
+/// advances is never kept waiting: the writers are woken whenever the
+/// physics thread finds no Advance waiting.
+const MAX_UNWOKEN_STATES: u32 = 2;
 
 /// Starts the physics thread. It builds the world and reports the outcome on
 /// `ready` before stepping; when it ends, for whatever reason, it cancels
@@ -114,6 +124,11 @@ struct Physics {
     publish_seq: u64,
     applied_seq: u64,
     delays: Option<Delays>,
+    /// When published states' writers are woken: at once in realtime; in
+    /// lock-step by [`Physics::run_lockstep`] (see [`MAX_UNWOKEN_STATES`]).
+    wake: Wake,
+    /// States published since the writers were last woken.
+    unwoken: u32,
 }
 
 /// Whether the thread should go on after a message.
@@ -142,6 +157,11 @@ impl Physics {
             publish_seq: 0,
             applied_seq: 0,
             delays: config.timing.latency().map(Delays::new),
+            wake: match config.timing {
+                Timing::Realtime { .. } => Wake::Now,
+                Timing::Lockstep { .. } => Wake::Later,
+            },
+            unwoken: 0,
         })
     }
 
@@ -227,13 +247,31 @@ impl Physics {
     /// commands, never on when they arrived.
     fn run_lockstep(&mut self) -> Result<(), StepError> {
         loop {
-            let accepted = match self.inbox.recv() {
-                Ok(ToPhysics::Command(accepted)) => accepted,
-                Ok(ToPhysics::BlowUp(body)) => {
+            let message = match self.inbox.try_recv() {
+                Ok(message) => message,
+                Err(TryRecvError::Empty) => {
+                    self.wake_writers();
+                    match self.inbox.recv() {
+                        Ok(message) => message,
+                        Err(_) => return Ok(()),
+                    }
+                }
+                Err(TryRecvError::Disconnected) => {
+                    self.wake_writers();
+                    return Ok(());
+                }
+            };
+            let advance = matches!(&message, ToPhysics::Command(a) if matches!(a.op, Op::Advance));
+            if !advance || self.unwoken >= MAX_UNWOKEN_STATES {
+                self.wake_writers();
+            }
+            let accepted = match message {
+                ToPhysics::Command(accepted) => accepted,
+                ToPhysics::BlowUp(body) => {
                     self.blow_up(&body);
                     continue;
                 }
-                Ok(ToPhysics::Stop) | Err(_) => return Ok(()),
+                ToPhysics::Stop => return Ok(()),
             };
             self.shared.gate.taken(1);
             if matches!(accepted.op, Op::Advance) {
@@ -285,6 +323,13 @@ impl Physics {
         }
     }
 
+    fn wake_writers(&mut self) {
+        if self.unwoken > 0 {
+            self.shared.wake_writers();
+            self.unwoken = 0;
+        }
+    }
+
     fn blow_up(&mut self, body: &str) {
         if let Err(err) = self.world.provoke_blow_up(body) {
             tracing::error!("cannot provoke a blow-up: {err}");
@@ -325,7 +370,10 @@ impl Physics {
             Ok(Some(snapshot)) => {
                 self.publish_seq += 1;
                 let state = super::state_message(&snapshot, self.publish_seq, self.applied_seq);
-                self.shared.broadcast_state(&Arc::new(state));
+                self.shared.broadcast_state(&Arc::new(state), self.wake);
+                if self.wake == Wake::Later {
+                    self.unwoken += 1;
+                }
                 Ok(true)
             }
             Ok(None) => Ok(false),
