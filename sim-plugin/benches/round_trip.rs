@@ -44,8 +44,8 @@ use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::{self, client_message::Payload};
 use sim_plugin::server::{state_message, Config, Server, ServerHandle, Timing};
-use sim_plugin::sweep::run;
-use sim_plugin::{ActuatorMode, Command, Scene, SweepOptions, World};
+use sim_plugin::sweep::{run, start_commands};
+use sim_plugin::{Scene, SweepOptions, World};
 use tokio::net::TcpListener;
 
 const MESSAGES: u32 = 150;
@@ -128,24 +128,8 @@ const STEPS_PER_SECOND: u32 = 1000;
 /// steps, every published snapshot turned into the daemon's framed message.
 /// Returns the last step, to check that both sides stepped as many steps.
 fn in_process_run(world: &mut World, rate_hz: u32, x0: f64) -> u64 {
-    let commands = [
-        Command::SetPublishRate(rate_hz),
-        Command::Actuator {
-            mode: ActuatorMode::Move,
-            velocity: [0.0; 3],
-        },
-        Command::Reset,
-        Command::Unpause,
-        Command::SetPose {
-            name: "actuator".into(),
-            position: [x0, 0.0, 0.03],
-            orientation: [0.0, 0.0, 0.0, 1.0],
-        },
-        Command::Actuator {
-            mode: ActuatorMode::Move,
-            velocity: [0.0, 0.5, 0.0],
-        },
-    ];
+    let z = world.scene().drive.z_clamp;
+    let commands = start_commands(rate_hz, x0, z, [0.0, 0.5]);
     for command in commands {
         if let Err(err) = world.apply(command) {
             panic!("in-process command: {err}");

@@ -87,17 +87,12 @@ pub fn sweep_world(world: &mut World, options: &SweepOptions) -> Result<Vec<Swee
         .collect()
 }
 
-/// One run: the command sequence of the experiment driver (stop, reset,
-/// place the actuator, push), then `messages` publish intervals.
-pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRow, SweepError> {
-    let blue = world
-        .scene()
-        .body_index(BLUE_BLOCK)
-        .ok_or_else(|| SweepError::NoBlueBlock(world.scene().name.clone()))?;
-    let start = world.scene().bodies[blue].start;
-    let z = world.scene().drive.z_clamp;
-    for cmd in [
-        Command::SetPublishRate(options.rate_hz),
+/// The experiment driver's start of a push run: publish at `rate_hz`,
+/// stop, reset, unpause, place the actuator at (`x0`, 0, `z`) and push with
+/// `action` (m/s in x and y).
+pub fn start_commands(rate_hz: u32, x0: f64, z: f64, action: [f64; 2]) -> [Command; 6] {
+    [
+        Command::SetPublishRate(rate_hz),
         Command::Actuator {
             mode: ActuatorMode::Move,
             velocity: [0.0; 3],
@@ -111,9 +106,21 @@ pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRo
         },
         Command::Actuator {
             mode: ActuatorMode::Move,
-            velocity: [options.action[0], options.action[1], 0.0],
+            velocity: [action[0], action[1], 0.0],
         },
-    ] {
+    ]
+}
+
+/// One run: the command sequence of the experiment driver (stop, reset,
+/// place the actuator, push), then `messages` publish intervals.
+pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRow, SweepError> {
+    let blue = world
+        .scene()
+        .body_index(BLUE_BLOCK)
+        .ok_or_else(|| SweepError::NoBlueBlock(world.scene().name.clone()))?;
+    let start = world.scene().bodies[blue].start;
+    let z = world.scene().drive.z_clamp;
+    for cmd in start_commands(options.rate_hz, x0, z, options.action) {
         world.apply(cmd)?;
     }
     let mut message = 0;
