@@ -282,19 +282,20 @@ async fn send_and_advance(
     Ok(client.wait_applied(advance).await?)
 }
 
-/// Brings the world to the end of a recorded path: its rate, the reset
-/// batch and every batch since, each state checked against the record.
+/// Brings the world to the end of a recorded path (from its rate and reset
+/// batch, or from the frame the world produced last), each state checked
+/// against the record.
 async fn resync_world(
     client: &mut SimClient,
     cursor: &mut Cursor,
     path: Path,
 ) -> Result<(), ExperimentError> {
-    if cursor.needs_rate(path.rate) {
-        let set_rate = Payload::publish_rate(path.rate);
+    if let Some(rate) = path.rate.filter(|&rate| cursor.needs_rate(rate)) {
+        let set_rate = Payload::publish_rate(rate);
         cursor.sent(std::slice::from_ref(&set_rate));
         client.send(set_rate).await?;
     }
-    for (step, (batch, expected)) in path.steps.into_iter().enumerate() {
+    for (step, (batch, expected)) in (path.first_step..).zip(path.steps) {
         let state = send_and_advance(client, cursor, batch).await?;
         cursor.resimulated();
         if frame_from_state(&state) != *expected {
