@@ -579,15 +579,20 @@ impl KdIndex {
                 for k in 0..len {
                     let at = self.input_at(slot, k);
                     let sum = pairwise_sq_sum(&slab[at..at + x.len()], x);
+                    // Exact shortcuts: a strictly larger root cannot rank,
+                    // not even by a tie, so its row number is not even read.
+                    // An equal root can, when its row comes before the
+                    // second winner's (the scan meets rows in order; the
+                    // tree does not).
+                    let root = sum.sqrt();
+                    if second.is_some_and(|s| root > s.0) {
+                        continue;
+                    }
                     let row = slab[self.row_at(slot, k)] as usize;
-                    // Exact shortcut: a larger sum cannot give a smaller
-                    // root, but its root can be equal and then a row
-                    // before the second winner's wins the tie (the scan
-                    // meets rows in order; the tree does not).
                     if second.is_some_and(|s| sum > s.1 && row > s.2) {
                         continue;
                     }
-                    let c = (sum.sqrt(), sum, row);
+                    let c = (root, sum, row);
                     if best.is_none_or(|b| ranks_before(c, b)) {
                         second = best;
                         best = Some(c);
