@@ -520,70 +520,91 @@ impl KdIndex {
         }
     }
 
-    /// Lower bound of the squared distance from `x` to node's box.
-    #[inline]
-    fn lower_bound(&self, node: u32, x: &[f64]) -> f64 {
-        let (at, d) = (self.box_at(node), self.dim);
-        let b = &self.pairs.as_slice()[at..at + 2 * d];
-        let (lo, hi) = b.split_at(d);
-        let mut sum = 0.0;
+    /// Lower bound of the squared distance from `x` to node's box; `N` is
+    /// the dimension when known at compile time, 0 otherwise.
+    #[inline(always)]
+    fn lower_bound<const N: usize>(&self, node: u32, x: &[f64]) -> f64 {
+        let d = if N == 0 { self.dim } else { N };
+        let at = self.box_at(node);
+        let (lo, hi) = self.pairs.as_slice()[at..at + 2 * d].split_at(d);
+        let x = &x[..d];
+        // Branch-free (where a query lies against a box is as good as
+        // random, and a search compares hundreds of boxes), in four partial
+        // sums. Each gap is the one positive difference, or 0: as the box
+        // contains the rows (its bounds widen to `f64` exactly) and rounding
+        // is monotone, at most the rounded difference of any row in it.
+        let mut acc = [0.0; 4];
         for j in 0..d {
-            // Bounds widened exactly: as the box contains the rows, each
-            // rounded gap is at most the rounded difference of any row.
-            let (l, h) = (f64::from(lo[j]), f64::from(hi[j]));
-            let gap = if x[j] < l {
-                l - x[j]
-            } else if x[j] > h {
-                x[j] - h
-            } else {
-                0.0
-            };
-            sum += gap * gap;
+            let below = f64::from(lo[j]) - x[j];
+            let above = x[j] - f64::from(hi[j]);
+            let gap = if below > above { below } else { above };
+            let gap = if gap > 0.0 { gap } else { 0.0 };
+            acc[j % 4] += gap * gap;
         }
-        sum * MARGIN
+        ((acc[0] + acc[1]) + (acc[2] + acc[3])) * MARGIN
     }
 
     /// The winner and second winner among the rows in the tree, exactly as
     /// the brute-force scan ranks them, for a finite `x` and finite rows.
     pub(crate) fn nearest_two(&self, x: &[f64]) -> (Option<Candidate>, Option<Candidate>) {
+        // The instances' input sizes get the dimension at compile time (the
+        // same arithmetic, unrolled), as the scan does.
+        match self.dim {
+            2 => self.nearest_two_in::<2>(x),
+            8 => self.nearest_two_in::<8>(x),
+            10 => self.nearest_two_in::<10>(x),
+            _ => self.nearest_two_in::<0>(x),
+        }
+    }
+
+    fn nearest_two_in<const N: usize>(&self, x: &[f64]) -> (Option<Candidate>, Option<Candidate>) {
+        let d = if N == 0 { self.dim } else { N };
+        let x = &x[..d];
         let mut best: Option<Candidate> = None;
         let mut second: Option<Candidate> = None;
-        // Every distance in a box is ≥ √bound: strictly farther than the
-        // second winner cannot rank, not even by a tie.
-        let hopeless =
-            |bound: f64, second: Option<Candidate>| second.is_some_and(|s| bound.sqrt() > s.0);
+        // A box whose bound exceeds `prune` lies strictly farther than the
+        // second winner (every distance in it is ≥ √bound > the second
+        // distance): it cannot rank, not even by a tie. See
+        // [`beyond_squared`]; no square root per box.
+        let mut prune = f64::INFINITY;
         let slab = self.slab.as_slice();
         let mut stack: Vec<((u32, u32), f64)> = Vec::with_capacity(64);
-        stack.push((self.link(ROOT), self.lower_bound(ROOT, x)));
+        stack.push((self.link(ROOT), self.lower_bound::<N>(ROOT, x)));
         while let Some(((a, b), bound)) = stack.pop() {
-            if hopeless(bound, second) {
+            if bound > prune {
                 continue;
             }
             if a == INNER {
                 let (left, right) = (b, b + 1);
-                let (bl, br) = (self.lower_bound(left, x), self.lower_bound(right, x));
+                let (bl, br) = (
+                    self.lower_bound::<N>(left, x),
+                    self.lower_bound::<N>(right, x),
+                );
                 // The nearer box is searched first (pushed last).
                 let (near, far) = if bl <= br {
                     ((left, bl), (right, br))
                 } else {
                     ((right, br), (left, bl))
                 };
-                if !hopeless(far.1, second) {
+                if far.1 <= prune {
                     stack.push((self.link(far.0), far.1));
                 }
-                if !hopeless(near.1, second) {
+                if near.1 <= prune {
                     stack.push((self.link(near.0), near.1));
                 }
             } else if a != FREE {
                 let (slot, len) = (b, a as usize);
                 for k in 0..len {
                     let at = self.input_at(slot, k);
-                    let sum = pairwise_sq_sum(&slab[at..at + x.len()], x);
+                    let sum = pairwise_sq_sum(&slab[at..at + d], x);
                     // Exact shortcuts: a strictly larger root cannot rank,
                     // not even by a tie, so its row number is not even read.
                     // An equal root can, when its row comes before the
                     // second winner's (the scan meets rows in order; the
                     // tree does not).
+                    if sum > prune {
+                        continue;
+                    }
                     let root = sum.sqrt();
                     if second.is_some_and(|s| root > s.0) {
                         continue;
@@ -599,11 +620,24 @@ impl KdIndex {
                     } else if second.is_none_or(|s| ranks_before(c, s)) {
                         second = Some(c);
                     }
+                    if let Some(s) = second {
+                        prune = beyond_squared(s.0);
+                    }
                 }
             }
         }
         (best, second)
     }
+}
+
+/// A value `t` such that every `v > t` has `v.sqrt() > r` (for `r ≥ 0`),
+/// so that bounds are compared without taking their roots: with `u` the
+/// next value above `r`, `t ≥ u²` exactly (the rounded square plus one
+/// step), so `√v > u` and its rounding, monotone, is at least `u > r`.
+#[inline]
+fn beyond_squared(r: f64) -> f64 {
+    let u = r.next_up();
+    (u * u).next_up()
 }
 
 #[cfg(test)]
