@@ -349,9 +349,15 @@ impl KdIndex {
     fn grow_box(&mut self, node: u32, x: &[f64]) {
         let (at, d) = (self.box_at(node), self.dim);
         let b = &mut self.pairs.as_mut_slice()[at..at + 2 * d];
+        // Rounded only when the box grows (most insertions reach boxes
+        // that hold them already).
         for (j, &v) in x.iter().enumerate() {
-            b[j] = b[j].min(round_down(v));
-            b[d + j] = b[d + j].max(round_up(v));
+            if v < f64::from(b[j]) {
+                b[j] = round_down(v);
+            }
+            if v > f64::from(b[d + j]) {
+                b[d + j] = round_up(v);
+            }
         }
     }
 
