@@ -4,7 +4,8 @@
 //! beside it up to 100 k.
 //!
 //! `cargo bench -p learner --bench aitm_scaling` prints a table and writes
-//! `target/aitm_scaling.csv`. Not criterion: an update grows the map, so
+//! `target/aitm_scaling.csv`; `… -- runs` (or `uniform`) times one shape
+//! only and writes `target/aitm_scaling-runs.csv` (or `-uniform`). Not criterion: an update grows the map, so
 //! each timed batch runs on a fresh copy of the map (the copy is not timed),
 //! and building a million-node map once is all the setup it needs.
 //!
@@ -169,10 +170,19 @@ fn along_probes(seen: &[[f64; 8]], rng: &mut Rng) -> Vec<[f64; 8]> {
 }
 
 fn main() -> std::io::Result<()> {
+    // Cargo passes `--bench` to a bench without the test harness.
+    let only = std::env::args().skip(1).find(|a| !a.starts_with("--"));
+    if let Some(shape) = only.as_deref().filter(|s| !["runs", "uniform"].contains(s)) {
+        eprintln!("unknown shape {shape:?}: expected runs or uniform");
+        std::process::exit(2);
+    }
     let mut csv =
         String::from("shape,nodes,search,along_query_ns,near_query_ns,far_query_ns,update_ns\n");
     println!("shape    nodes      search  along µs  near µs   far µs  update µs");
     for (shape, name) in [(Shape::Runs, "runs"), (Shape::Uniform, "uniform")] {
+        if only.as_ref().is_some_and(|o| o != name) {
+            continue;
+        }
         let mut map = Aitm::new(AitmConfig::regressor(QueryMode::BestTwo), 8, 3);
         let mut train = Samples::new(shape, 1);
         let mut fresh = Samples::new(shape, 2);
@@ -227,8 +237,13 @@ fn main() -> std::io::Result<()> {
             }
         }
     }
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/aitm_scaling.csv");
+    let file = match &only {
+        Some(shape) => format!("aitm_scaling-{shape}.csv"),
+        None => "aitm_scaling.csv".to_owned(),
+    };
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../target")
+        .join(file);
     std::fs::File::create(&path)?.write_all(csv.as_bytes())?;
     println!("wrote {}", path.display());
     Ok(())

@@ -20,12 +20,24 @@
 //! thesis's named weakness is a memory that slows down as it grows). A
 //! search touches a few dozen nodes and leaves wherever they lie, so each
 //! touch should cost as few cache misses as possible:
-//! * a leaf keeps its own copy of its rows' inputs, contiguous in a slab of
-//!   fixed-size slots, so scanning a leaf streams one block instead of
-//!   fetching every row from wherever `w_in` keeps it;
-//! * the two children of a node are allocated as a pair, so the two boxes a
-//!   visit compares are adjacent in memory;
+//! * everything the search reads of a sibling pair lies in one block of
+//!   whole, aligned cache lines: both boxes, as `f32` rounded outward (the
+//!   lower corner down, the upper up, so a box still contains its rows and
+//!   the bound stays a lower bound), and both nodes' kinds; the rest of a
+//!   node (split, parent, row count), which only insertions and removals
+//!   need, lies elsewhere. For 8 inputs a visit reads 3 lines instead of
+//!   about 6 (`f64` boxes, unaligned, beside separately stored nodes);
+//! * a leaf keeps its row numbers and its own copy of its rows' inputs in
+//!   one aligned slot of a slab, so scanning a leaf streams one block
+//!   instead of fetching every row from wherever `w_in` keeps it; a row
+//!   farther than the second winner is rejected before its number is read;
 //! * nodes are small plain values (no per-leaf heap allocation).
+//!
+//! The box bound is computed without branches (where a query lies against a
+//! box is as good as random), with the dimension known at compile time for
+//! the instances' input sizes; the pruning test compares the squared bound
+//! with a threshold derived once per new second winner instead of taking a
+//! root per box.
 //!
 //! The copies cost `dim` values per row on top of `w_in`; the map keeps
 //! them in step by removing a row before its input changes and inserting it
@@ -52,11 +64,19 @@ const MARGIN: f64 = 1.0 - 1e-9;
 
 const NONE: u32 = u32::MAX;
 
-/// The root's slot; every other node is one of a pair of siblings at
-/// `(2k + 1, 2k + 2)`.
+/// The root's slot, paired with an unused node 1; every other node is one
+/// of a pair of siblings at `(2k, 2k + 1)`.
 const ROOT: u32 = 0;
 
-#[derive(Clone, Copy, Debug)]
+/// Bytes in a cache line.
+const LINE: usize = 64;
+
+/// The search's copy of a node's kind, stored beside its box: `(a, b)` is
+/// `(INNER, children)`, `(len, slot)` for a leaf or `(FREE, 0)`.
+const INNER: u32 = u32::MAX;
+const FREE: u32 = u32::MAX - 1;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
     /// Children at `children` and `children + 1`; inserted rows go left when
     /// their `axis` component is below `split`.
@@ -71,12 +91,114 @@ enum Kind {
     Free,
 }
 
+impl Kind {
+    /// What the search needs of the kind: the `(a, b)` of [`INNER`].
+    fn link(self) -> (u32, u32) {
+        match self {
+            Kind::Inner { children, .. } => (INNER, children),
+            Kind::Leaf { slot, len } => (len, slot),
+            Kind::Free => (FREE, 0),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Node {
     kind: Kind,
     parent: u32,
     /// Rows in the subtree.
     count: u32,
+}
+
+/// A growable array whose first element starts a cache line, so that a
+/// block of elements laid out to fill whole lines really occupies only
+/// those lines (the allocator aligns large blocks to 16 bytes only).
+#[derive(Debug)]
+struct LineAligned<T> {
+    data: Vec<T>,
+    /// Padding elements before the first.
+    base: usize,
+}
+
+impl<T: Copy + Default> LineAligned<T> {
+    /// A copy of `items` starting a line, with room for `room` elements.
+    fn with_room(items: &[T], room: usize) -> Self {
+        let size = size_of::<T>().max(1);
+        let mut data = Vec::with_capacity(room.max(items.len()) + LINE / size);
+        let base = (LINE - data.as_ptr() as usize % LINE) % LINE / size;
+        data.resize(base, T::default());
+        data.extend_from_slice(items);
+        Self { data, base }
+    }
+
+    fn len(&self) -> usize {
+        self.data.len() - self.base
+    }
+
+    fn as_slice(&self) -> &[T] {
+        &self.data[self.base..]
+    }
+
+    fn as_mut_slice(&mut self) -> &mut [T] {
+        &mut self.data[self.base..]
+    }
+
+    /// Appends `n` default elements, moving everything to a new aligned
+    /// block (of twice the size) when the current one is full.
+    fn grow(&mut self, n: usize) {
+        if self.data.len() + n > self.data.capacity() {
+            *self = Self::with_room(self.as_slice(), 2 * (self.len() + n));
+        }
+        self.data.resize(self.data.len() + n, T::default());
+    }
+}
+
+impl<T: Copy + Default> Clone for LineAligned<T> {
+    fn clone(&self) -> Self {
+        Self::with_room(self.as_slice(), self.len())
+    }
+}
+
+/// `v` rounded to an `f32` not above it.
+fn round_down(v: f64) -> f32 {
+    let f = v as f32;
+    if f64::from(f) > v {
+        -f32_next_up(-f)
+    } else {
+        f
+    }
+}
+
+/// `v` rounded to an `f32` not below it.
+fn round_up(v: f64) -> f32 {
+    let f = v as f32;
+    if f64::from(f) < v {
+        f32_next_up(f)
+    } else {
+        f
+    }
+}
+
+/// The least `f32` above a finite or infinite `f` below +∞ (`f32::next_up`
+/// is newer than the workspace's minimum Rust).
+fn f32_next_up(f: f32) -> f32 {
+    if f == 0.0 {
+        return f32::from_bits(1);
+    }
+    let bits = f.to_bits();
+    f32::from_bits(if f > 0.0 { bits + 1 } else { bits - 1 })
+}
+
+/// The least `f64` above `x`; +∞ stays +∞.
+fn f64_next_up(x: f64) -> f64 {
+    if x == f64::INFINITY {
+        return x;
+    }
+    if x == 0.0 {
+        return f64::from_bits(1);
+    }
+    let bits = x.to_bits();
+    f64::from_bits(if x > 0.0 { bits + 1 } else { bits - 1 })
 }
 
 /// A candidate: distance, sum of squares, row.
@@ -94,15 +216,21 @@ pub(crate) fn ranks_before(a: Candidate, b: Candidate) -> bool {
 #[derive(Clone, Debug)]
 pub(crate) struct KdIndex {
     dim: usize,
+    /// Everything about a node that insertions and removals need.
     nodes: Vec<Node>,
-    /// `2·dim` values per node: lower corner, then upper corner.
-    bbox: Vec<f64>,
+    /// What the search reads, one block of `pair_stride` values (whole
+    /// cache lines) per sibling pair: the two boxes (lower corner, upper
+    /// corner, as `f32` rounded outward), then the two nodes' `(a, b)` of
+    /// [`INNER`] as bits.
+    pairs: LineAligned<f32>,
+    pair_stride: usize,
     /// Free sibling pairs, by their first node.
     free_pairs: Vec<u32>,
-    /// `LEAF_CAP` rows per slot.
-    slab_rows: Vec<u32>,
-    /// `LEAF_CAP · dim` inputs per slot, the copies of the rows' inputs.
-    slab_inputs: Vec<f64>,
+    /// One block of `slot_stride` values per leaf slot: `LEAF_CAP` row
+    /// numbers (exact in `f64`), then `LEAF_CAP · dim` inputs, the copies
+    /// of those rows' inputs.
+    slab: LineAligned<f64>,
+    slot_stride: usize,
     free_slots: Vec<u32>,
     /// Leaf of each row, `NONE` if the row is not in the tree.
     leaf_of: Vec<u32>,
@@ -111,20 +239,20 @@ pub(crate) struct KdIndex {
 impl KdIndex {
     /// A tree over `rows` of `w_in` (`dim` values per row).
     pub(crate) fn build(dim: usize, w_in: &[f64], rows: impl Iterator<Item = usize>) -> Self {
+        let per_line = LINE / size_of::<f32>();
         let mut index = Self {
             dim,
-            nodes: vec![Node {
-                kind: Kind::Free,
-                parent: NONE,
-                count: 0,
-            }],
-            bbox: vec![0.0; 2 * dim],
+            nodes: Vec::new(),
+            pairs: LineAligned::with_room(&[], 0),
+            pair_stride: (4 * dim + 4).div_ceil(per_line) * per_line,
             free_pairs: Vec::new(),
-            slab_rows: Vec::new(),
-            slab_inputs: Vec::new(),
+            slab: LineAligned::with_room(&[], 0),
+            slot_stride: LEAF_CAP * (1 + dim),
             free_slots: Vec::new(),
             leaf_of: Vec::new(),
         };
+        let root = index.alloc_pair();
+        debug_assert_eq!(root, ROOT);
         let mut all: Vec<u32> = rows.map(|r| r as u32).collect();
         index.build_into(ROOT, &mut all, w_in);
         index
@@ -146,7 +274,10 @@ impl KdIndex {
             count: 0,
         };
         self.nodes.extend([free, free]);
-        self.bbox.extend(std::iter::repeat_n(0.0, 4 * self.dim));
+        self.pairs.grow(self.pair_stride);
+        for node in [first, first + 1] {
+            self.set_kind(node, Kind::Free);
+        }
         first
     }
 
@@ -154,10 +285,8 @@ impl KdIndex {
         if let Some(slot) = self.free_slots.pop() {
             return slot;
         }
-        let slot = (self.slab_rows.len() / LEAF_CAP) as u32;
-        self.slab_rows.extend([NONE; LEAF_CAP]);
-        self.slab_inputs
-            .extend(std::iter::repeat_n(0.0, LEAF_CAP * self.dim));
+        let slot = (self.slab.len() / self.slot_stride) as u32;
+        self.slab.grow(self.slot_stride);
         slot
     }
 
@@ -166,10 +295,55 @@ impl KdIndex {
         &w_in[r * self.dim..(r + 1) * self.dim]
     }
 
+    /// Where node `node`'s box starts in `pairs`.
+    fn box_at(&self, node: u32) -> usize {
+        let node = node as usize;
+        node / 2 * self.pair_stride + node % 2 * 2 * self.dim
+    }
+
+    /// Where node `node`'s `(a, b)` lies in `pairs`.
+    fn link_at(&self, node: u32) -> usize {
+        let node = node as usize;
+        node / 2 * self.pair_stride + 4 * self.dim + node % 2 * 2
+    }
+
+    fn set_kind(&mut self, node: u32, kind: Kind) {
+        self.nodes[node as usize].kind = kind;
+        let at = self.link_at(node);
+        let (a, b) = kind.link();
+        // Stored as bits: copies keep them, whatever value they spell.
+        self.pairs.as_mut_slice()[at..at + 2]
+            .copy_from_slice(&[f32::from_bits(a), f32::from_bits(b)]);
+    }
+
+    /// The search's copy of node `node`'s kind.
+    #[inline]
+    fn link(&self, node: u32) -> (u32, u32) {
+        let at = self.link_at(node);
+        let pairs = self.pairs.as_slice();
+        (pairs[at].to_bits(), pairs[at + 1].to_bits())
+    }
+
+    /// Where row `k` of slot `slot` has its number in `slab`; its inputs
+    /// are at [`Self::input_at`].
+    fn row_at(&self, slot: u32, k: usize) -> usize {
+        slot as usize * self.slot_stride + k
+    }
+
+    fn input_at(&self, slot: u32, k: usize) -> usize {
+        slot as usize * self.slot_stride + LEAF_CAP + k * self.dim
+    }
+
     /// The inputs stored in `slot` at position `k`.
+    #[cfg(test)]
     fn slab_input(&self, slot: u32, k: usize) -> &[f64] {
-        let at = (slot as usize * LEAF_CAP + k) * self.dim;
-        &self.slab_inputs[at..at + self.dim]
+        let at = self.input_at(slot, k);
+        &self.slab.as_slice()[at..at + self.dim]
+    }
+
+    /// The row stored in `slot` at position `k`.
+    fn slab_row(&self, slot: u32, k: usize) -> u32 {
+        self.slab.as_slice()[self.row_at(slot, k)] as u32
     }
 
     fn note_leaf(&mut self, r: u32, leaf: u32) {
@@ -185,11 +359,41 @@ impl KdIndex {
         let Kind::Leaf { slot, len } = self.nodes[node as usize].kind else {
             unreachable!("rows are only pushed to leaves");
         };
-        let k = slot as usize * LEAF_CAP + len as usize;
-        self.slab_rows[k] = r;
-        self.slab_inputs[k * self.dim..(k + 1) * self.dim].copy_from_slice(x);
-        self.nodes[node as usize].kind = Kind::Leaf { slot, len: len + 1 };
+        let (row_at, input_at) = (
+            self.row_at(slot, len as usize),
+            self.input_at(slot, len as usize),
+        );
+        let slab = self.slab.as_mut_slice();
+        slab[row_at] = f64::from(r);
+        slab[input_at..input_at + x.len()].copy_from_slice(x);
+        self.set_kind(node, Kind::Leaf { slot, len: len + 1 });
         self.note_leaf(r, node);
+    }
+
+    /// Sets node `node`'s box to the smallest `f32` box around `lo`..`hi`.
+    fn set_box(&mut self, node: u32, lo: &[f64], hi: &[f64]) {
+        let (at, d) = (self.box_at(node), self.dim);
+        let b = &mut self.pairs.as_mut_slice()[at..at + 2 * d];
+        for j in 0..d {
+            b[j] = round_down(lo[j]);
+            b[d + j] = round_up(hi[j]);
+        }
+    }
+
+    /// Grows node `node`'s box to contain `x`.
+    fn grow_box(&mut self, node: u32, x: &[f64]) {
+        let (at, d) = (self.box_at(node), self.dim);
+        let b = &mut self.pairs.as_mut_slice()[at..at + 2 * d];
+        // Rounded only when the box grows (most insertions reach boxes
+        // that hold them already).
+        for (j, &v) in x.iter().enumerate() {
+            if v < f64::from(b[j]) {
+                b[j] = round_down(v);
+            }
+            if v > f64::from(b[d + j]) {
+                b[d + j] = round_up(v);
+            }
+        }
     }
 
     /// Builds a balanced subtree over `rows` into node `node`, whose parent
@@ -203,13 +407,11 @@ impl KdIndex {
                 hi[j] = hi[j].max(*v);
             }
         }
-        let b = node as usize * 2 * d;
-        self.bbox[b..b + d].copy_from_slice(&lo);
-        self.bbox[b + d..b + 2 * d].copy_from_slice(&hi);
+        self.set_box(node, &lo, &hi);
         self.nodes[node as usize].count = rows.len() as u32;
         if rows.len() <= LEAF_CAP {
             let slot = self.alloc_slot();
-            self.nodes[node as usize].kind = Kind::Leaf { slot, len: 0 };
+            self.set_kind(node, Kind::Leaf { slot, len: 0 });
             for &r in rows.iter() {
                 self.push_to_leaf(node, r, &w_in[r as usize * d..(r as usize + 1) * d]);
             }
@@ -226,11 +428,14 @@ impl KdIndex {
         let split = key(&rows[mid]);
         let (left_rows, right_rows) = rows.split_at_mut(mid);
         let children = self.alloc_pair();
-        self.nodes[node as usize].kind = Kind::Inner {
-            axis: axis as u32,
-            split,
-            children,
-        };
+        self.set_kind(
+            node,
+            Kind::Inner {
+                axis: axis as u32,
+                split,
+                children,
+            },
+        );
         for child in [children, children + 1] {
             self.nodes[child as usize].parent = node;
         }
@@ -241,8 +446,7 @@ impl KdIndex {
     fn rows_below(&self, node: u32, out: &mut Vec<u32>) {
         match self.nodes[node as usize].kind {
             Kind::Leaf { slot, len } => {
-                let at = slot as usize * LEAF_CAP;
-                out.extend_from_slice(&self.slab_rows[at..at + len as usize]);
+                out.extend((0..len as usize).map(|k| self.slab_row(slot, k)));
             }
             Kind::Inner { children, .. } => {
                 self.rows_below(children, out);
@@ -260,13 +464,13 @@ impl KdIndex {
                 self.release_below(children);
                 self.release_below(children + 1);
                 for child in [children, children + 1] {
-                    self.nodes[child as usize].kind = Kind::Free;
+                    self.set_kind(child, Kind::Free);
                 }
                 self.free_pairs.push(children);
             }
             Kind::Free => {}
         }
-        self.nodes[node as usize].kind = Kind::Free;
+        self.set_kind(node, Kind::Free);
     }
 
     /// Rebuilds the subtree at `node` in place, with `extra` rows added.
@@ -285,12 +489,7 @@ impl KdIndex {
         let mut node = ROOT;
         let mut depth = 1;
         loop {
-            let b = node as usize * 2 * d;
-            let (lo, hi) = self.bbox[b..b + 2 * d].split_at_mut(d);
-            for ((l, h), v) in lo.iter_mut().zip(hi.iter_mut()).zip(x) {
-                *l = l.min(*v);
-                *h = h.max(*v);
-            }
+            self.grow_box(node, x);
             self.nodes[node as usize].count += 1;
             match self.nodes[node as usize].kind {
                 Kind::Inner {
@@ -341,22 +540,20 @@ impl KdIndex {
         let Kind::Leaf { slot, len } = self.nodes[leaf as usize].kind else {
             return;
         };
-        let at = slot as usize * LEAF_CAP;
-        let Some(k) = self.slab_rows[at..at + len as usize]
-            .iter()
-            .position(|&x| x as usize == r)
-        else {
+        let Some(k) = (0..len as usize).find(|&k| self.slab_row(slot, k) as usize == r) else {
             return;
         };
-        // Swap-remove in both halves of the slot.
+        // Swap-remove: the last row and its inputs move into position `k`.
         let last = len as usize - 1;
-        self.slab_rows.swap(at + k, at + last);
-        let d = self.dim;
         if k != last {
-            self.slab_inputs
-                .copy_within((at + last) * d..(at + last + 1) * d, (at + k) * d);
+            let d = self.dim;
+            let (from, to) = (self.input_at(slot, last), self.input_at(slot, k));
+            let (last_row, k_row) = (self.row_at(slot, last), self.row_at(slot, k));
+            let slab = self.slab.as_mut_slice();
+            slab[k_row] = slab[last_row];
+            slab.copy_within(from..from + d, to);
         }
-        self.nodes[leaf as usize].kind = Kind::Leaf { slot, len: len - 1 };
+        self.set_kind(leaf, Kind::Leaf { slot, len: len - 1 });
         let mut node = leaf;
         while node != NONE {
             self.nodes[node as usize].count -= 1;
@@ -364,84 +561,124 @@ impl KdIndex {
         }
     }
 
-    /// Lower bound of the squared distance from `x` to node's box.
-    #[inline]
-    fn lower_bound(&self, node: u32, x: &[f64]) -> f64 {
-        let d = self.dim;
-        let b = node as usize * 2 * d;
-        let (lo, hi) = (&self.bbox[b..b + d], &self.bbox[b + d..b + 2 * d]);
-        let mut sum = 0.0;
+    /// Lower bound of the squared distance from `x` to node's box; `N` is
+    /// the dimension when known at compile time, 0 otherwise.
+    #[inline(always)]
+    fn lower_bound<const N: usize>(&self, node: u32, x: &[f64]) -> f64 {
+        let d = if N == 0 { self.dim } else { N };
+        let at = self.box_at(node);
+        let (lo, hi) = self.pairs.as_slice()[at..at + 2 * d].split_at(d);
+        let x = &x[..d];
+        // Branch-free (where a query lies against a box is as good as
+        // random, and a search compares hundreds of boxes), in four partial
+        // sums. Each gap is the one positive difference, or 0: as the box
+        // contains the rows (its bounds widen to `f64` exactly) and rounding
+        // is monotone, at most the rounded difference of any row in it.
+        let mut acc = [0.0; 4];
         for j in 0..d {
-            let gap = if x[j] < lo[j] {
-                lo[j] - x[j]
-            } else if x[j] > hi[j] {
-                x[j] - hi[j]
-            } else {
-                0.0
-            };
-            sum += gap * gap;
+            let below = f64::from(lo[j]) - x[j];
+            let above = x[j] - f64::from(hi[j]);
+            let gap = if below > above { below } else { above };
+            let gap = if gap > 0.0 { gap } else { 0.0 };
+            acc[j % 4] += gap * gap;
         }
-        sum * MARGIN
+        ((acc[0] + acc[1]) + (acc[2] + acc[3])) * MARGIN
     }
 
     /// The winner and second winner among the rows in the tree, exactly as
     /// the brute-force scan ranks them, for a finite `x` and finite rows.
     pub(crate) fn nearest_two(&self, x: &[f64]) -> (Option<Candidate>, Option<Candidate>) {
+        // The instances' input sizes get the dimension at compile time (the
+        // same arithmetic, unrolled), as the scan does.
+        match self.dim {
+            2 => self.nearest_two_in::<2>(x),
+            8 => self.nearest_two_in::<8>(x),
+            10 => self.nearest_two_in::<10>(x),
+            _ => self.nearest_two_in::<0>(x),
+        }
+    }
+
+    fn nearest_two_in<const N: usize>(&self, x: &[f64]) -> (Option<Candidate>, Option<Candidate>) {
+        let d = if N == 0 { self.dim } else { N };
+        let x = &x[..d];
         let mut best: Option<Candidate> = None;
         let mut second: Option<Candidate> = None;
-        // Every distance in a box is ≥ √bound: strictly farther than the
-        // second winner cannot rank, not even by a tie.
-        let hopeless =
-            |bound: f64, second: Option<Candidate>| second.is_some_and(|s| bound.sqrt() > s.0);
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
-        stack.push((ROOT, self.lower_bound(ROOT, x)));
-        while let Some((node, bound)) = stack.pop() {
-            if hopeless(bound, second) {
+        // A box whose bound exceeds `prune` lies strictly farther than the
+        // second winner (every distance in it is ≥ √bound > the second
+        // distance): it cannot rank, not even by a tie. See
+        // [`beyond_squared`]; no square root per box.
+        let mut prune = f64::INFINITY;
+        let slab = self.slab.as_slice();
+        let mut stack: Vec<((u32, u32), f64)> = Vec::with_capacity(64);
+        stack.push((self.link(ROOT), self.lower_bound::<N>(ROOT, x)));
+        while let Some(((a, b), bound)) = stack.pop() {
+            if bound > prune {
                 continue;
             }
-            match self.nodes[node as usize].kind {
-                Kind::Leaf { slot, len } => {
-                    let at = slot as usize * LEAF_CAP;
-                    for k in 0..len as usize {
-                        let sum = pairwise_sq_sum(self.slab_input(slot, k), x);
-                        let row = self.slab_rows[at + k] as usize;
-                        // Exact shortcut: a larger sum cannot give a smaller
-                        // root, but its root can be equal and then a row
-                        // before the second winner's wins the tie (the scan
-                        // meets rows in order; the tree does not).
-                        if second.is_some_and(|s| sum > s.1 && row > s.2) {
-                            continue;
-                        }
-                        let c = (sum.sqrt(), sum, row);
-                        if best.is_none_or(|b| ranks_before(c, b)) {
-                            second = best;
-                            best = Some(c);
-                        } else if second.is_none_or(|s| ranks_before(c, s)) {
-                            second = Some(c);
-                        }
+            if a == INNER {
+                let (left, right) = (b, b + 1);
+                let (bl, br) = (
+                    self.lower_bound::<N>(left, x),
+                    self.lower_bound::<N>(right, x),
+                );
+                // The nearer box is searched first (pushed last).
+                let (near, far) = if bl <= br {
+                    ((left, bl), (right, br))
+                } else {
+                    ((right, br), (left, bl))
+                };
+                if far.1 <= prune {
+                    stack.push((self.link(far.0), far.1));
+                }
+                if near.1 <= prune {
+                    stack.push((self.link(near.0), near.1));
+                }
+            } else if a != FREE {
+                let (slot, len) = (b, a as usize);
+                for k in 0..len {
+                    let at = self.input_at(slot, k);
+                    let sum = pairwise_sq_sum(&slab[at..at + d], x);
+                    // Exact shortcuts: a strictly larger root cannot rank,
+                    // not even by a tie, so its row number is not even read.
+                    // An equal root can, when its row comes before the
+                    // second winner's (the scan meets rows in order; the
+                    // tree does not).
+                    if sum > prune {
+                        continue;
+                    }
+                    let root = sum.sqrt();
+                    if second.is_some_and(|s| root > s.0) {
+                        continue;
+                    }
+                    let row = slab[self.row_at(slot, k)] as usize;
+                    if second.is_some_and(|s| sum > s.1 && row > s.2) {
+                        continue;
+                    }
+                    let c = (root, sum, row);
+                    if best.is_none_or(|b| ranks_before(c, b)) {
+                        second = best;
+                        best = Some(c);
+                    } else if second.is_none_or(|s| ranks_before(c, s)) {
+                        second = Some(c);
+                    }
+                    if let Some(s) = second {
+                        prune = beyond_squared(s.0);
                     }
                 }
-                Kind::Inner { children, .. } => {
-                    let (left, right) = (children, children + 1);
-                    let (bl, br) = (self.lower_bound(left, x), self.lower_bound(right, x));
-                    // The nearer box is searched first (pushed last).
-                    let (near, far) = if bl <= br {
-                        ((left, bl), (right, br))
-                    } else {
-                        ((right, br), (left, bl))
-                    };
-                    if !hopeless(far.1, second) {
-                        stack.push(far);
-                    }
-                    if !hopeless(near.1, second) {
-                        stack.push(near);
-                    }
-                }
-                Kind::Free => {}
             }
         }
         (best, second)
     }
+}
+
+/// A value `t` such that every `v > t` has `v.sqrt() > r` (for `r ≥ 0`),
+/// so that bounds are compared without taking their roots: with `u` the
+/// next value above `r`, `t ≥ u²` exactly (the rounded square plus one
+/// step), so `√v > u` and its rounding, monotone, is at least `u > r`.
+#[inline]
+fn beyond_squared(r: f64) -> f64 {
+    let u = f64_next_up(r);
+    f64_next_up(u * u)
 }
 
 #[cfg(test)]
@@ -480,26 +717,33 @@ impl KdIndex {
                 n.parent
             ));
         }
+        if self.link(node) != n.kind.link() {
+            return Err(format!(
+                "node {node}: the search's copy of its kind is stale"
+            ));
+        }
         let before = seen.len();
+        let (at, pairs) = (self.box_at(node), self.pairs.as_slice());
+        let (lo, hi) = pairs[at..at + 2 * d].split_at(d);
         match n.kind {
             Kind::Leaf { slot, len } => {
                 if len as usize > LEAF_CAP {
                     return Err(format!("leaf {node} holds {len} rows"));
                 }
                 for k in 0..len as usize {
-                    let r = self.slab_rows[slot as usize * LEAF_CAP + k];
+                    let r = self.slab_row(slot, k);
                     if self.slab_input(slot, k) != self.row(w_in, r) {
                         return Err(format!("leaf {node}: the copy of row {r} is stale"));
                     }
                     if self.leaf_of[r as usize] != node {
                         return Err(format!("row {r}: leaf_of is not leaf {node}"));
                     }
-                    let b = node as usize * 2 * d;
+                    // The `f32` box, rounded outward, still holds the row.
                     let inside = self
                         .row(w_in, r)
                         .iter()
                         .enumerate()
-                        .all(|(j, v)| self.bbox[b + j] <= *v && *v <= self.bbox[b + d + j]);
+                        .all(|(j, v)| f64::from(lo[j]) <= *v && *v <= f64::from(hi[j]));
                     if !inside {
                         return Err(format!("row {r} lies outside the box of leaf {node}"));
                     }
@@ -509,11 +753,9 @@ impl KdIndex {
             Kind::Inner { children, .. } => {
                 for child in [children, children + 1] {
                     self.check_node(child, node, w_in, seen)?;
-                    let (b, c) = (node as usize * 2 * d, child as usize * 2 * d);
-                    let nested = (0..d).all(|j| {
-                        self.bbox[b + j] <= self.bbox[c + j]
-                            && self.bbox[c + d + j] <= self.bbox[b + d + j]
-                    });
+                    let c = self.box_at(child);
+                    let (clo, chi) = pairs[c..c + 2 * d].split_at(d);
+                    let nested = (0..d).all(|j| lo[j] <= clo[j] && chi[j] <= hi[j]);
                     if !nested && self.nodes[child as usize].count > 0 {
                         return Err(format!("the box of {child} leaves its parent's"));
                     }
@@ -645,6 +887,23 @@ mod tests {
                     prop_assert!(false, "{}", broken);
                 }
             }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn f32_bounds_enclose_and_are_tight(v in prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO) {
+            let (lo, hi) = (round_down(v), round_up(v));
+            prop_assert!(f64::from(lo) <= v && v <= f64::from(hi));
+            // One `f32` step apart at most (equal when `v` is an `f32`).
+            prop_assert!(hi <= f32_next_up(lo));
+        }
+
+        #[test]
+        fn beyond_the_squared_threshold_the_root_is_larger(r in 0.0..1e6f64, t in 0.0..1e-6f64) {
+            let v = f64_next_up(beyond_squared(r)) * (1.0 + t);
+            prop_assert!(v.sqrt() > r);
+            prop_assert!(f64_next_up(r) > r && f64_next_up(f64::INFINITY) == f64::INFINITY);
         }
     }
 
