@@ -5,9 +5,10 @@
 //!
 //! `cargo bench -p learner --bench aitm_scaling` prints a table and writes
 //! `target/aitm_scaling.csv`; `… -- runs` (or `uniform`) times one shape
-//! only and writes `target/aitm_scaling-runs.csv` (or `-uniform`). Not criterion: an update grows the map, so
-//! each timed batch runs on a fresh copy of the map (the copy is not timed),
-//! and building a million-node map once is all the setup it needs.
+//! only and writes `target/aitm_scaling-runs.csv` (or `-uniform`). Not
+//! criterion: an update grows the map, so each timed batch runs on a fresh
+//! copy of the map (the copy is not timed), and building a million-node map
+//! once is all the setup it needs.
 //!
 //! Inputs are 8-dimensional like the object predictors' φ, outputs
 //! 3-dimensional (BESTTWO), on the 3-decimal grid:
