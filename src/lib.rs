@@ -1,24 +1,12 @@
-//! pushlearn: wire types, client, learner daemon, experiments.
+//! pushlearn: the protocol every pushlearn process and client shares.
 //!
 //! * [`wire`]: the protobuf schema (`proto/pushlearn.proto`), framing,
-//!   connections and command validation shared by the world daemon and its
-//!   clients;
-//! * [`client`]: an async client for the world daemon;
-//! * [`frame`]: world states as the learner sees them;
-//! * [`experiment`]: the thesis's experiments over the sockets;
-//! * [`learn`]: the learner daemon;
-//! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
-//! * [`models`]: the learners by name;
-//! * [`report`]: JSON documents and terminal tables beside the thesis's numbers;
-//! * [`view`]: the browser viewer (`pushlearn view`).
+//!   connections and command validation, used by the world daemon and every
+//!   client alike;
+//! * [`client`]: an async client for the world daemon.
+//!
+//! The application (learner daemon, experiments, reports, viewer, `ctl`) is
+//! the `pushlearn-cli` crate in `crates/cli`; the world is `sim-plugin`.
 
 pub mod client;
-pub mod experiment;
-pub mod frame;
-pub mod latency;
-pub mod learn;
-pub mod load;
-pub mod models;
-pub mod report;
-pub mod view;
 pub mod wire;

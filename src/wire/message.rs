@@ -7,6 +7,7 @@
 use std::fmt;
 use std::str::FromStr;
 
+use super::orientation;
 use super::pb::{
     self, actuator_command::Command, client_message::Payload, server_message, sim_control::Action,
 };
@@ -19,17 +20,17 @@ impl pb::Vector3d {
 }
 
 impl pb::Quaternion {
-    /// A rotation by `yaw` radians about the world z axis, as the learners
-    /// define it (`features.md` §1: `(0, 0, sin(yaw/2), cos(yaw/2))`).
+    /// A rotation by `yaw` radians about the world z axis
+    /// ([`orientation::from_yaw`]).
     pub fn from_yaw(yaw: f64) -> Self {
-        let [x, y, z, w] = learner::features::yaw_to_quaternion(yaw);
+        let [x, y, z, w] = orientation::from_yaw(yaw);
         Self { x, y, z, w }
     }
 
-    /// The yaw the learners read from this orientation (`features.md` §1,
-    /// normalised first), in `(-π, π]`.
+    /// The yaw the learners read from this orientation
+    /// ([`orientation::yaw`]).
     pub fn yaw(&self) -> f64 {
-        learner::features::quaternion_to_yaw([self.x, self.y, self.z, self.w])
+        orientation::yaw([self.x, self.y, self.z, self.w])
     }
 }
 

@@ -10,11 +10,13 @@
 //! * [`connection`]: typed reader/writer halves over any byte stream;
 //! * [`validate()`]: the state-independent checks a world runs on every
 //!   command on arrival (a client runs them before sending);
-//! * [`message`]: constructors such as [`pb::ClientMessage::move_`].
+//! * [`message`]: constructors such as [`pb::ClientMessage::move_`];
+//! * [`orientation`]: a planar yaw as the wire's quaternion, and back.
 
 pub mod codec;
 pub mod connection;
 pub mod message;
+pub mod orientation;
 pub mod pb;
 pub mod validate;
 

@@ -1,6 +1,6 @@
 //! `SimClient` against worlds that misbehave: a scripted listener plays
 //! bytes no real daemon sends. Its behaviour against the real daemon is
-//! tested with the daemon (`sim-plugin/tests/daemon`).
+//! tested with the daemon (`sim-plugin/tests/sim/daemon`).
 
 use std::time::Duration;
 

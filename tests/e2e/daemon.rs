@@ -59,6 +59,11 @@ impl Daemon {
         }
     }
 
+    /// The daemon's process id.
+    pub fn pid(&self) -> u32 {
+        self.process.pid()
+    }
+
     /// Kills the daemon (SIGKILL) and returns its log.
     pub fn stop(&mut self) -> String {
         self.process.stop()

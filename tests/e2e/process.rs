@@ -116,6 +116,11 @@ impl Background {
         (Background { name, child, logs }, line)
     }
 
+    /// The child's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
     /// Kills the child and returns its log.
     pub fn stop(&mut self) -> String {
         let _ = self.child.kill();

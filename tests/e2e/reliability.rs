@@ -10,8 +10,8 @@ use std::time::{Duration, Instant};
 
 use learner::{Action, GateConfig, GateModel, Model};
 use pushlearn::client::SimClient;
-use pushlearn::learn::state::{recover, Settings};
-use pushlearn::learn::{serve, Learner, Policy, ServeOptions};
+use pushlearn_cli::learn::state::{recover, Settings};
+use pushlearn_cli::learn::{serve, Learner, Policy, ServeOptions};
 use serde_json::Value;
 
 use crate::daemon::Daemon;
@@ -159,7 +159,7 @@ fn settings() -> Settings {
         policy: Policy::Fixed(ACTION),
         shadows: false,
         seed: 1,
-        model_options: pushlearn::models::ModelOptions::default().canonical(),
+        model_options: pushlearn_cli::models::ModelOptions::default().canonical(),
     }
 }
 
@@ -215,7 +215,7 @@ fn a_learner_killed_mid_training_resumes_bit_identically_and_cuts_a_torn_tail() 
         "--snapshot-every",
         "150",
     ];
-    let mut learn = Learn::start(&args, "pushlearn::learn::state=trace");
+    let mut learn = Learn::start(&args, "pushlearn_cli::learn::state=trace");
     // Acknowledged records, as the journal reports them after each fsync.
     let acknowledged = learn.wait_for("400 acknowledged records", |line| {
         let n: u64 = line
@@ -355,4 +355,39 @@ fn a_restarted_world_is_reconnected_with_backoff_and_the_model_resynchronised() 
         Some(2000 - 2),
         "{stdout}"
     );
+}
+
+/// The reduced version of the documented 64-client, 60 s load run
+/// (`docs/reliability.md`): the same code as `pushlearn ctl load`, 2 s
+/// against a real realtime daemon.
+#[test]
+fn sixty_four_clients_at_100_hz_miss_nothing_and_the_daemons_memory_stays_bounded() {
+    let daemon = Daemon::start(&["--real-time-rate", "1000"]);
+    let options = pushlearn_cli::load::LoadOptions {
+        clients: 64,
+        duration: Duration::from_secs(2),
+        pid: Some(daemon.pid()),
+        sample_every: Duration::from_millis(250),
+    };
+    let runtime = tokio::runtime::Runtime::new().expect("a tokio runtime");
+    let report = runtime
+        .block_on(async {
+            tokio::time::timeout(
+                CHILD_LIMIT,
+                pushlearn_cli::load::run_load(&daemon.addr.to_string(), &options),
+            )
+            .await
+        })
+        .expect("the load run finishes in time")
+        .expect("load run");
+    assert!(report.controller.states > 0, "{report}");
+    assert_eq!(report.controller.missed, 0, "{report}");
+    assert_eq!(report.subscribers_lost, 0, "{report}");
+    assert!(report.subscriber_min_states > 0, "{report}");
+    // Bounded: whatever happens, 64 queues of 1024 states (about 0.3 KiB
+    // each) are all the daemon may hold on to.
+    let rss: Vec<u64> = report.rss_kib.iter().map(|s| s.1).collect();
+    assert!(rss.len() >= 2, "{report}");
+    let growth = rss.iter().max().unwrap_or(&0) - rss[0];
+    assert!(growth < 64 * 1024, "RSS grew by {growth} KiB: {report}");
 }

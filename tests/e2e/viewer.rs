@@ -25,7 +25,7 @@ const REPORT: &str = "JSON.stringify({view: window.pushlearnView || null, \
     status: (document.getElementById('status') || {}).textContent, \
     message: (document.getElementById('message') || {}).textContent})";
 
-/// Colours the page fills with (src/view/page.html), and its background.
+/// Colours the page fills with (crates/cli/src/view/page.html), and its background.
 const BLUE: [f64; 3] = [31.0, 95.0, 208.0];
 const GREY: [f64; 3] = [68.0, 68.0, 68.0];
 const BACKGROUND: [f64; 3] = [247.0, 247.0, 242.0];

@@ -1,0 +1,533 @@
+//! `pushlearn experiment`: the thesis's experiments against real worlds.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use learner::{Model, ObjectState};
+use pushlearn_cli::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
+use pushlearn_cli::experiment::push_task::{Protocol, Variant};
+use pushlearn_cli::experiment::replay::RunCache;
+use pushlearn_cli::experiment::run::{self, Plan};
+use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
+use pushlearn_cli::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
+use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
+use pushlearn_cli::report::{self, draft, table};
+
+/// Run one of the thesis's experiments and print its table beside the
+/// thesis's numbers.
+///
+/// Each worker starts its own world (`pushlearn-sim serve` on a free port,
+/// found next to this executable, on PATH, or at --sim-bin) and runs
+/// independent jobs; results are gathered in job order, so they do not
+/// depend on --workers. In the lock-step modes the same --seed gives the same
+/// results.
+#[derive(Debug, Args)]
+pub struct ExperimentArgs {
+    #[command(subcommand)]
+    command: ExperimentCommand,
+}
+
+#[derive(Debug, Subcommand)]
+enum ExperimentCommand {
+    /// Push Task Simulation: train the forward model on N pushes, then
+    /// predict 150 steps of 21 test pushes without feedback (experiments.md §3).
+    #[command(after_help = "Thesis tables:\n  \
+        pushlearn experiment push-task --model gate                               # §3.4, §4.2\n  \
+        pushlearn experiment push-task --model interaction                        # §3.2, §4.1\n  \
+        pushlearn experiment push-task --model gate --variant fixed-three         # §5.3\n  \
+        pushlearn experiment push-task --model gate --variant two-objects         # §6.1\n  \
+        pushlearn experiment push-task --model gate --variant two-objects --train-runs 7   # §6.2\n  \
+        pushlearn experiment push-task --model gate --variant constant-feedback   # §7 (qualitative)\n\n\
+        Thesis draft (Tables 6.1, 6.2; every row of the draft):\n  \
+        pushlearn experiment push-task --report draft\n  \
+        pushlearn experiment push-task --model interaction --variant draft --selector tree --train-runs 3,10")]
+    PushTask(PushTaskArgs),
+    /// Move to Target: train on 8 fixed pushes, then plan pushes until the
+    /// block reaches a target pose (experiments.md §4).
+    #[command(after_help = "Thesis tables:\n  \
+        pushlearn experiment move-to-target --model gate          # §8.2\n  \
+        pushlearn experiment move-to-target --model interaction   # §8.1")]
+    MoveToTarget(MoveToTargetArgs),
+}
+
+/// Where the worlds come from and how they are timed.
+#[derive(Debug, Args)]
+struct WorldArgs {
+    /// World timing: lockstep-jitter (lock-step with seeded command latency of
+    /// 0–5 steps, the thesis's timing noise, reproducible), lockstep (no
+    /// latency: folds of fixed-start experiments are identical), or realtime
+    /// (the thesis's free-running world; the learner must keep up).
+    #[arg(long, value_enum, default_value_t = Mode::LockstepJitter)]
+    mode: Mode,
+
+    /// Number of worlds (processes) running jobs in parallel [default: the
+    /// number of CPUs].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    workers: Option<u32>,
+
+    /// The world daemon binary [default: `pushlearn-sim` next to this
+    /// executable, else on PATH].
+    #[arg(long, value_name = "PATH")]
+    sim_bin: Option<PathBuf>,
+
+    /// Use an already running world instead of starting one (one worker).
+    /// Its scene and timing mode must match the experiment.
+    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["workers", "sim_bin"])]
+    connect: Option<String>,
+
+    /// In lockstep mode, simulate every run afresh instead of reusing the
+    /// states of an identical earlier run (same start, same commands since
+    /// the world's reset). Reuse gives bit-identical results, since a
+    /// lock-step world without latency is a function of those commands
+    /// (docs/performance.md); the other modes never reuse.
+    #[arg(long)]
+    no_reuse: bool,
+
+    /// Seed of every random choice (training starts, exploration, latency).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+
+    /// Also write the results as JSON to FILE.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+
+    /// Also write the figures (PNG and SVG) into DIR, created if needed.
+    /// `pushlearn report plot FILE.json` draws them again from saved JSON.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct PushTaskArgs {
+    /// The learner.
+    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    model: ModelKind,
+
+    /// Which experiment of the thesis: random training starts (§3.1),
+    /// the three selected starts (§3.2), two blocks (§3.3), constant
+    /// feedback at 10 Hz (§3.4), or the thesis draft's protocol (starts at
+    /// the block's ends and centre, then random in [−0.35, 0.35); 20 test
+    /// runs from one fixed seed).
+    #[arg(long, value_enum, default_value_t = Variant::Random)]
+    variant: Variant,
+
+    /// Which tables to print: the final thesis's (for --variant), or the
+    /// thesis draft's Tables 6.1 and 6.2, which runs every row of the draft
+    /// (its own models, flags and protocol) and ignores --model.
+    #[arg(long, value_enum, default_value_t = ReportKind::Thesis)]
+    report: ReportKind,
+
+    /// Numbers of training runs, comma-separated [default: 1,2,3,5,10,20,30
+    /// for random, 3 for fixed-three, 6 for two-objects (7 for the thesis's
+    /// second variant)].
+    #[arg(long, value_name = "N,…", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..))]
+    train_runs: Option<Vec<u32>>,
+
+    /// Repetitions (folds) per number of training runs, each with a fresh
+    /// model [default: 20; 1 for the draft's protocol, which trained one
+    /// model per row].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    folds: Option<u32>,
+
+    #[command(flatten)]
+    options: ModelOptions,
+
+    #[command(flatten)]
+    world: WorldArgs,
+}
+
+/// The table layouts of `push-task`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum ReportKind {
+    /// The final thesis's tables for the chosen variant.
+    Thesis,
+    /// The thesis draft's Tables 6.1 and 6.2.
+    Draft,
+}
+
+#[derive(Debug, Args)]
+struct MoveToTargetArgs {
+    /// The learner.
+    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    model: ModelKind,
+
+    /// A target pose X,Y,ORI of the blue block (metres, radians); repeat for
+    /// more [default: the thesis's four targets].
+    #[arg(long, value_name = "X,Y,ORI", allow_hyphen_values = true, value_parser = parse_pose)]
+    target: Vec<ObjectState>,
+
+    /// Test runs per target, each with a freshly trained model.
+    #[arg(long, default_value_t = REPETITIONS as u32, value_parser = clap::value_parser!(u32).range(1..))]
+    repetitions: u32,
+
+    /// Longest test run, in messages.
+    #[arg(long, default_value_t = MAX_STEPS, value_parser = clap::value_parser!(u64).range(1..))]
+    max_steps: u64,
+
+    #[command(flatten)]
+    options: ModelOptions,
+
+    #[command(flatten)]
+    world: WorldArgs,
+}
+
+/// `X,Y,ORI` as three finite numbers.
+pub fn parse_pose(text: &str) -> Result<ObjectState, String> {
+    let v = parse_numbers(text, 3)?;
+    Ok(ObjectState::new(v[0], v[1], v[2]))
+}
+
+/// `n` comma-separated finite numbers.
+pub fn parse_numbers(text: &str, n: usize) -> Result<Vec<f64>, String> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("'{s}' is not a finite number"))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.len() == n {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected {n} comma-separated numbers, got {}",
+            v.len()
+        ))
+    }
+}
+
+impl WorldArgs {
+    fn plan(&self, model: ModelKind, scene: &str) -> Result<Plan> {
+        let source = match &self.connect {
+            Some(addr) => WorldSource::Connect(addr.clone()),
+            None => WorldSource::Spawn {
+                bin: find_sim_binary(self.sim_bin.as_deref())?,
+                args: self.mode.serve_args(scene),
+            },
+        };
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        Ok(Plan {
+            mode: self.mode,
+            workers: self.workers.map_or(cpus, |n| n as usize),
+            source,
+            seed: self.seed,
+            model: model.as_str().to_owned(),
+            runs: (self.mode == Mode::Lockstep && !self.no_reuse)
+                .then(|| std::sync::Arc::new(RunCache::new())),
+        })
+    }
+
+    fn write_json<T: serde::Serialize>(&self, report: &T) -> Result<()> {
+        if let Some(path) = &self.json {
+            report::write_json(path, report)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(())
+    }
+
+    /// Checks before the experiment runs that the figure directory can be
+    /// created, so that a typo does not cost a whole run.
+    fn check_plots(&self) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
+        }
+        Ok(())
+    }
+
+    fn write_plots(
+        &self,
+        plot: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>, report::plot::PlotError>,
+    ) -> Result<()> {
+        if let Some(dir) = &self.plots {
+            let written = plot(dir)?;
+            eprintln!("wrote {} figures to {}", written.len(), dir.display());
+        }
+        Ok(())
+    }
+}
+
+/// A progress bar on stderr, hidden when stdout is not a terminal (reports
+/// piped into files stay clean, and so do logs).
+fn progress(len: usize, what: &str) -> ProgressBar {
+    if !std::io::stdout().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(len as u64);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{msg} {wide_bar} {pos}/{len} jobs [{elapsed_precise}, eta {eta_precise}]",
+    ) {
+        bar.set_style(style);
+    }
+    bar.set_message(what.to_owned());
+    bar
+}
+
+/// On Ctrl-C or SIGTERM: kill the world processes, then exit. (An
+/// interrupted program does not unwind, so the processes' own clean-up would
+/// not run.)
+fn end_worlds_on_signal() {
+    std::thread::spawn(|| {
+        let Ok(runtime) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        runtime.block_on(async {
+            let mut terminate =
+                tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+            let terminated = async {
+                match terminate.as_mut() {
+                    Some(signal) => {
+                        signal.recv().await;
+                    }
+                    None => std::future::pending::<()>().await,
+                }
+            };
+            tokio::select! {
+                _ = tokio::signal::ctrl_c() => {}
+                () = terminated => {}
+            }
+        });
+        kill_all_worlds();
+        eprintln!("interrupted; the world processes were stopped");
+        std::process::exit(130);
+    });
+}
+
+/// Runs `pushlearn experiment`.
+pub fn run(args: ExperimentArgs) -> Result<()> {
+    end_worlds_on_signal();
+    match args.command {
+        ExperimentCommand::PushTask(args) => push_task(&args),
+        ExperimentCommand::MoveToTarget(args) => move_to_target(&args),
+    }
+}
+
+fn push_task(args: &PushTaskArgs) -> Result<()> {
+    if args.report == ReportKind::Draft {
+        return draft_tables(args);
+    }
+    let variant = args.variant;
+    args.world.check_plots()?;
+    let plan = args.world.plan(args.model, variant.scene())?;
+    if variant == Variant::ConstantFeedback {
+        if args.train_runs.is_some() {
+            bail!("--variant constant-feedback has no training phase; drop --train-runs");
+        }
+        let report =
+            args.model
+                .dispatch(&args.options, LOW_RATE_HZ, Feedback { plan: &plan })??;
+        args.world.write_json(&report)?;
+        args.world
+            .write_plots(|dir| report::plot::feedback(&report, args.model, dir))?;
+        let mut out = std::io::stdout().lock();
+        table::feedback(&mut out, &report, args.model)?;
+        return Ok(out.flush()?);
+    }
+    let train_runs: Vec<usize> = match &args.train_runs {
+        Some(list) => list.iter().map(|&n| n as usize).collect(),
+        None => variant.default_train_runs(),
+    };
+    let protocol = Protocol::new(variant, args.options.config_number());
+    let fixed = protocol.fixed_starts.len();
+    if variant == Variant::TwoObjects && train_runs.iter().any(|&n| n > fixed) {
+        bail!("the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}");
+    }
+    let folds = args.folds.map_or(variant_folds(variant), |n| n as usize);
+    let bar = progress(train_runs.len() * folds, "push task");
+    let report = args.model.dispatch(
+        &args.options,
+        protocol.rate_hz,
+        Push {
+            protocol: &protocol,
+            train_runs: &train_runs,
+            folds,
+            plan: &plan,
+            bar: &bar,
+        },
+    )??;
+    bar.finish_and_clear();
+    args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::push(&report, args.model, dir))?;
+    let mut out = std::io::stdout().lock();
+    table::push(&mut out, &report, args.model)?;
+    draft::keypoint_section(&mut out, &report)?;
+    Ok(out.flush()?)
+}
+
+/// Folds when --folds is not given: the thesis's 20, and one model per row
+/// for the draft, which reports 20 test runs of one training sequence.
+fn variant_folds(variant: Variant) -> usize {
+    if variant == Variant::Draft {
+        1
+    } else {
+        20
+    }
+}
+
+/// `push-task --report draft`: every row of the draft's Tables 6.1/6.2 on
+/// the draft's protocol.
+fn draft_tables(args: &PushTaskArgs) -> Result<()> {
+    if args.variant != Variant::Random
+        || args.train_runs.is_some()
+        || args.options != ModelOptions::default()
+    {
+        bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs and the model options");
+    }
+    let rows = draft::rows();
+    let folds = args
+        .folds
+        .map_or(variant_folds(Variant::Draft), |n| n as usize);
+    let bar = progress(rows.len() * folds, "draft tables");
+    let mut results = Vec::new();
+    let mut reports = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let plan = args.world.plan(row.model, Variant::Draft.scene())?;
+        let protocol = Protocol::new(Variant::Draft, row.options.config_number());
+        let report = row.model.dispatch(
+            &row.options,
+            protocol.rate_hz,
+            Push {
+                protocol: &protocol,
+                train_runs: &[row.train_runs],
+                folds,
+                plan: &plan,
+                bar: &ProgressBar::hidden(),
+            },
+        )??;
+        bar.set_position(((i + 1) * folds) as u64);
+        let entry = report
+            .results
+            .first()
+            .context("a draft row produced no results")?;
+        results.push(draft::DraftRowResult::of(row, entry));
+        reports.push(report);
+    }
+    bar.finish_and_clear();
+    let setup = reports
+        .first()
+        .map(|r| r.setup.clone())
+        .context("the draft has no rows")?;
+    let report = draft::DraftReport {
+        setup,
+        folds,
+        test_positions: Protocol::from(Variant::Draft).test_positions,
+        rows: results,
+        reports,
+    };
+    args.world.write_json(&report)?;
+    let mut out = std::io::stdout().lock();
+    draft::tables(&mut out, &report)?;
+    Ok(out.flush()?)
+}
+
+fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
+    args.world.check_plots()?;
+    let plan = args.world.plan(args.model, "one_block")?;
+    let targets = if args.target.is_empty() {
+        TARGETS.to_vec()
+    } else {
+        args.target.clone()
+    };
+    let repetitions = args.repetitions as usize;
+    let bar = progress(targets.len() * repetitions, "move to target");
+    let report = args.model.dispatch(
+        &args.options,
+        RATE_HZ,
+        MoveToTarget {
+            targets: &targets,
+            repetitions,
+            max_steps: args.max_steps,
+            plan: &plan,
+            bar: &bar,
+        },
+    )??;
+    bar.finish_and_clear();
+    args.world.write_json(&report)?;
+    args.world
+        .write_plots(|dir| report::plot::move_to_target(&report, args.model, dir))?;
+    let mut out = std::io::stdout().lock();
+    table::move_to_target(&mut out, &report, args.model)?;
+    Ok(out.flush()?)
+}
+
+struct Push<'a> {
+    protocol: &'a Protocol,
+    train_runs: &'a [usize],
+    folds: usize,
+    plan: &'a Plan,
+    bar: &'a ProgressBar,
+}
+
+impl WithModel for Push<'_> {
+    type Output = Result<report::PushReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::push_task(
+            untrained,
+            self.protocol,
+            self.train_runs,
+            self.folds,
+            self.plan,
+            |done| self.bar.set_position(done as u64),
+        )?)
+    }
+}
+
+struct Feedback<'a> {
+    plan: &'a Plan,
+}
+
+impl WithModel for Feedback<'_> {
+    type Output = Result<report::FeedbackReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::constant_feedback(untrained, self.plan)?)
+    }
+}
+
+struct MoveToTarget<'a> {
+    targets: &'a [ObjectState],
+    repetitions: usize,
+    max_steps: u64,
+    plan: &'a Plan,
+    bar: &'a ProgressBar,
+}
+
+impl WithModel for MoveToTarget<'_> {
+    type Output = Result<report::MttReport>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        Ok(run::move_to_target(
+            untrained,
+            self.targets,
+            self.repetitions,
+            self.max_steps,
+            self.plan,
+            |done| self.bar.set_position(done as u64),
+        )?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn poses_and_actions_parse_strictly() {
+        assert_eq!(
+            parse_pose("-0.6, 0.7,0.75"),
+            Ok(ObjectState::new(-0.6, 0.7, 0.75))
+        );
+        assert!(parse_pose("1,2").unwrap_err().contains("expected 3"));
+        assert!(parse_pose("1,nan,2").unwrap_err().contains("finite"));
+        assert!(parse_pose("1,x,2").is_err());
+        assert_eq!(parse_numbers("0,0.5", 2), Ok(vec![0.0, 0.5]));
+    }
+}

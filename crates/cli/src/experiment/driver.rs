@@ -1,0 +1,551 @@
+//! The message handler common to every experiment (`experiments.md` §2): the
+//! state machine that drops the message after a reset, verifies start
+//! positions (correcting them with SetPose), and hands every other message
+//! to the current experiment's [`Task`].
+//!
+//! It is synchronous and does no I/O: [`Driver::on_state`] takes one frame
+//! and returns the commands to send in order. The socket side
+//! (`super::link`) adds pacing (Advance in lock-step, the 2/f budget in
+//! realtime), so the state machine can be tested with scripted frames.
+
+use std::collections::BTreeMap;
+
+use learner::eval::{actuator_left_area, RunStepper, MESSAGES_PER_RUN};
+use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID, ACTUATOR_NAME};
+use serde::{Deserialize, Serialize};
+
+use pushlearn::wire::pb::client_message::Payload;
+
+/// `experiments.md` §2: a start pose farther than this (norm over x, y, θ,
+/// unwrapped) from the expected one is corrected.
+pub const START_TOLERANCE: f64 = 0.01;
+
+/// z of a SetPose for the actuator and for blocks (`protocol.md` §6).
+pub const ACTUATOR_Z: f64 = 0.03;
+/// See [`ACTUATOR_Z`].
+pub const BLOCK_Z: f64 = 0.05;
+
+/// Counters of one driver, summed over jobs for the report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counters {
+    /// Every world state offered to the driver while it was not done.
+    pub messages: u64,
+    /// Messages dropped after a reset or repositioning (`ignore`).
+    pub ignored: u64,
+    /// Failed start-position checks, each answered with a SetPose.
+    pub reset_errors: u64,
+    /// Frames the model could not parse (not a model step).
+    pub parse_errors: u64,
+}
+
+impl std::ops::AddAssign for Counters {
+    fn add_assign(&mut self, other: Self) {
+        self.messages += other.messages;
+        self.ignored += other.ignored;
+        self.reset_errors += other.reset_errors;
+        self.parse_errors += other.parse_errors;
+    }
+}
+
+/// The driver variables of `experiments.md` §2 and the run primitives of
+/// §2.1; the tasks change them only through these methods and fields.
+#[derive(Debug)]
+pub struct Core<M: Model> {
+    publish_rate_hz: u32,
+    startup: bool,
+    ignore: bool,
+    /// A start position still needs checking.
+    started_run: bool,
+    /// Whether a run is in progress (`run_started` of the spec).
+    pub run_started: bool,
+    done: bool,
+    /// Messages handled in the current run; each task increments it itself
+    /// (the constant-feedback task deliberately never does, §3.4).
+    pub step_counter: u64,
+    expected_start: BTreeMap<u32, ObjectState>,
+    /// `train_step` / `test_step` with the run's `last_action` and
+    /// `last_prediction`; replaced by a fresh one on every `reset_world`.
+    pub stepper: RunStepper<M>,
+    /// `last_action` and `last_prediction` for handlers that step the model
+    /// themselves (Move to Target's test run, constant feedback); cleared
+    /// with the stepper.
+    pub last_action: Option<Action>,
+    /// See [`Core::last_action`].
+    pub last_prediction: Option<M::World>,
+    counters: Counters,
+    out: Vec<Payload>,
+}
+
+impl<M: Model> Core<M> {
+    fn new(publish_rate_hz: u32) -> Self {
+        Self {
+            publish_rate_hz,
+            startup: true,
+            ignore: false,
+            started_run: false,
+            run_started: false,
+            done: false,
+            step_counter: 0,
+            expected_start: BTreeMap::new(),
+            stepper: RunStepper::new(),
+            last_action: None,
+            last_prediction: None,
+            counters: Counters::default(),
+            out: Vec::new(),
+        }
+    }
+
+    /// Queues a command for the world.
+    pub fn send(&mut self, payload: Payload) {
+        self.out.push(payload);
+    }
+
+    /// Queues Move(action).
+    pub fn send_move(&mut self, action: Action) {
+        self.send(Payload::move_(action.vx, action.vy));
+    }
+
+    /// `reset_world()`: stop, reset, forget the run, drop one message.
+    pub fn reset_world(&mut self) {
+        self.send_move(Action::ZERO);
+        self.send(Payload::reset());
+        self.stepper = RunStepper::new();
+        self.last_action = None;
+        self.last_prediction = None;
+        self.step_counter = 0;
+        self.ignore = true;
+    }
+
+    /// `start_run` / `start_target_run`: place the actuator at `actuator`
+    /// (yaw 0) and expect the blocks at `blocks`. `ignore_next` is false for
+    /// Move to Target, whose original did not drop a message there
+    /// (`experiments.md` §8; the position check covers it).
+    pub fn start_run(
+        &mut self,
+        actuator: (f64, f64),
+        blocks: &BTreeMap<u32, ObjectState>,
+        ignore_next: bool,
+    ) {
+        let (x, y) = actuator;
+        self.expected_start = blocks.clone();
+        self.expected_start
+            .insert(ACTUATOR_ID, ObjectState::new(x, y, 0.0));
+        self.send(Payload::set_pose(ACTUATOR_NAME, [x, y, ACTUATOR_Z], 0.0));
+        self.step_counter = 0;
+        self.ignore |= ignore_next;
+        self.started_run = true;
+        self.run_started = true;
+    }
+
+    /// `run_ended(WS)` of §2.1.
+    #[must_use]
+    pub fn run_ended(&self, poses: &Poses) -> bool {
+        actuator_left_area(poses) || self.step_counter > MESSAGES_PER_RUN as u64
+    }
+
+    /// Ends the job: later messages are not handled.
+    pub fn finish(&mut self) {
+        self.done = true;
+    }
+
+    /// `check_start_positions(WS)`: the actuator first, then each block the
+    /// run expects; the first misplaced body is put back and the message is
+    /// not handled.
+    fn check_start_positions(&mut self, poses: &Poses) -> bool {
+        let misplaced = poses
+            .objects()
+            .filter_map(|(id, s)| Some((id, s, *self.expected_start.get(&id)?)))
+            .find(|(_, s, expected)| s.distance_to(expected) > START_TOLERANCE);
+        let Some((id, found, expected)) = misplaced else {
+            return true;
+        };
+        self.counters.reset_errors += 1;
+        tracing::debug!(id, ?found, ?expected, "start position off; SetPose");
+        let z = if id == ACTUATOR_ID {
+            ACTUATOR_Z
+        } else {
+            BLOCK_Z
+        };
+        // `expected_start` only holds ids of the world's bodies.
+        if let Some(name) = object_name(id) {
+            self.send(Payload::set_pose(
+                name,
+                [expected.x, expected.y, z],
+                expected.theta,
+            ));
+        }
+        self.started_run = true;
+        false
+    }
+}
+
+/// One experiment's handler (`experiments.md` §3–§4): called for every
+/// message that passed the common checks, with the model's parse of it.
+pub trait Task<M: Model> {
+    /// Handles one message. Commands go through `core`; the job ends with
+    /// [`Core::finish`].
+    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World);
+}
+
+/// The state machine of `experiments.md` §2 for one job: a fresh model and
+/// the task that drives it.
+#[derive(Debug)]
+pub struct Driver<M: Model, T: Task<M>> {
+    core: Core<M>,
+    model: M,
+    task: T,
+}
+
+impl<M: Model, T: Task<M>> Driver<M, T> {
+    /// A driver that starts, on its first message, with SetPublishRate and a
+    /// world reset (`startup`).
+    pub fn new(model: M, task: T, publish_rate_hz: u32) -> Self {
+        Self {
+            core: Core::new(publish_rate_hz),
+            model,
+            task,
+        }
+    }
+
+    /// `on_world_state(msg)`: returns the commands to send, in order.
+    pub fn on_state(&mut self, frame: &Frame) -> Vec<Payload> {
+        let core = &mut self.core;
+        if core.done {
+            return Vec::new();
+        }
+        core.counters.messages += 1;
+        if core.startup {
+            core.send(Payload::publish_rate(core.publish_rate_hz));
+            core.reset_world();
+            core.startup = false;
+        } else if core.ignore {
+            core.ignore = false;
+            core.counters.ignored += 1;
+        } else {
+            match self.model.parse(frame) {
+                Err(err) => {
+                    core.counters.parse_errors += 1;
+                    tracing::warn!(%err, "a world state the model cannot parse was skipped");
+                }
+                Ok(world) => {
+                    let checked = !std::mem::take(&mut core.started_run)
+                        || core.check_start_positions(&M::poses(&world));
+                    if checked {
+                        self.task.handle(core, &mut self.model, &world);
+                    }
+                }
+            }
+        }
+        std::mem::take(&mut core.out)
+    }
+
+    /// Whether the job has ended.
+    #[must_use]
+    pub fn is_done(&self) -> bool {
+        self.core.done
+    }
+
+    /// The publish rate this driver sets, for the 2/f budget.
+    #[must_use]
+    pub fn publish_rate_hz(&self) -> u32 {
+        self.core.publish_rate_hz
+    }
+
+    /// The counters so far.
+    #[must_use]
+    pub fn counters(&self) -> Counters {
+        self.core.counters
+    }
+
+    /// The task (its results) and the model, once done.
+    pub fn into_parts(self) -> (T, M, Counters) {
+        (self.task, self.model, self.core.counters)
+    }
+
+    /// The model.
+    #[must_use]
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The task.
+    #[must_use]
+    pub fn task(&self) -> &T {
+        &self.task
+    }
+}
+
+/// Expected start poses of the blocks in push-task runs (`experiments.md`
+/// §2.1; the red block's entry only matters in the two-object scene).
+#[must_use]
+pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {
+    BTreeMap::from([
+        (learner::BLUE_ID, ObjectState::new(0.0, 0.25, 0.0)),
+        (learner::RED_ID, ObjectState::new(-0.6, 0.35, 0.0)),
+    ])
+}
+
+#[cfg(test)]
+pub(crate) mod test_support {
+    //! A scripted world for driver tests: frames built from poses, a tiny
+    //! model whose predictions are visible, and a decoder for the commands.
+
+    use learner::features::{parse_frame, ActuatorYaw};
+    use learner::{
+        Action, Frame, Model, ModelStats, ObjectState, Observation, ParseError, Poses, Target,
+        TargetError,
+    };
+    use serde::{Deserialize, Serialize};
+
+    use pushlearn::wire::pb::{client_message::Payload, sim_control};
+
+    /// Predicts "the actuator moves by action · 0.01, blocks stay", counts
+    /// calls, and walks towards its target's x in Move to Target.
+    #[derive(Clone, Debug, Default, Serialize, Deserialize)]
+    pub struct Probe {
+        pub resets: u64,
+        pub updates: u64,
+        pub trained_updates: u64,
+        pub training_off: bool,
+        pub target: Option<Target>,
+        pub current: Option<Poses>,
+        /// `act` reports the target reached after this many calls.
+        pub reach_after: Option<u64>,
+        pub acts: u64,
+    }
+
+    impl Model for Probe {
+        type World = Poses;
+        fn parse(&self, frame: &Frame) -> Result<Poses, ParseError> {
+            parse_frame(frame, ActuatorYaw::ForceZero)
+        }
+        fn poses(world: &Poses) -> Poses {
+            world.clone()
+        }
+        fn reset_objects(&mut self, world: &Poses) {
+            self.resets += 1;
+            self.current = Some(world.clone());
+        }
+        fn update(&mut self, world: &Poses, _action: Action) {
+            self.updates += 1;
+            if !self.training_off {
+                self.trained_updates += 1;
+            }
+            self.current = Some(world.clone());
+        }
+        fn predict(&self, world: &Poses, action: Action) -> Poses {
+            let mut next = world.clone();
+            next.actuator.x += action.vx * 0.01;
+            next.actuator.y += action.vy * 0.01;
+            next
+        }
+        fn set_training(&mut self, on: bool) {
+            self.training_off = !on;
+        }
+        fn is_training(&self) -> bool {
+            !self.training_off
+        }
+        fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
+            if let Some(t) = &target {
+                t.check()?;
+            }
+            self.target = target;
+            Ok(())
+        }
+        fn has_target(&self) -> bool {
+            self.target.is_some()
+        }
+        fn act(&mut self, rng: &mut dyn rand::Rng) -> Action {
+            use rand::RngExt;
+            self.acts += 1;
+            if self.reach_after.is_some_and(|n| self.acts >= n) {
+                self.target = None;
+            }
+            if self.target.is_none() {
+                return Action::ZERO;
+            }
+            Action::new(rng.random::<f64>() - 0.5, 0.0)
+        }
+        fn stats(&self) -> ModelStats {
+            let mut s = ModelStats::default();
+            s.maps.insert(
+                "probe".into(),
+                learner::MapStats {
+                    update_calls: self.trained_updates,
+                    inserts: self.resets,
+                    nodes: self.updates as usize,
+                },
+            );
+            s
+        }
+    }
+
+    /// A frame with the actuator at (x, y) and the given blocks.
+    pub fn frame(actuator: (f64, f64), blocks: &[(u32, ObjectState)]) -> Frame {
+        let obs = |name: &str, id, x, y, yaw: f64, z| Observation {
+            name: name.into(),
+            id,
+            position: [x, y, z],
+            orientation: learner::features::yaw_to_quaternion(yaw),
+        };
+        let mut objects = vec![obs("actuator", 8, actuator.0, actuator.1, 0.0, 0.03)];
+        for (id, s) in blocks {
+            let name = learner::object_name(*id).unwrap_or("block");
+            objects.push(obs(name, *id, s.x, s.y, s.theta, 0.05));
+        }
+        Frame { objects }
+    }
+
+    /// The blue block at its start pose.
+    pub fn blue_home() -> Vec<(u32, ObjectState)> {
+        vec![(learner::BLUE_ID, ObjectState::new(0.0, 0.25, 0.0))]
+    }
+
+    /// Short names of commands, e.g. `move(0,0.5)`, `reset`, `pose(actuator,0.1,0)`.
+    pub fn describe(commands: &[Payload]) -> Vec<String> {
+        commands
+            .iter()
+            .map(|c| match c {
+                Payload::Actuator(a) => {
+                    let d = a.direction.unwrap_or_default();
+                    format!("move({},{})", d.x, d.y)
+                }
+                Payload::Control(c) => match c.action {
+                    Some(sim_control::Action::PublishRateHz(hz)) => format!("rate({hz})"),
+                    _ => c_kind(c),
+                },
+                Payload::SetPose(v) => v
+                    .models
+                    .iter()
+                    .map(|m| {
+                        let p = m.pose.and_then(|p| p.position).unwrap_or_default();
+                        format!("pose({},{},{})", m.name, p.x, p.y)
+                    })
+                    .collect::<Vec<_>>()
+                    .join(";"),
+            })
+            .collect()
+    }
+
+    fn c_kind(c: &pushlearn::wire::pb::SimControl) -> String {
+        Payload::Control(*c).kind().to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_support::{blue_home, describe, frame, Probe};
+    use super::*;
+
+    /// A task that starts one run at x = 0.1 and records what reaches it.
+    #[derive(Debug, Default)]
+    struct Recorder {
+        handled: Vec<(u64, f64)>,
+    }
+
+    impl Task<Probe> for Recorder {
+        fn handle(&mut self, core: &mut Core<Probe>, _model: &mut Probe, world: &Poses) {
+            core.step_counter += 1;
+            if !core.run_started {
+                core.start_run((0.1, 0.0), &push_task_blocks(), true);
+                return;
+            }
+            self.handled.push((core.step_counter, world.actuator.x));
+            if core.step_counter == 2 {
+                core.finish();
+            }
+        }
+    }
+
+    #[test]
+    fn startup_sets_the_rate_resets_and_drops_the_next_message() {
+        let mut d = Driver::new(Probe::default(), Recorder::default(), 100);
+        let home = frame((0.0, 0.0), &blue_home());
+        assert_eq!(
+            describe(&d.on_state(&home)),
+            ["rate(100)", "move(0,0)", "reset"]
+        );
+        // The next message may predate the reset: dropped unseen.
+        assert!(d.on_state(&home).is_empty());
+        assert_eq!(d.counters().ignored, 1);
+        // Then the task starts its run: SetPose, and one more dropped message.
+        assert_eq!(describe(&d.on_state(&home)), ["pose(actuator,0.1,0)"]);
+        assert!(d.on_state(&home).is_empty());
+        assert_eq!(d.counters().ignored, 2);
+        assert!(d.task().handled.is_empty());
+    }
+
+    #[test]
+    fn a_failed_start_check_sets_the_pose_again_and_is_not_handled() {
+        let mut d = Driver::new(Probe::default(), Recorder::default(), 100);
+        let home = frame((0.0, 0.0), &blue_home());
+        for _ in 0..4 {
+            d.on_state(&home);
+        }
+        // Still at the old place: corrected, not counted.
+        assert_eq!(describe(&d.on_state(&home)), ["pose(actuator,0.1,0)"]);
+        assert_eq!(d.counters().reset_errors, 1);
+        // A pushed block is put back at z = 0.05 with its start yaw.
+        let moved_block = [(learner::BLUE_ID, ObjectState::new(0.0, 0.3, 0.0))];
+        assert_eq!(
+            describe(&d.on_state(&frame((0.1, 0.0), &moved_block))),
+            ["pose(blockA,0,0.25)"]
+        );
+        assert_eq!(d.counters().reset_errors, 2);
+        assert!(d.task().handled.is_empty());
+        // Within 0.01 everywhere: the check passes, and no message is dropped
+        // after a correction (the original had no `ignore` there).
+        let close = frame(
+            (0.105, 0.004),
+            &[(learner::BLUE_ID, ObjectState::new(0.003, 0.25, 0.0))],
+        );
+        assert!(d.on_state(&close).is_empty());
+        assert_eq!(d.task().handled, [(1, 0.105)]);
+        // Later messages are not checked.
+        d.on_state(&frame((0.5, 0.5), &blue_home()));
+        assert_eq!(d.task().handled.len(), 2);
+        assert!(d.is_done());
+        assert!(d.on_state(&home).is_empty(), "a done driver sends nothing");
+        assert_eq!(d.counters().reset_errors, 2);
+    }
+
+    #[test]
+    fn the_check_uses_the_norm_over_x_y_and_theta() {
+        let mut d = Driver::new(Probe::default(), Recorder::default(), 100);
+        let home = frame((0.1, 0.0), &blue_home());
+        for _ in 0..4 {
+            d.on_state(&home);
+        }
+        let turned = [(learner::BLUE_ID, ObjectState::new(0.0, 0.25, 0.02))];
+        assert_eq!(
+            describe(&d.on_state(&frame((0.1, 0.0), &turned))),
+            ["pose(blockA,0,0.25)"]
+        );
+    }
+
+    #[test]
+    fn unparseable_frames_are_counted_and_skipped() {
+        let mut d = Driver::new(Probe::default(), Recorder::default(), 100);
+        let home = frame((0.1, 0.0), &blue_home());
+        d.on_state(&home);
+        d.on_state(&home);
+        let mut broken = home.clone();
+        broken.objects[0].position[0] = f64::NAN;
+        assert!(d.on_state(&broken).is_empty());
+        assert_eq!(d.counters().parse_errors, 1);
+        assert_eq!(describe(&d.on_state(&home)), ["pose(actuator,0.1,0)"]);
+    }
+
+    #[test]
+    fn run_ended_by_count_or_distance() {
+        let mut core = Core::<Probe>::new(100);
+        let mut poses = Poses::default();
+        core.step_counter = 150;
+        assert!(!core.run_ended(&poses));
+        core.step_counter = 151;
+        assert!(core.run_ended(&poses));
+        core.step_counter = 1;
+        poses.actuator = ObjectState::new(0.6, 0.81, 0.0);
+        assert!(core.run_ended(&poses));
+    }
+}

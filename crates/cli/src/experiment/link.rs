@@ -1,0 +1,334 @@
+//! A driver's connection to one world: the socket side of
+//! `experiments.md` §2 and the pacing of `world.md` §8.
+//!
+//! * **lock-step**: the world waits for Advance after every publish. The
+//!   link sends Advance, takes the first state produced after it (its
+//!   `applied_seq` covers the Advance, so a stale or unsolicited state is
+//!   skipped), lets the driver handle it and sends the driver's commands;
+//!   then the next Advance. Exactly one Advance is ever outstanding, so the
+//!   driver's commands are always in force from the next interval on.
+//! * **realtime**: the world does not wait. The link handles every state as
+//!   it comes and counts the messages whose handling took longer than the
+//!   original's budget of 2/f seconds (`experiments.md` §6).
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use learner::Model;
+use serde::{Deserialize, Serialize};
+
+use super::driver::{Driver, Task};
+use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
+use super::ExperimentError;
+use crate::frame::frame_from_state;
+use crate::latency::Latencies;
+use pushlearn::client::{ClientOptions, SimClient};
+use pushlearn::wire::pb::client_message::Payload;
+use pushlearn::wire::TimingMode;
+
+/// How a link paces the world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Pacing {
+    /// Send Advance after handling each state.
+    Lockstep,
+    /// React to a free-running world.
+    Realtime,
+}
+
+impl Pacing {
+    fn timing_mode(self) -> TimingMode {
+        match self {
+            Pacing::Lockstep => TimingMode::Lockstep,
+            Pacing::Realtime => TimingMode::Realtime,
+        }
+    }
+}
+
+/// Handling times of the messages of one or more jobs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// States handled.
+    pub messages: u64,
+    /// States whose handling (parse, model work, sending the commands) took
+    /// longer than 2/f.
+    pub too_slow: u64,
+    /// Sum of the handling times, seconds.
+    pub busy_seconds: f64,
+    /// The longest handling time, seconds.
+    pub max_seconds: f64,
+    /// All handling times, for percentiles (not serialised).
+    #[serde(skip)]
+    pub histogram: Latencies,
+}
+
+impl Timing {
+    fn record(&mut self, took: Duration, budget: Duration) {
+        self.messages += 1;
+        if took > budget {
+            self.too_slow += 1;
+        }
+        let s = took.as_secs_f64();
+        self.busy_seconds += s;
+        self.max_seconds = self.max_seconds.max(s);
+        self.histogram.record(took);
+    }
+
+    /// Fraction of messages that were too slow (0 without messages).
+    #[must_use]
+    pub fn too_slow_fraction(&self) -> f64 {
+        if self.messages == 0 {
+            0.0
+        } else {
+            self.too_slow as f64 / self.messages as f64
+        }
+    }
+}
+
+impl std::ops::AddAssign for Timing {
+    fn add_assign(&mut self, other: Self) {
+        self.messages += other.messages;
+        self.too_slow += other.too_slow;
+        self.busy_seconds += other.busy_seconds;
+        self.max_seconds = self.max_seconds.max(other.max_seconds);
+        self.histogram += other.histogram;
+    }
+}
+
+/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz).
+#[must_use]
+pub fn budget(publish_rate_hz: u32) -> Duration {
+    Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
+}
+
+/// One connection to a world, with its own single-threaded runtime so that a
+/// worker thread can drive it with plain blocking calls.
+#[derive(Debug)]
+pub struct WorldLink {
+    runtime: tokio::runtime::Runtime,
+    client: SimClient,
+    pacing: Pacing,
+    /// Set when recorded runs are reused (`lockstep` only; see
+    /// [`super::replay`]), with the batch the last driver left unsent.
+    replay: Option<(Cursor, Vec<Payload>)>,
+}
+
+impl WorldLink {
+    /// Connects and checks that the world's timing mode matches `pacing`.
+    ///
+    /// # Errors
+    /// Connection failures, or a world in the other timing mode.
+    pub fn connect(addr: &str, pacing: Pacing) -> Result<Self, ExperimentError> {
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .map_err(ExperimentError::Runtime)?;
+        let client = runtime.block_on(SimClient::connect_with(addr, ClientOptions::default()))?;
+        let mode = client.hello().timing_mode.clone();
+        if mode != pacing.timing_mode().as_str() {
+            return Err(ExperimentError::WrongMode {
+                addr: addr.to_owned(),
+                found: mode,
+                wanted: pacing.timing_mode().as_str(),
+            });
+        }
+        Ok(Self {
+            runtime,
+            client,
+            pacing,
+            replay: None,
+        })
+    }
+
+    /// Serves states from `cache` where it has them and records the others
+    /// there (see [`super::replay`]). Only for a lock-step world without
+    /// latency emulation: in any other mode the stream depends on more than
+    /// the commands, so nothing is reused there.
+    pub fn reuse_runs(&mut self, cache: Arc<RunCache>) {
+        if self.pacing == Pacing::Lockstep {
+            let rate = self.client.hello().publish_rate;
+            self.replay = Some((Cursor::new(cache, rate), Vec::new()));
+        }
+    }
+
+    /// The scene the world reported in its Hello.
+    #[must_use]
+    pub fn scene(&self) -> &str {
+        &self.client.hello().scene
+    }
+
+    /// Checks that the world runs `scene`.
+    ///
+    /// # Errors
+    /// [`ExperimentError::WrongScene`].
+    pub fn require_scene(&self, scene: &str) -> Result<(), ExperimentError> {
+        if self.scene() == scene {
+            Ok(())
+        } else {
+            Err(ExperimentError::WrongScene {
+                found: self.scene().to_owned(),
+                wanted: scene.to_owned(),
+            })
+        }
+    }
+
+    /// Runs `driver` until its job is done. `setup` is sent first (e.g. the
+    /// job's latency seed).
+    ///
+    /// # Errors
+    /// Socket errors, and any command the world refuses.
+    pub fn drive<M: Model, T: Task<M>>(
+        &mut self,
+        driver: &mut Driver<M, T>,
+        setup: Vec<Payload>,
+    ) -> Result<Timing, ExperimentError> {
+        let Self {
+            runtime,
+            client,
+            pacing,
+            replay,
+        } = self;
+        match replay {
+            Some((cursor, pending)) => {
+                pending.extend(setup);
+                runtime.block_on(drive_replaying(client, cursor, pending, driver))
+            }
+            None => runtime.block_on(drive(client, *pacing, driver, setup)),
+        }
+    }
+
+    /// Closes the connection.
+    pub fn close(self) {
+        let Self {
+            runtime, client, ..
+        } = self;
+        if let Err(err) = runtime.block_on(client.close()) {
+            tracing::debug!(%err, "closing the world connection");
+        }
+    }
+}
+
+async fn drive<M: Model, T: Task<M>>(
+    client: &mut SimClient,
+    pacing: Pacing,
+    driver: &mut Driver<M, T>,
+    setup: Vec<Payload>,
+) -> Result<Timing, ExperimentError> {
+    for payload in setup {
+        client.send(payload).await?;
+    }
+    let budget = budget(driver.publish_rate_hz());
+    let mut timing = Timing::default();
+    while !driver.is_done() {
+        let state = match pacing {
+            Pacing::Lockstep => {
+                let advance = client.send(Payload::advance()).await?;
+                client.wait_applied(advance).await?
+            }
+            Pacing::Realtime => client.next_state().await?,
+        };
+        let received = Instant::now();
+        let commands = driver.on_state(&frame_from_state(&state));
+        for command in commands {
+            client.send(command).await?;
+        }
+        timing.record(received.elapsed(), budget);
+    }
+    // Surfaces a refusal of the last commands here rather than in the next job.
+    client.sync().await?;
+    Ok(timing)
+}
+
+/// [`drive`] in lock-step through a [`RunCache`]: states the cache holds
+/// are handed to the driver without touching the world. The driver's last
+/// commands stay in `pending` for the next job on this link, whose first
+/// state follows them as it would on the socket.
+async fn drive_replaying<M: Model, T: Task<M>>(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    pending: &mut Vec<Payload>,
+    driver: &mut Driver<M, T>,
+) -> Result<Timing, ExperimentError> {
+    let budget = budget(driver.publish_rate_hz());
+    let mut timing = Timing::default();
+    while !driver.is_done() {
+        let frame = match cursor.next(std::mem::take(pending)) {
+            Next::Stored(frame) => frame,
+            Next::Simulate { resync, batch } => {
+                if let Some(path) = resync {
+                    resync_world(client, cursor, path).await?;
+                }
+                let state = send_and_advance(client, cursor, batch).await?;
+                cursor.simulated(frame_from_state(&state))?
+            }
+        };
+        let received = Instant::now();
+        *pending = driver.on_state(&frame);
+        timing.record(received.elapsed(), budget);
+    }
+    Ok(timing)
+}
+
+/// Sends `batch`, then Advance; the state that covers the Advance.
+async fn send_and_advance(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    batch: Vec<Payload>,
+) -> Result<pushlearn::wire::pb::WorldState, ExperimentError> {
+    cursor.sent(&batch);
+    for command in batch {
+        client.send(command).await?;
+    }
+    let advance = client.send(Payload::advance()).await?;
+    Ok(client.wait_applied(advance).await?)
+}
+
+/// Brings the world to the end of a recorded path (from its rate and reset
+/// batch, or from the frame the world produced last), each state checked
+/// against the record.
+async fn resync_world(
+    client: &mut SimClient,
+    cursor: &mut Cursor,
+    path: Path,
+) -> Result<(), ExperimentError> {
+    if let Some(rate) = path.rate.filter(|&rate| cursor.needs_rate(rate)) {
+        let set_rate = Payload::publish_rate(rate);
+        cursor.sent(std::slice::from_ref(&set_rate));
+        client.send(set_rate).await?;
+    }
+    for (step, (batch, expected)) in (path.first_step..).zip(path.steps) {
+        let state = send_and_advance(client, cursor, batch).await?;
+        cursor.resimulated();
+        if frame_from_state(&state) != *expected {
+            return Err(ReplayError::Diverged { step }.into());
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_budget_is_two_intervals() {
+        assert_eq!(budget(100), Duration::from_millis(20));
+        assert_eq!(budget(10), Duration::from_millis(200));
+    }
+
+    #[test]
+    fn timing_counts_only_messages_over_budget() {
+        let mut t = Timing::default();
+        let b = budget(100);
+        t.record(Duration::from_millis(5), b);
+        t.record(Duration::from_millis(25), b);
+        t.record(Duration::from_millis(20), b);
+        assert_eq!((t.messages, t.too_slow), (3, 1));
+        assert!((t.too_slow_fraction() - 1.0 / 3.0).abs() < 1e-12);
+        assert!((t.max_seconds - 0.025).abs() < 1e-12);
+        let mut sum = Timing::default();
+        sum += t;
+        sum += t;
+        assert_eq!((sum.messages, sum.too_slow), (6, 2));
+        assert_eq!(Timing::default().too_slow_fraction(), 0.0);
+    }
+}

@@ -1,0 +1,172 @@
+//! The thesis's experiments over the real sockets (`experiments.md`).
+//!
+//! * [`driver`]: the message handler common to all experiments (§2), pure;
+//! * [`push_task`], [`constant_feedback`], [`move_to_target`]: the
+//!   experiments' handlers (§3, §3.4, §4), their jobs and their summaries;
+//! * [`link`]: a driver's connection to one world, paced in lock-step or
+//!   realtime;
+//! * [`workers`]: one world process per worker, jobs spread over workers
+//!   and gathered back in job order;
+//! * [`replay`]: recorded runs reused in `lockstep` mode;
+//! * [`run`]: whole experiments, from jobs to report documents;
+//! * [`seed`]: per-job seeds (§5); [`nodes`]: node statistics (§7.5).
+
+pub mod constant_feedback;
+pub mod driver;
+pub mod link;
+pub mod move_to_target;
+pub mod nodes;
+pub mod push_task;
+pub mod replay;
+pub mod run;
+pub mod seed;
+pub mod workers;
+
+use serde::{Deserialize, Serialize};
+
+use link::Pacing;
+use pushlearn::client::ClientError;
+
+/// Largest command latency, in physics steps, of the world's latency
+/// emulation (`world.md` §8: default L_max = 5).
+pub const LATENCY_MAX_STEPS: u32 = 5;
+
+/// The thesis's model update rate (`experiments.md` §6).
+pub const RATE_HZ: u32 = 100;
+
+/// The constant-feedback images' rate (`experiments.md` §3.4, configuration 2).
+pub const LOW_RATE_HZ: u32 = 10;
+
+/// How the world is timed (`world.md` §8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Mode {
+    /// The world steps on its own at 500 steps/s, as in the thesis; the
+    /// learner must keep up (timing noise comes from the machine).
+    Realtime,
+    /// The world waits for the learner after every publish; bit-identical.
+    Lockstep,
+    /// Lock-step with seeded command latency of 0…5 steps: the thesis's
+    /// timing noise, reproducibly.
+    LockstepJitter,
+}
+
+impl Mode {
+    /// The name on the command line and in reports.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Mode::Realtime => "realtime",
+            Mode::Lockstep => "lockstep",
+            Mode::LockstepJitter => "lockstep-jitter",
+        }
+    }
+
+    /// How a link paces a world in this mode.
+    #[must_use]
+    pub fn pacing(self) -> Pacing {
+        match self {
+            Mode::Realtime => Pacing::Realtime,
+            Mode::Lockstep | Mode::LockstepJitter => Pacing::Lockstep,
+        }
+    }
+
+    /// Whether the world emulates command latency (and takes a latency seed).
+    #[must_use]
+    pub fn jitter(self) -> bool {
+        self == Mode::LockstepJitter
+    }
+
+    /// `pushlearn-sim serve` arguments for this mode and `scene`.
+    #[must_use]
+    pub fn serve_args(self, scene: &str) -> Vec<String> {
+        let mut args = vec!["--scene".to_owned(), scene.to_owned(), "--mode".to_owned()];
+        match self {
+            Mode::Realtime => args.push("realtime".into()),
+            Mode::Lockstep => args.push("lockstep".into()),
+            Mode::LockstepJitter => {
+                args.push("lockstep".into());
+                args.push("--latency-max".into());
+                args.push(LATENCY_MAX_STEPS.to_string());
+            }
+        }
+        args
+    }
+}
+
+/// What can end an experiment early.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    /// Talking to a world failed, or it refused a command.
+    #[error(transparent)]
+    Client(#[from] ClientError),
+    /// The async runtime of a worker could not be built.
+    #[error("cannot start an async runtime: {0}")]
+    Runtime(std::io::Error),
+    /// The world daemon binary is missing.
+    #[error(
+        "cannot find the world daemon `pushlearn-sim` (looked at {looked}); build it with \
+         `cargo build --release -p sim-plugin --bin pushlearn-sim` or pass --sim-bin PATH"
+    )]
+    SimNotFound { looked: String },
+    /// A world process did not come up.
+    #[error("cannot start the world {command}: {reason}")]
+    Spawn { command: String, reason: String },
+    /// The world runs in the other timing mode.
+    #[error("the world at {addr} runs in {found} mode, this experiment needs {wanted}")]
+    WrongMode {
+        addr: String,
+        found: String,
+        wanted: &'static str,
+    },
+    /// The world has the wrong scene.
+    #[error("the world runs scene `{found}`, this experiment needs `{wanted}`")]
+    WrongScene { found: String, wanted: String },
+    /// A test run ended before the model made a prediction.
+    #[error("{job}: test run {run} ended before any prediction was made")]
+    NoPrediction { job: String, run: usize },
+    /// No errors were recorded for a block at some test position.
+    #[error("no errors were recorded for block {id} at some test position")]
+    MissingBlock { id: u32 },
+    /// An N_train value without finished jobs.
+    #[error("no finished job for N_train = {n_train}")]
+    NoJobs { n_train: usize },
+    /// A job produced no result (its worker died).
+    #[error("job {index} produced no result")]
+    JobLost { index: usize },
+    /// The model refused the target.
+    #[error(transparent)]
+    Target(#[from] learner::TargetError),
+    /// Reusing recorded runs failed (`replay`).
+    #[error(transparent)]
+    Replay(#[from] replay::ReplayError),
+    /// A job ended without its results (a bug in a handler).
+    #[error("{0}")]
+    Incomplete(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modes_start_the_world_accordingly() {
+        assert_eq!(
+            Mode::LockstepJitter.serve_args("one_block"),
+            [
+                "--scene",
+                "one_block",
+                "--mode",
+                "lockstep",
+                "--latency-max",
+                "5"
+            ]
+        );
+        assert_eq!(
+            Mode::Realtime.serve_args("two_blocks"),
+            ["--scene", "two_blocks", "--mode", "realtime"]
+        );
+        assert_eq!(Mode::Lockstep.pacing(), Pacing::Lockstep);
+        assert!(Mode::LockstepJitter.jitter() && !Mode::Lockstep.jitter());
+    }
+}

@@ -1,0 +1,252 @@
+//! Whole experiments: jobs built, spread over workers, gathered in job order
+//! and summarised into the report documents.
+
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use learner::{Model, ObjectState};
+
+use super::constant_feedback::FeedbackTask;
+use super::driver::{Driver, Task};
+use super::link::{Timing, WorldLink};
+use super::move_to_target::{MttJob, MttJobResult, MttTask, TargetSummary};
+use super::nodes::NodeSummary;
+use super::push_task::{summarise, Protocol, PushJob, PushJobResult, PushTask, Variant};
+use super::replay::RunCache;
+use super::workers::{run_jobs, Worker, WorldSource};
+use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
+use crate::report::{FeedbackReport, MttReport, PushReport, RunInfo, Setup, TargetEntry};
+use pushlearn::wire::pb::client_message::Payload;
+
+/// Where and how an experiment runs.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    pub mode: Mode,
+    pub workers: usize,
+    pub source: WorldSource,
+    pub seed: u64,
+    /// Name of the model, for the report.
+    pub model: String,
+    /// Recorded runs to reuse, shared by the workers (and by experiments
+    /// given the same cache). Only used in [`Mode::Lockstep`], where a
+    /// world's states are a function of the commands since its last reset
+    /// (see [`super::replay`]); ignored in the other modes.
+    pub runs: Option<Arc<RunCache>>,
+}
+
+impl Plan {
+    fn setup(&self, experiment: &str) -> Setup {
+        Setup {
+            experiment: experiment.to_owned(),
+            model: self.model.clone(),
+            mode: self.mode.as_str().to_owned(),
+            seed: self.seed,
+        }
+    }
+
+    /// `run` with the states the worlds simulated, if runs were reused.
+    fn with_reuse(&self, mut run: RunInfo) -> RunInfo {
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            run.simulated_states = cache.counts().simulated;
+        }
+        run
+    }
+
+    fn workers(&self) -> usize {
+        self.source.max_workers(self.workers)
+    }
+
+    fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
+        let mut worker = Worker::start(&self.source, self.mode.pacing())?;
+        worker.link.require_scene(scene)?;
+        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
+            worker.link.reuse_runs(Arc::clone(cache));
+        }
+        Ok(worker)
+    }
+
+    /// Commands sent before a job's first Advance: with latency emulation
+    /// the job's latency seed, so that the world's jitter does not depend on
+    /// earlier jobs or on which worker runs the job (`experiments.md` §5).
+    fn job_setup(&self, latency_seed: u64) -> Vec<Payload> {
+        if self.mode.jitter() {
+            vec![Payload::latency_seed(latency_seed)]
+        } else {
+            Vec::new()
+        }
+    }
+}
+
+/// Runs one job's driver to its end on `link`.
+fn drive<M: Model, T: Task<M>>(
+    link: &mut WorldLink,
+    untrained: &Mutex<M>,
+    task: T,
+    rate_hz: u32,
+    setup: Vec<Payload>,
+) -> Result<(T, Timing, super::driver::Counters), ExperimentError> {
+    // A fold starts from an untrained instance (`experiments.md` §2 new_fold).
+    let model = untrained
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .clone();
+    let mut driver = Driver::new(model, task, rate_hz);
+    let timing = link.drive(&mut driver, setup)?;
+    let (task, _, counters) = driver.into_parts();
+    Ok((task, timing, counters))
+}
+
+/// Push Task Simulation (`experiments.md` §3.1–§3.3).
+///
+/// # Errors
+/// The first failing job, or a summary that cannot be formed.
+pub fn push_task<M: Model>(
+    untrained: M,
+    protocol: &Protocol,
+    train_runs: &[usize],
+    folds: usize,
+    plan: &Plan,
+    progress: impl FnMut(usize),
+) -> Result<PushReport, ExperimentError> {
+    let started = Instant::now();
+    let variant = protocol.variant;
+    let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
+    let untrained = Mutex::new(untrained);
+    let results = run_jobs(
+        &jobs,
+        plan.workers(),
+        || plan.start(variant.scene()),
+        |job, worker| {
+            let (task, timing, counters) = drive(
+                &mut worker.link,
+                &untrained,
+                PushTask::new(job),
+                protocol.rate_hz,
+                plan.job_setup(job.latency_seed),
+            )?;
+            PushJobResult::from_task(job, task, counters, timing)
+        },
+        progress,
+    )?;
+    Ok(PushReport {
+        setup: plan.setup(super::push_task::EXPERIMENT),
+        variant: variant.as_str().to_owned(),
+        folds,
+        train_runs: train_runs.to_vec(),
+        results: summarise(protocol, train_runs, &results)?,
+        run: plan.with_reuse(RunInfo::of(
+            results.iter().map(|r| (r.counters, r.timing)),
+            RATE_HZ,
+            plan.workers().min(jobs.len()),
+            started.elapsed().as_secs_f64(),
+        )),
+    })
+}
+
+/// Generalisation with constant feedback (`experiments.md` §3.4): one job
+/// with both test runs, at 10 Hz. `untrained` must use the 10 Hz thresholds.
+///
+/// # Errors
+/// The job failed.
+pub fn constant_feedback<M: Model>(
+    untrained: M,
+    plan: &Plan,
+) -> Result<FeedbackReport, ExperimentError> {
+    let started = Instant::now();
+    let jobs = [super::seed::derive(
+        plan.seed,
+        super::constant_feedback::EXPERIMENT,
+        &[],
+        super::seed::Stream::Latency,
+    )];
+    let untrained = Mutex::new(untrained);
+    let mut results = run_jobs(
+        &jobs,
+        1,
+        || plan.start(Variant::ConstantFeedback.scene()),
+        |&latency_seed, worker| {
+            drive(
+                &mut worker.link,
+                &untrained,
+                FeedbackTask::new(Variant::ConstantFeedback.test_positions()),
+                LOW_RATE_HZ,
+                plan.job_setup(latency_seed),
+            )
+        },
+        |_| {},
+    )?;
+    let (task, timing, counters) = results.pop().ok_or(ExperimentError::JobLost { index: 0 })?;
+    Ok(FeedbackReport {
+        setup: plan.setup(super::push_task::EXPERIMENT),
+        variant: Variant::ConstantFeedback.as_str().to_owned(),
+        publish_rate_hz: LOW_RATE_HZ,
+        runs: task.runs,
+        run: plan.with_reuse(RunInfo::of(
+            [(counters, timing)],
+            LOW_RATE_HZ,
+            1,
+            started.elapsed().as_secs_f64(),
+        )),
+    })
+}
+
+/// Move to Target (`experiments.md` §4).
+///
+/// # Errors
+/// The first failing job.
+pub fn move_to_target<M: Model>(
+    untrained: M,
+    targets: &[ObjectState],
+    repetitions: usize,
+    max_steps: u64,
+    plan: &Plan,
+    progress: impl FnMut(usize),
+) -> Result<MttReport, ExperimentError> {
+    let started = Instant::now();
+    let jobs = MttJob::all(targets, repetitions, max_steps, plan.seed);
+    let untrained = Mutex::new(untrained);
+    let results = run_jobs(
+        &jobs,
+        plan.workers(),
+        || plan.start("one_block"),
+        |job, worker| {
+            let (task, timing, counters) = drive(
+                &mut worker.link,
+                &untrained,
+                MttTask::new(job),
+                RATE_HZ,
+                plan.job_setup(job.latency_seed),
+            )?;
+            MttJobResult::from_task(job, task, counters, timing)
+        },
+        progress,
+    )?;
+    let entries = targets
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            let mine: Vec<&MttJobResult> = results.iter().filter(|r| r.target_index == i).collect();
+            let runs: Vec<_> = mine.iter().map(|r| r.run.clone()).collect();
+            let nodes: Vec<&learner::ModelStats> =
+                mine.iter().map(|r| &r.nodes_after_training).collect();
+            TargetEntry {
+                target: t.to_array(),
+                summary: TargetSummary::of(&runs),
+                runs,
+                nodes_after_training: NodeSummary::of(&nodes),
+            }
+        })
+        .collect();
+    Ok(MttReport {
+        setup: plan.setup(super::move_to_target::EXPERIMENT),
+        repetitions,
+        max_steps,
+        targets: entries,
+        run: plan.with_reuse(RunInfo::of(
+            results.iter().map(|r| (r.counters, r.timing)),
+            RATE_HZ,
+            plan.workers().min(jobs.len()),
+            started.elapsed().as_secs_f64(),
+        )),
+    })
+}

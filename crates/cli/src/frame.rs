@@ -1,0 +1,115 @@
+//! The one conversion from the wire's `WorldState` to the learner's [`Frame`]
+//! (`protocol.md` §4): every body in message order, with its name, id,
+//! position and orientation quaternion in the order (x, y, z, w), which is
+//! the schema's order as well as the learner's.
+//!
+//! Skipping (`ground_plane`, `*wall*`, `*Shadow`) and rounding are the
+//! models' parsing (`features.md` §1), so this conversion keeps everything.
+
+use learner::{Frame, Observation};
+
+use pushlearn::wire::pb;
+
+/// The learner's view of one world state.
+///
+/// A body published without a position or orientation gets NaN there
+/// instead of a made-up pose: the models' parsing then refuses the frame with
+/// an error naming the body if (and only if) it is a body the learner uses.
+#[must_use]
+pub fn frame_from_state(state: &pb::WorldState) -> Frame {
+    Frame {
+        objects: state.models().iter().map(observation).collect(),
+    }
+}
+
+fn observation(model: &pb::ModelState) -> Observation {
+    let pose = model.pose.as_ref();
+    let position = pose
+        .and_then(|p| p.position.as_ref())
+        .map_or([f64::NAN; 3], |v| [v.x, v.y, v.z]);
+    let orientation = pose
+        .and_then(|p| p.orientation.as_ref())
+        .map_or([f64::NAN; 4], |q| [q.x, q.y, q.z, q.w]);
+    Observation {
+        name: model.name.clone(),
+        id: model.id,
+        position,
+        orientation,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use learner::features::{parse_frame, ActuatorYaw};
+    use learner::ParseError;
+
+    use super::*;
+
+    fn body(name: &str, id: u32, position: [f64; 3], yaw: f64) -> pb::ModelState {
+        pb::ModelState {
+            name: name.into(),
+            id,
+            pose: Some(pb::Pose::from_position_yaw(position, yaw)),
+            ..Default::default()
+        }
+    }
+
+    fn state(models: Vec<pb::ModelState>) -> pb::WorldState {
+        pb::WorldState {
+            model_v: Some(pb::ModelStateV { models }),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn keeps_every_body_in_order_with_xyzw_quaternions() {
+        let s = state(vec![
+            body("blockA", 15, [0.1, 0.25, 0.05], 0.5),
+            body("actuator", 8, [0.0, 0.0, 0.03], 0.0),
+            body("blockAShadow", 15, [9.0, 9.0, 0.05], 0.0),
+        ]);
+        let frame = frame_from_state(&s);
+        let names: Vec<&str> = frame.objects.iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names, ["blockA", "actuator", "blockAShadow"]);
+        let block = &frame.objects[0];
+        assert_eq!(block.id, 15);
+        assert_eq!(block.position, [0.1, 0.25, 0.05]);
+        let q = pb::Quaternion::from_yaw(0.5);
+        assert_eq!(block.orientation, [q.x, q.y, q.z, q.w]);
+
+        // The learner reads the same yaw back (and skips the shadow).
+        let poses = parse_frame(&frame, ActuatorYaw::Keep).unwrap();
+        assert_eq!(poses.blocks.len(), 1);
+        assert_eq!(poses.blocks[&15].theta, 0.5);
+        assert_eq!(poses.blocks[&15].x, 0.1);
+    }
+
+    #[test]
+    fn a_missing_pose_is_refused_by_parsing_only_where_it_matters() {
+        let mut actuator = body("actuator", 8, [0.0, 0.0, 0.03], 0.0);
+        actuator.pose = None;
+        let frame = frame_from_state(&state(vec![actuator]));
+        assert!(matches!(
+            parse_frame(&frame, ActuatorYaw::Keep),
+            Err(ParseError::NonFinite { ref name, .. }) if name == "actuator"
+        ));
+
+        let mut shadow = body("actuatorShadow", 8, [0.0; 3], 0.0);
+        shadow.pose = None;
+        let frame = frame_from_state(&state(vec![
+            body("actuator", 8, [0.2, 0.0, 0.03], 0.0),
+            shadow,
+        ]));
+        assert_eq!(
+            parse_frame(&frame, ActuatorYaw::Keep).unwrap().actuator.x,
+            0.2
+        );
+    }
+
+    #[test]
+    fn an_empty_state_is_an_empty_frame() {
+        assert!(frame_from_state(&pb::WorldState::default())
+            .objects
+            .is_empty());
+    }
+}

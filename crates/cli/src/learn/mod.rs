@@ -1,0 +1,474 @@
+//! The learner daemon (`pushlearn learn`): one model attached to a running
+//! world, learning online from every state it publishes.
+//!
+//! For every world state: parse it, re-synchronise (first state) or update
+//! the model with the action that was in force, choose the next action (a
+//! fixed one, or the planner towards a target, `planning.md`), predict the
+//! next state, and send Move — plus, optionally, the prediction as the
+//! `*Shadow` ghost poses. In lock-step the daemon then sends Advance; in
+//! realtime it measures each message's work against the 2/f budget
+//! (`experiments.md` §6).
+
+use std::time::{Duration, Instant};
+
+use learner::{object_name, Action, Frame, Model, ObjectState, ParseError, Target, TargetError};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::experiment::driver::{ACTUATOR_Z, BLOCK_Z};
+use crate::experiment::link::budget;
+use crate::frame::frame_from_state;
+use crate::latency::{Latencies, LatencySummary};
+use pushlearn::client::{ClientError, SimClient};
+use pushlearn::wire::pb::{self, client_message::Payload};
+use pushlearn::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
+
+pub mod reconnect;
+pub mod state;
+
+/// How the daemon chooses its actions.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Policy {
+    /// Always the same velocity.
+    Fixed(Action),
+    /// The model's planner towards a pose of the blue block.
+    Target(ObjectState),
+}
+
+/// What can stop the daemon.
+#[derive(Debug, thiserror::Error)]
+pub enum LearnError {
+    #[error(transparent)]
+    Client(#[from] ClientError),
+    #[error("the model refused the target: {0}")]
+    Target(#[from] TargetError),
+    #[error(transparent)]
+    State(#[from] state::StateError),
+}
+
+/// What [`serve`] hands each world state to: a [`Learner`], or one that
+/// also journals what it learns ([`state::Durable`]).
+pub trait OnState {
+    /// Handles one world state; returns the commands to send.
+    ///
+    /// # Errors
+    /// The model refuses its target, or the learner's memory cannot be kept.
+    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError>;
+
+    /// [`Learner::resync`].
+    ///
+    /// # Errors
+    /// The learner's memory cannot be kept.
+    fn resync(&mut self) -> Result<(), LearnError>;
+}
+
+impl<M: Model> OnState for Learner<M> {
+    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError> {
+        Ok(Learner::on_state(self, frame)?)
+    }
+
+    fn resync(&mut self) -> Result<(), LearnError> {
+        Learner::resync(self);
+        Ok(())
+    }
+}
+
+/// One model's online loop, without I/O.
+///
+/// Everything here influences future predictions or actions, so all of it is
+/// serialised into the daemon's persistent memory (`docs/reliability.md`):
+/// the model (which keeps the previous world itself), the generator's
+/// position, the action in force and the target bookkeeping.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(bound = "")]
+pub struct Learner<M: Model> {
+    model: M,
+    policy: Policy,
+    shadows: bool,
+    rng: ChaCha8Rng,
+    last_action: Option<Action>,
+    target_set: bool,
+    reached_reported: bool,
+    /// States the model could not parse.
+    pub parse_errors: u64,
+}
+
+impl<M: Model> Learner<M> {
+    /// A learner for `model`; `seed` feeds the planner's exploration.
+    pub fn new(model: M, policy: Policy, shadows: bool, seed: u64) -> Self {
+        Self {
+            model,
+            policy,
+            shadows,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            last_action: None,
+            target_set: false,
+            reached_reported: false,
+            parse_errors: 0,
+        }
+    }
+
+    /// Handles one world state; returns the commands to send (Move, then
+    /// the shadows). A state the model cannot parse sends nothing.
+    ///
+    /// # Errors
+    /// The model refuses the target (set on the first state, once the model
+    /// knows the block).
+    pub fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, TargetError> {
+        let world = match self.model.parse(frame) {
+            Ok(world) => world,
+            Err(err) => {
+                self.parse_error(&err);
+                return Ok(Vec::new());
+            }
+        };
+        match self.last_action {
+            Some(action) => self.model.update(&world, action),
+            None => self.model.reset_objects(&world),
+        }
+        let action = match self.policy {
+            Policy::Fixed(action) => action,
+            Policy::Target(pose) => {
+                if !self.target_set {
+                    self.model
+                        .set_target(Some(Target::new(learner::BLUE_ID, pose)))?;
+                    self.target_set = true;
+                }
+                let action = self.model.act(&mut self.rng);
+                if !self.model.has_target() && !self.reached_reported {
+                    self.reached_reported = true;
+                    tracing::info!(?pose, "target reached");
+                }
+                action
+            }
+        };
+        self.last_action = Some(action);
+        let mut commands = vec![Payload::move_(action.vx, action.vy)];
+        if self.shadows {
+            let predicted = M::poses(&self.model.predict(&world, action));
+            let target = match self.policy {
+                Policy::Target(pose) => Some(pose),
+                Policy::Fixed(_) => None,
+            };
+            commands.push(shadows(&predicted, target));
+        }
+        Ok(commands)
+    }
+
+    /// Forgets the action in force, so that the next state re-synchronises
+    /// the model instead of training it on a transition across a gap (after
+    /// a reconnect or a restart) whose action is unknown.
+    pub fn resync(&mut self) {
+        self.last_action = None;
+    }
+
+    fn parse_error(&mut self, err: &ParseError) {
+        self.parse_errors += 1;
+        tracing::warn!(%err, "skipping a world state the model cannot parse");
+    }
+
+    /// Whether a target policy has reached its target.
+    #[must_use]
+    pub fn reached(&self) -> bool {
+        self.reached_reported
+    }
+
+    /// The model.
+    #[must_use]
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The model, for a learner that goes on elsewhere.
+    #[must_use]
+    pub fn into_model(self) -> M {
+        self.model
+    }
+}
+
+/// The predicted poses, and the blue block's target if there is one, as one
+/// SetPose of the ghost bodies (`world.md` §3). The target is sent with every
+/// prediction rather than once, because a Reset clears the ghosts.
+fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
+    let ghost = |id, s: ObjectState, suffix: &str| {
+        let name = object_name(id)?;
+        let z = if id == learner::ACTUATOR_ID {
+            ACTUATOR_Z
+        } else {
+            BLOCK_Z
+        };
+        Some((
+            format!("{name}{GHOST_MARKER}{suffix}"),
+            pb::Pose::from_position_yaw([s.x, s.y, z], s.theta),
+        ))
+    };
+    let poses = predicted
+        .objects()
+        .filter_map(|(id, s)| ghost(id, s, ""))
+        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, TARGET_GHOST_SUFFIX)));
+    Payload::set_poses(poses)
+}
+
+/// Per-message work times and the too-slow count.
+#[derive(Clone, Debug, Default)]
+pub struct WorkTimes {
+    micros: Vec<u64>,
+    too_slow: u64,
+    /// The model's share (parse, update, act, predict): see [`crate::latency`].
+    model: Latencies,
+}
+
+/// A summary of [`WorkTimes`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WorkSummary {
+    pub messages: u64,
+    pub too_slow: u64,
+    pub too_slow_fraction: f64,
+    pub p50_ms: f64,
+    pub p99_ms: f64,
+    pub max_ms: f64,
+    /// The model's work per message (parse, update, act, predict), without
+    /// the socket writes.
+    #[serde(default)]
+    pub model: LatencySummary,
+}
+
+impl WorkTimes {
+    /// Records the model's share of one message's work.
+    pub fn record_model(&mut self, took: Duration) {
+        self.model.record(took);
+    }
+
+    /// Records one message's work.
+    pub fn record(&mut self, took: Duration, budget: Duration) {
+        self.micros
+            .push(u64::try_from(took.as_micros()).unwrap_or(u64::MAX));
+        if took > budget {
+            self.too_slow += 1;
+        }
+    }
+
+    /// Count, too-slow count and fraction, and nearest-rank percentiles.
+    #[must_use]
+    pub fn summary(&self) -> WorkSummary {
+        let mut sorted = self.micros.clone();
+        sorted.sort_unstable();
+        let n = sorted.len();
+        let rank = |p: f64| -> f64 {
+            if n == 0 {
+                return 0.0;
+            }
+            // Nearest rank: the smallest value with at least p of the data
+            // at or below it.
+            let k = ((p * n as f64).ceil() as usize).clamp(1, n);
+            sorted[k - 1] as f64 / 1e3
+        };
+        WorkSummary {
+            messages: n as u64,
+            too_slow: self.too_slow,
+            too_slow_fraction: if n == 0 {
+                0.0
+            } else {
+                self.too_slow as f64 / n as f64
+            },
+            p50_ms: rank(0.5),
+            p99_ms: rank(0.99),
+            max_ms: sorted.last().map_or(0.0, |&m| m as f64 / 1e3),
+            model: self.model.summary(),
+        }
+    }
+}
+
+impl std::fmt::Display for WorkSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} messages, {} ({:.4} %) over budget; work per message p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms; model alone {}",
+            self.messages,
+            self.too_slow,
+            100.0 * self.too_slow_fraction,
+            self.p50_ms,
+            self.p99_ms,
+            self.max_ms,
+            self.model
+        )
+    }
+}
+
+/// When to stop and what to print on the way.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ServeOptions {
+    /// Stop after this many states.
+    pub max_messages: Option<u64>,
+    /// Print the work-time summary this often.
+    pub report_every: Option<Duration>,
+}
+
+/// Why the loop ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Stop {
+    Interrupted,
+    MessageLimit,
+}
+
+/// Runs `learner` against the world behind `client` until interrupted
+/// (SIGINT) or the message limit. `report` receives the periodic summaries.
+///
+/// # Errors
+/// Socket errors, a refused command, a refused target.
+pub async fn serve(
+    client: &mut SimClient,
+    learner: &mut impl OnState,
+    options: ServeOptions,
+    mut report: impl FnMut(&WorkSummary),
+) -> Result<(Stop, WorkSummary), LearnError> {
+    let lockstep = client.hello().timing() == Ok(TimingMode::Lockstep);
+    let budget = budget(client.hello().publish_rate);
+    // A world can be quiet for long (paused, or waiting for another client).
+    client.set_timeout(None);
+    let mut times = WorkTimes::default();
+    let mut last_report = Instant::now();
+    let interrupt = tokio::signal::ctrl_c();
+    tokio::pin!(interrupt);
+    let stop = loop {
+        if options
+            .max_messages
+            .is_some_and(|n| times.micros.len() as u64 >= n)
+        {
+            break Stop::MessageLimit;
+        }
+        let next = async {
+            if lockstep {
+                let advance = client.send(Payload::advance()).await?;
+                client.wait_applied(advance).await
+            } else {
+                client.next_state().await
+            }
+        };
+        let state = tokio::select! {
+            state = next => state?,
+            _ = &mut interrupt => break Stop::Interrupted,
+        };
+        let received = Instant::now();
+        let frame = frame_from_state(&state);
+        let modelled = Instant::now();
+        let commands = learner.on_state(&frame)?;
+        times.record_model(modelled.elapsed());
+        for command in commands {
+            client.send(command).await?;
+        }
+        times.record(received.elapsed(), budget);
+        if let Some(every) = options.report_every {
+            if last_report.elapsed() >= every {
+                report(&times.summary());
+                last_report = Instant::now();
+            }
+        }
+    };
+    // The last Move stays in force in a free-running world: stop the actuator.
+    client.send(Payload::move_(0.0, 0.0)).await?;
+    client.sync().await?;
+    Ok((stop, times.summary()))
+}
+
+#[cfg(test)]
+mod tests {
+    use learner::BLUE_ID;
+
+    use super::*;
+    use crate::experiment::driver::test_support::{blue_home, describe, frame, Probe};
+
+    #[test]
+    fn a_fixed_action_learns_from_every_state_and_sends_shadows() {
+        let mut l = Learner::new(
+            Probe::default(),
+            Policy::Fixed(Action::new(0.0, 0.5)),
+            true,
+            1,
+        );
+        let first = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        // Shadows predict the actuator 5 mm ahead (the probe's model).
+        assert_eq!(
+            first,
+            [
+                "move(0,0.5)",
+                "pose(actuatorShadow,0,0.005);pose(blockAShadow,0,0.25)"
+            ]
+        );
+        l.on_state(&frame((0.0, 0.005), &blue_home())).unwrap();
+        l.on_state(&frame((0.0, 0.01), &blue_home())).unwrap();
+        assert_eq!(l.model().resets, 1);
+        assert_eq!(l.model().updates, 2);
+        let mut broken = frame((0.0, 0.0), &blue_home());
+        broken.objects.remove(0);
+        assert!(l.on_state(&broken).unwrap().is_empty());
+        assert_eq!(l.parse_errors, 1);
+        assert_eq!(l.model().updates, 2);
+    }
+
+    #[test]
+    fn a_target_policy_plans_until_reached() {
+        let probe = Probe {
+            reach_after: Some(3),
+            ..Probe::default()
+        };
+        let goal = ObjectState::new(0.6, 0.7, -2.1);
+        let mut l = Learner::new(probe, Policy::Target(goal), false, 1);
+        let a = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        assert_eq!(a.len(), 1);
+        assert_eq!(
+            l.model().target.map(|t| (t.id, t.pose)),
+            Some((BLUE_ID, goal))
+        );
+        assert!(!l.reached());
+        l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap();
+        let stop = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        assert_eq!(stop, ["move(0,0)"]);
+        assert!(l.reached());
+    }
+
+    #[test]
+    fn shadows_of_a_target_policy_mark_the_target() {
+        let goal = ObjectState::new(0.6, 0.7, -2.1);
+        let mut l = Learner::new(Probe::default(), Policy::Target(goal), true, 1);
+        let commands = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        assert_eq!(commands.len(), 2, "{commands:?}");
+        assert!(
+            commands[1].ends_with(";pose(blockAShadowTarget,0.6,0.7)"),
+            "{commands:?}"
+        );
+    }
+
+    #[test]
+    fn a_refused_target_is_an_error() {
+        let mut l = Learner::new(
+            Probe::default(),
+            Policy::Target(ObjectState::new(f64::NAN, 0.0, 0.0)),
+            false,
+            1,
+        );
+        assert!(matches!(
+            l.on_state(&frame((0.0, 0.0), &blue_home())),
+            Err(TargetError::NonFinite { .. })
+        ));
+    }
+
+    #[test]
+    fn work_times_give_nearest_rank_percentiles() {
+        let mut t = WorkTimes::default();
+        let budget = Duration::from_millis(20);
+        for ms in 1..=100 {
+            t.record(Duration::from_micros(ms * 250), budget);
+        }
+        let s = t.summary();
+        assert_eq!(s.messages, 100);
+        // 0.25 ms … 25 ms: those above 20 ms are 20.25 … 25 (20 of them).
+        assert_eq!(s.too_slow, 20);
+        assert!((s.too_slow_fraction - 0.2).abs() < 1e-12);
+        assert_eq!(s.p50_ms, 12.5);
+        assert_eq!(s.p99_ms, 24.75);
+        assert_eq!(s.max_ms, 25.0);
+        assert_eq!(WorkTimes::default().summary(), WorkSummary::default());
+    }
+}

@@ -1,0 +1,22 @@
+//! The pushlearn application: everything behind the `pushlearn` command.
+//!
+//! * [`frame`]: world states as the learner sees them;
+//! * [`experiment`]: the thesis's experiments over the sockets;
+//! * [`learn`]: the learner daemon;
+//! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
+//! * [`models`]: the learners by name;
+//! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
+//!   and figures;
+//! * [`view`]: the browser viewer (`pushlearn view`).
+//!
+//! The wire types and the world client come from the root protocol crate,
+//! `pushlearn`.
+
+pub mod experiment;
+pub mod frame;
+pub mod latency;
+pub mod learn;
+pub mod load;
+pub mod models;
+pub mod report;
+pub mod view;

@@ -1,0 +1,17 @@
+//! The world's tests, compiled as one test binary since linking each file
+//! separately costs minutes on two cores:
+//!
+//! * [`world`], [`calibration`]: the in-process world and the thesis's
+//!   calibration checks (`docs/spec/world.md` §10);
+//! * [`daemon`]: the `pushlearn-sim` daemon over real localhost sockets;
+//! * [`gate_push_task`], [`interaction_push_task`]: the learners trained and
+//!   tested on pushes of this world, in-process (trace-driven).
+
+#[path = "../support/push_frames.rs"]
+mod push_frames;
+
+mod calibration;
+mod daemon;
+mod gate_push_task;
+mod interaction_push_task;
+mod world;
