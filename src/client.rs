@@ -27,7 +27,7 @@
 //! Sequence numbers are assigned by the client, strictly increasing from
 //! [`ClientOptions::first_seq`]. `applied_seq` is global to the world: with
 //! several clients it only identifies a client's own commands if the clients
-//! use disjoint, increasing seq ranges (protocol.md §3); otherwise a later
+//! use disjoint, increasing seq ranges (docs/spec/protocol.md §3); otherwise a later
 //! command of another client with a smaller seq can hide ours, and a wait for
 //! "applied" can time out or return early.
 
@@ -189,7 +189,7 @@ impl Default for ClientOptions {
 impl ClientOptions {
     /// The defaults, with seqs from [`seq_base_from_clock`]: for a
     /// long-running client beside others (a learner, a viewer), whose
-    /// `applied_seq`s must stay apart from theirs (protocol.md §5).
+    /// `applied_seq`s must stay apart from theirs (docs/protocol.md §5).
     pub fn clock_seqs() -> Self {
         Self {
             first_seq: seq_base_from_clock(),

@@ -1,12 +1,12 @@
 //! Gate model time per message after 1, 3, 10 and 30 training runs.
 //!
 //! The original needs, after 30 runs, ≈ 300 µs per learning update (p99
-//! ≈ 0.8 ms) and 150–250 µs per prediction (`reference-results.md` §10);
-//! the budget is 20 ms per message (`experiments.md` §6).
+//! ≈ 0.8 ms) and 150–250 µs per prediction (`docs/spec/reference-results.md` §10);
+//! the budget is 20 ms per message (`docs/spec/experiments.md` §6).
 //!
 //! Data: push-task runs recorded from the in-process world
 //! (`sim_plugin::push_run::record_push_run`), 30 training runs at seeded random
-//! starts (`experiments.md` §3, §5) trained as the driver does
+//! starts (`docs/spec/experiments.md` §3, §5) trained as the driver does
 //! (`learner::eval::train_on_run`), and the 21 test runs.
 //!
 //! * `gate_update/N`: a copy of the model trained on N runs learns one more

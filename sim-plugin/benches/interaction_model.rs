@@ -1,6 +1,6 @@
 //! Interaction model: time per message of `update` (training on) and of
-//! `predict` after 1, 3, 10 and 30 training runs (`experiments.md` §6: all
-//! work for one message must fit 0.02 s; `reference-results.md` §10: the
+//! `predict` after 1, 3, 10 and 30 training runs (`docs/spec/experiments.md` §6: all
+//! work for one message must fit 0.02 s; `docs/spec/reference-results.md` §10: the
 //! original took ≈ 300 µs per update and 150 – 250 µs per prediction after
 //! 30 runs).
 //!

@@ -1,5 +1,5 @@
-/* Plain-C reference for benches/step.rs: the same one-block world and push
- * (world.md §2–§5), stepped directly with libode, to measure what the Rust
+/* Plain-C reference for sim-plugin/benches/step.rs: the same one-block world and push
+ * (docs/spec/world.md §2–§5), stepped directly with libode, to measure what the Rust
  * layers cost on this machine. It also prints the pushed block's outcome so
  * the two implementations can be compared number for number.
  *

@@ -4,7 +4,7 @@
 //!   scenes);
 //! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
 //!   per-step actuator drive, commands, ghosts and publishing;
-//! * [`sweep`](mod@sweep): the calibration sweep of `world.md` §10;
+//! * [`sweep`](mod@sweep): the calibration sweep of `docs/spec/world.md` §10;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
 //! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
 //!   (`docs/protocol.md`).

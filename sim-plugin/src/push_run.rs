@@ -1,4 +1,4 @@
-//! Push-task runs as the experiment driver produces them (`experiments.md`
+//! Push-task runs as the experiment driver produces them (`docs/spec/experiments.md`
 //! §2, §3), in lock-step with the world and without latency: the messages a
 //! learner sees in one run, for the trace-driven learner tests and
 //! benchmarks.

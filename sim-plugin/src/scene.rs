@@ -7,14 +7,14 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-/// Ids the learners key their tables by (`features.md`): these names must
+/// Ids the learners key their tables by (`docs/spec/features.md`): these names must
 /// carry exactly these ids, and no other body may use them.
 pub const KNOWN_IDS: [(&str, u32); 3] = [("actuator", 8), ("blockA", 15), ("blockB", 27)];
 
 /// Name of the body the actuator commands drive.
 pub const ACTUATOR: &str = "actuator";
 
-/// Substring that marks a non-physical ghost pose (`protocol.md` §3).
+/// Substring that marks a non-physical ghost pose (`docs/spec/protocol.md` §3).
 pub use pushlearn::wire::GHOST_MARKER;
 
 const BUILTINS: [(&str, &str); 2] = [
@@ -80,7 +80,7 @@ fn default_publish_rate() -> u32 {
     100
 }
 
-/// World-level solver settings (Gazebo 2.x defaults, `world.md` §2).
+/// World-level solver settings (Gazebo 2.x defaults, `docs/spec/world.md` §2).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Physics {
@@ -164,7 +164,7 @@ impl Default for Ground {
     }
 }
 
-/// How the actuator is driven every step (`world.md` §5).
+/// How the actuator is driven every step (`docs/spec/world.md` §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Drive {

@@ -1,4 +1,4 @@
-//! The thesis's calibration sweep (`world.md` §10): the push action from 21
+//! The thesis's calibration sweep (`docs/spec/world.md` §10): the push action from 21
 //! start positions along the start line, one run each.
 
 use serde::{Deserialize, Serialize};
@@ -23,7 +23,7 @@ pub struct SweepOptions {
 }
 
 impl SweepOptions {
-    /// x₀ = −0.35 + 0.035·i, i = 0…20 (`experiments.md`), computed in
+    /// x₀ = −0.35 + 0.035·i, i = 0…20 (`docs/spec/experiments.md`), computed in
     /// millimetres so that every start is the double nearest its decimal.
     pub fn thesis_starts() -> Vec<f64> {
         (0..21).map(|i| f64::from(-350 + 35 * i) / 1000.0).collect()

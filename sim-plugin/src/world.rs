@@ -1,4 +1,4 @@
-//! The thesis world (`world.md` §2–§7) on the `ode` wrapper.
+//! The thesis world (`docs/spec/world.md` §2–§7) on the `ode` wrapper.
 
 use ode::{
     BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
@@ -41,7 +41,7 @@ pub enum Command {
     Pause,
     Unpause,
     /// Every body to its start pose at rest, step counter and time to 0.
-    /// The stored actuator command is kept (`world.md` §6).
+    /// The stored actuator command is kept (`docs/spec/world.md` §6).
     Reset,
     /// Sets a body's pose (velocities untouched), or stores a ghost pose for
     /// names containing `Shadow`.
@@ -94,7 +94,7 @@ pub enum StepError {
     Ode(#[from] OdeError),
 }
 
-/// One body as published (`protocol.md` ModelState).
+/// One body as published (`docs/spec/protocol.md` ModelState).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BodyState {
     pub name: String,
@@ -180,7 +180,7 @@ impl SurfaceTable {
     }
 }
 
-/// Gazebo 2.x's contact surface for two materials (`world.md` §4): friction
+/// Gazebo 2.x's contact surface for two materials (`docs/spec/world.md` §4): friction
 /// by the minimum rule, softness from springs in series and dampers in
 /// parallel.
 fn combine(a: (f64, f64, f64, f64), b: (f64, f64, f64, f64), h: f64) -> Result<Surface, OdeError> {
@@ -445,7 +445,7 @@ impl World {
             body.reset_dynamics();
         }
         // QuickStep's row shuffling draws from this stream: seeding it at
-        // every reset makes runs reproducible (`world.md` §12).
+        // every reset makes runs reproducible (`docs/spec/world.md` §12).
         self.ode.set_rand_seed(0);
         self.step_count = 0;
         self.ghosts.clear();
@@ -501,7 +501,7 @@ impl World {
         }
     }
 
-    /// `world.md` §5, steps 1–3, in that order.
+    /// `docs/spec/world.md` §5, steps 1–3, in that order.
     fn drive_actuator(&mut self) -> Result<(), OdeError> {
         let drive = &self.scene.drive;
         let mut body = self.ode.body_mut(self.bodies[self.actuator].handle)?;

@@ -233,7 +233,7 @@ impl pb::WorldState {
     }
 }
 
-/// How the world paces its steps (`Hello.timing_mode`, world.md §8).
+/// How the world paces its steps (`Hello.timing_mode`, docs/spec/world.md §8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum TimingMode {
     /// Steps continuously, paced against the wall clock.

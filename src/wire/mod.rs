@@ -28,7 +28,7 @@ pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, Ser
 pub use message::TimingMode;
 pub use validate::{validate, InvalidCommand};
 
-/// Substring that marks a non-physical ghost pose (`protocol.md` §3): the
+/// Substring that marks a non-physical ghost pose (`docs/spec/protocol.md` §3): the
 /// world never simulates such a body and learners skip it.
 pub const GHOST_MARKER: &str = "Shadow";
 

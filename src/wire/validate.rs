@@ -1,4 +1,4 @@
-//! Command validation (protocol.md §3: "every command is validated on
+//! Command validation (docs/spec/protocol.md §3: "every command is validated on
 //! arrival").
 //!
 //! [`validate`] holds the checks that need nothing but the message; a world

@@ -140,7 +140,7 @@ fn push_task_over_sockets_is_plausible_and_identical_for_any_worker_count() {
         plausible(&r["actuator_pos_err"], 0.5);
         plausible(&r["interacting"]["block_pos_err"], 1.0);
         assert_eq!(r["per_position"].as_array().map(Vec::len), Some(21));
-        // 149 updates per training run (experiments.md §8).
+        // 149 updates per training run (docs/spec/experiments.md §8).
         assert_eq!(
             number(&r["nodes"]["maps"]["gate"]["update_calls"]["mean"]),
             149.0 * n
@@ -188,7 +188,7 @@ fn fixed_three_lockstep_folds_are_identical() {
     let r = &v["results"][0];
     assert_eq!(r["train_runs"], 3);
     // Without latency emulation the world is deterministic: every fold is
-    // the same (world.md §8), so every per-position std is zero.
+    // the same (docs/spec/world.md §8), so every per-position std is zero.
     for p in r["per_position"].as_array().expect("positions") {
         assert_eq!(number(&p["block_pos_err"]["std"]), 0.0, "{p}");
     }

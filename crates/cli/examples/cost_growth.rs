@@ -15,7 +15,7 @@
 //! message), `act` towards a Move-to-Target target (the planner's inverse
 //! queries; its action is not sent, since the runs are recorded pushes) and
 //! `predict` under the push. Parsing and the socket are left out. Runs start
-//! at seeded random positions (`experiments.md` §3, §5) and end, as the
+//! at seeded random positions (`docs/spec/experiments.md` §3, §5) and end, as the
 //! driver's do, when the actuator leaves the area.
 
 use std::path::PathBuf;

@@ -1,10 +1,10 @@
 //! The one conversion from the wire's `WorldState` to the learner's [`Frame`]
-//! (`protocol.md` §4): every body in message order, with its name, id,
+//! (`docs/spec/protocol.md` §4): every body in message order, with its name, id,
 //! position and orientation quaternion in the order (x, y, z, w), which is
 //! the schema's order as well as the learner's.
 //!
 //! Skipping (`ground_plane`, `*wall*`, `*Shadow`) and rounding are the
-//! models' parsing (`features.md` §1), so this conversion keeps everything.
+//! models' parsing (`docs/spec/features.md` §1), so this conversion keeps everything.
 
 use learner::{Frame, Observation};
 

@@ -9,9 +9,9 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum ModelKind {
-    /// Object-state model with a gating function (`gate-model.md`).
+    /// Object-state model with a gating function (`docs/spec/gate-model.md`).
     Gate,
-    /// Interaction-state model with Abstract Collections (`interaction-model.md`).
+    /// Interaction-state model with Abstract Collections (`docs/spec/interaction-model.md`).
     Interaction,
 }
 
@@ -42,7 +42,7 @@ pub trait WithModel {
 }
 
 /// A command-line name for each configuration bit of the original
-/// (`experiments.md` §1).
+/// (`docs/spec/experiments.md` §1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum ConfigFlag {
     /// 1, USE_DYNS: the block predictors also see the block's velocity
@@ -233,7 +233,7 @@ impl ModelOptions {
 impl ModelKind {
     /// Calls `job` with an untrained model of this kind configured by
     /// `options` for the world's publish rate (10 Hz: the LOWFREQ
-    /// thresholds of `experiments.md` §1, as with bit 2).
+    /// thresholds of `docs/spec/experiments.md` §1, as with bit 2).
     ///
     /// # Errors
     /// Options that do not apply to this model, or invalid values.

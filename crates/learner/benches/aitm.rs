@@ -1,4 +1,4 @@
-//! AITM update and query time against node count (aitm.md §7: the original
+//! AITM update and query time against node count (docs/spec/aitm.md §7: the original
 //! is linear in the node count; ≈ 1100 nodes must fit a 0.02 s budget).
 //!
 //! Maps are grown with random inputs on a 3-decimal grid until they hold the

@@ -1,4 +1,4 @@
-//! How AITM query and update time grow with the node count (aitm.md §7;
+//! How AITM query and update time grow with the node count (docs/spec/aitm.md §7;
 //! issue "memory that does not slow down"): maps of 1 k, 10 k, 100 k and
 //! 1 M nodes, searched through the spatial index, and the brute-force scan
 //! beside it up to 100 k.

@@ -1,5 +1,5 @@
 //! The push-task protocol on the learner's side and its metrics
-//! (`experiments.md` §2, §3, §7), independent of where the frames come from:
+//! (`docs/spec/experiments.md` §2, §3, §7), independent of where the frames come from:
 //! the experiment driver feeds it messages from the simulator's socket, the
 //! trace-driven tests feed it runs of an in-process world.
 //!
@@ -18,26 +18,26 @@ use crate::model::Model;
 use crate::types::{Action, Frame, Poses};
 
 /// The push action of every push-task run, in training and in testing
-/// (`experiments.md` §3): straight towards the block at 0.5 m/s.
+/// (`docs/spec/experiments.md` §3): straight towards the block at 0.5 m/s.
 pub const PUSH_ACTION: Action = Action::new(0.0, 0.5);
 
 /// Messages processed per run; the next one (the 151st) ends the run and is
-/// the one scored (`experiments.md` §2: "the message on which `step_counter`
+/// the one scored (`docs/spec/experiments.md` §2: "the message on which `step_counter`
 /// becomes 151 ends the run").
 pub const MESSAGES_PER_RUN: usize = 150;
 
 /// A run also ends once the actuator is farther than this from the origin
-/// (`experiments.md` §2.1 `run_ended`).
+/// (`docs/spec/experiments.md` §2.1 `run_ended`).
 pub const RUN_END_DISTANCE: f64 = 1.0;
 
 /// Number of push-task test positions.
 pub const TEST_POSITION_COUNT: usize = 21;
 
 /// Indices of the 15 test positions whose push meets the block
-/// (`experiments.md` §3: ±0.28, ±0.315, ±0.35 miss it).
+/// (`docs/spec/experiments.md` §3: ±0.28, ±0.315, ±0.35 miss it).
 pub const INTERACTING_POSITIONS: std::ops::RangeInclusive<usize> = 3..=17;
 
-/// The first training starts of configuration 8 (`experiments.md` §3.2, §8:
+/// The first training starts of configuration 8 (`docs/spec/experiments.md` §3.2, §8:
 /// −0.18 / 0.18, not the −0.14 / 0.14 of the original's last commit).
 pub const FIXED_TRAINING_STARTS: [f64; 3] = [-0.18, 0.18, 0.0];
 
@@ -47,24 +47,24 @@ pub fn test_positions() -> [f64; TEST_POSITION_COUNT] {
     std::array::from_fn(|i| -0.35 + 0.035 * i as f64)
 }
 
-/// The two-object test starts `−0.8 + 0.06·i`, i = 0 … 20 (`experiments.md`
+/// The two-object test starts `−0.8 + 0.06·i`, i = 0 … 20 (`docs/spec/experiments.md`
 /// §3.3).
 #[must_use]
 pub fn two_object_test_positions() -> [f64; TEST_POSITION_COUNT] {
     std::array::from_fn(|i| -0.8 + 0.06 * i as f64)
 }
 
-/// Width of the random training start range of `experiments.md` §3:
+/// Width of the random training start range of `docs/spec/experiments.md` §3:
 /// [−0.25, 0.25), the block's length.
 pub const TRAINING_START_RANGE: f64 = 0.5;
 
-/// The range with configuration bit 4, ALLOWMISSPOSITIONS (`experiments.md`
+/// The range with configuration bit 4, ALLOWMISSPOSITIONS (`docs/spec/experiments.md`
 /// §1): [−0.35, 0.35), so that some pushes miss the block (thesis draft
 /// §6.1.1 samples "between −0.35 and 0.35").
 pub const WIDE_TRAINING_START_RANGE: f64 = 0.7;
 
 /// A random training start from a uniform sample `u` in [0, 1):
-/// `(u − 0.5) · 0.5`, i.e. [−0.25, 0.25) (`experiments.md` §3). The caller
+/// `(u − 0.5) · 0.5`, i.e. [−0.25, 0.25) (`docs/spec/experiments.md` §3). The caller
 /// draws `u` for every run, also when a fixed start replaces it, so that the
 /// random sequence does not depend on the variant.
 #[must_use]
@@ -88,7 +88,7 @@ pub fn draft_training_starts() -> [f64; 3] {
     [-w, w, 0.0]
 }
 
-/// `run_ended(WS)` of `experiments.md` §2.1, for the distance part; the step
+/// `run_ended(WS)` of `docs/spec/experiments.md` §2.1, for the distance part; the step
 /// count part is the caller's (it counts messages).
 #[must_use]
 pub fn actuator_left_area(poses: &Poses) -> bool {
@@ -96,7 +96,7 @@ pub fn actuator_left_area(poses: &Poses) -> bool {
     a.x.hypot(a.y) > RUN_END_DISTANCE
 }
 
-/// The per-message learner side of one run (`experiments.md` §2
+/// The per-message learner side of one run (`docs/spec/experiments.md` §2
 /// `train_step` / `test_step`).
 ///
 /// `last_prediction` doubles, as in the original, as the marker that the
@@ -175,7 +175,7 @@ impl<M: Model> RunStepper<M> {
     }
 }
 
-/// Errors of one scored test run (`experiments.md` §7.2): the actual state
+/// Errors of one scored test run (`docs/spec/experiments.md` §7.2): the actual state
 /// of the message that ended the run against the prediction made on the
 /// message before.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -244,7 +244,7 @@ pub fn train_on_run<M: Model>(
 }
 
 /// Runs one push-task test run on a recorded run of at least 151 frames and
-/// scores the run's end (`experiments.md` §2, §7.2): 150 chained predictions,
+/// scores the run's end (`docs/spec/experiments.md` §2, §7.2): 150 chained predictions,
 /// the last of which is compared with frame 151. `None` if there are too few
 /// frames or the run ended early before any prediction was made.
 ///
@@ -270,7 +270,7 @@ pub fn test_on_run<M: Model>(
 }
 
 /// Mean and **population** standard deviation (divide by n), as the thesis's
-/// per-position tables use them (`experiments.md` §7.3).
+/// per-position tables use them (`docs/spec/experiments.md` §7.3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct MeanStd {
     pub mean: f64,
@@ -291,7 +291,7 @@ impl MeanStd {
     }
 }
 
-/// One point of a learning curve (`experiments.md` §7.4): the mean over test
+/// One point of a learning curve (`docs/spec/experiments.md` §7.4): the mean over test
 /// positions of the per-position means, with the mean of the per-position
 /// standard deviations as its error bar (not the spread over all runs).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -312,7 +312,7 @@ impl CurvePoint {
 
     /// The value the original analysis plotted for the actuator over the
     /// interacting positions: the mean of `(mean + std) / 2` per position
-    /// (`experiments.md` §7.4 quirk). Only for comparison with the thesis's
+    /// (`docs/spec/experiments.md` §7.4 quirk). Only for comparison with the thesis's
     /// figures; [`CurvePoint::of`] is the correct value.
     #[must_use]
     pub fn original_script_quirk(per_position: &[MeanStd]) -> f64 {
@@ -344,7 +344,7 @@ impl PositionErrors {
 }
 
 /// Learning-curve summary of one `N_train` over all positions and over the
-/// interacting ones (`experiments.md` §7.4), for one block.
+/// interacting ones (`docs/spec/experiments.md` §7.4), for one block.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CurveSummary {
     pub block_pos: CurvePoint,
@@ -499,7 +499,10 @@ mod tests {
             .iter()
             .filter(|c| c.starts_with("update"))
             .count();
-        assert_eq!(updates, 149, "experiments.md §8: 149 updates per run");
+        assert_eq!(
+            updates, 149,
+            "docs/spec/experiments.md §8: 149 updates per run"
+        );
         assert_eq!(model.calls[149], "update y=0.745 a=0.5", "frame 151 unused");
     }
 

@@ -1,4 +1,4 @@
-//! Configuration bits of the original (`experiments.md` §1): the gate model
+//! Configuration bits of the original (`docs/spec/experiments.md` §1): the gate model
 //! reads 1, 2, 16, 32 and 64 (`GateParams::from_config_number`), the
 //! interaction model 2 (`InteractionParams::from_config_number`), the
 //! experiment driver 2, 4 and 8.
@@ -19,5 +19,5 @@ pub const HARDCODEDGATE: u32 = 32;
 pub const USINGPREDICTIONBOOST: u32 = 64;
 /// Every bit the original defined.
 pub const ALL: u32 = 127;
-/// The bits that concern only the driver (`experiments.md` §1).
+/// The bits that concern only the driver (`docs/spec/experiments.md` §1).
 pub const DRIVER: u32 = ALLOWMISSPOSITIONS | FIXFIRSTTHREETRAININGRUNS;

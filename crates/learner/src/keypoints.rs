@@ -1,7 +1,7 @@
 //! The thesis draft's key-point score (draft §6.1.2): for each body its
 //! centre and two key points on the block's edges, the corners
 //! `R(θ)·(w, h) + p` and `R(θ)·(−w, −h) + p` that the original's recorder
-//! also wrote (`experiments.md` §7.1). One number measures position and
+//! also wrote (`docs/spec/experiments.md` §7.1). One number measures position and
 //! orientation together:
 //!
 //! `s = (1/3) Σᵢ |pᵢ(predicted) − pᵢ(actual)|`
@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 use crate::features::{global_point, Shape};
 use crate::types::{ObjectState, Poses, ACTUATOR_ID};
 
-/// Half extents `(w, h)` of a body from the shape table (`features.md` §4):
+/// Half extents `(w, h)` of a body from the shape table (`docs/spec/features.md` §4):
 /// the largest corner coordinates; (0, 0) for round or unknown bodies.
 #[must_use]
 pub fn half_extents(id: u32) -> (f64, f64) {

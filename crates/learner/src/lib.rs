@@ -1,21 +1,21 @@
-//! pushlearn models: the learner side of the system (`spec/README.md` §1).
+//! pushlearn models: the learner side of the system (`docs/spec/README.md` §1).
 //!
 //! Pure and deterministic: no I/O, no protobuf, no global state.
 //!
 //! * [`types`]: what the daemon and the experiment driver exchange with a
 //!   model (frames, object states, actions, poses, targets);
-//! * [`features`]: parsing and every feature computation of `features.md`;
-//! * [`aitm`]: the Adapted Instantaneous Topological Map (`aitm.md`), the
+//! * [`features`]: parsing and every feature computation of `docs/spec/features.md`;
+//! * [`aitm`]: the Adapted Instantaneous Topological Map (`docs/spec/aitm.md`), the
 //!   one memory-based regressor/classifier of both learners;
-//! * [`aim`]: the Averaging Inverse Model (`inverse-model.md`);
+//! * [`aim`]: the Averaging Inverse Model (`docs/spec/inverse-model.md`);
 //! * [`gate`]: the object-state model with gating function
-//!   (`gate-model.md`) and its planner (`planning.md` §2);
+//!   (`docs/spec/gate-model.md`) and its planner (`docs/spec/planning.md` §2);
 //! * [`model`]: the [`Model`] trait both learners implement;
 //! * [`eval`]: the push-task protocol on the learner's side and its metrics;
 //! * [`interaction`]: the pairwise interaction-state model
-//!   (`interaction-model.md`);
+//!   (`docs/spec/interaction-model.md`);
 //! * [`planning`]: the model-independent parts of Move to Target
-//!   (`planning.md` §1, §4, §5);
+//!   (`docs/spec/planning.md` §1, §4, §5);
 //! * [`tree`]: the decision trees of the thesis draft's AC selector;
 //! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2).
 

@@ -1,6 +1,6 @@
 //! The interface a daemon and the experiment driver use to drive a learner,
-//! implemented by the gate model (`gate-model.md`) and the interaction model
-//! (`interaction-model.md`).
+//! implemented by the gate model (`docs/spec/gate-model.md`) and the interaction model
+//! (`docs/spec/interaction-model.md`).
 
 use std::collections::BTreeMap;
 use std::fmt::Debug;
@@ -16,7 +16,7 @@ use crate::types::{Action, Frame, Poses, Target, TargetError};
 /// A learner of forward and inverse models, driven one world-state message at
 /// a time.
 ///
-/// # How the driver calls it (`experiments.md` §2–§4)
+/// # How the driver calls it (`docs/spec/experiments.md` §2–§4)
 ///
 /// For every message that is not dropped:
 ///
@@ -43,10 +43,10 @@ use crate::types::{Action, Frame, Poses, Target, TargetError};
 ///
 /// The issue that asked for this trait sketched
 /// `update(previous world, action, current world)`. The spec's models keep
-/// their previous state themselves (`gate-model.md` §2–§4,
-/// `interaction-model.md` §3–§4) and the reference results depend on it: the
+/// their previous state themselves (`docs/spec/gate-model.md` §2–§4,
+/// `docs/spec/interaction-model.md` §3–§4) and the reference results depend on it: the
 /// gate model's record of a block is what supplies `s_prev` (stale across a
-/// reset, shared with prediction chains, `gate-model.md` §3, §4.1), and the
+/// reset, shared with prediction chains, `docs/spec/gate-model.md` §3, §4.1), and the
 /// interaction model trains on its stored current interaction state. A
 /// caller-supplied previous world would bypass exactly those quirks, so the
 /// previous state is the model's and `update` sees only the new one.
@@ -55,15 +55,15 @@ use crate::types::{Action, Frame, Poses, Target, TargetError};
 ///
 /// Everything is deterministic given the inputs: the only randomness is the
 /// exploration fallback of [`Model::act`], drawn from the caller's seeded
-/// generator (`experiments.md` §5). No method does I/O.
+/// generator (`docs/spec/experiments.md` §5). No method does I/O.
 pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
-    /// The model's own parsed world state (`README.md` §4 "world state"): for
+    /// The model's own parsed world state (`docs/spec/README.md` §4 "world state"): for
     /// the gate model the actuator and blocks as tracked objects with `s` and
     /// `s_prev`; for the interaction model the object states plus the
     /// interaction states computed from them. Predictions are values of the
     /// same type so that they can be chained.
     ///
-    /// The gate model's shared block records (`gate-model.md` §4.1) need
+    /// The gate model's shared block records (`docs/spec/gate-model.md` §4.1) need
     /// object identity across `parse`, `predict` and `reset_objects`/`update`
     /// even though they all take the world by shared reference: a parsed
     /// block can carry an identity token created at parse time (e.g. an
@@ -72,8 +72,8 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     /// block as its record.
     type World: Clone + Debug + Send;
 
-    /// Parse one world-state message (`features.md` §1 with this model's
-    /// actuator-yaw rule, `crate::features::ActuatorYaw`; `protocol.md` §4
+    /// Parse one world-state message (`docs/spec/features.md` §1 with this model's
+    /// actuator-yaw rule, `crate::features::ActuatorYaw`; `docs/spec/protocol.md` §4
     /// skip rules). Freshly parsed objects have `s_prev = s`.
     ///
     /// Errors instead of panics on anything the world may send: no actuator,
@@ -82,26 +82,26 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     fn parse(&self, frame: &Frame) -> Result<Self::World, ParseError>;
 
     /// Model-agnostic object states of a world (parsed or predicted), for the
-    /// start-position check (`experiments.md` §2), the recorded rows and the
+    /// start-position check (`docs/spec/experiments.md` §2), the recorded rows and the
     /// metrics (§7) and for shadows. For the interaction model's predictions
-    /// these are the finalised objects (`interaction-model.md` §5), with the
+    /// these are the finalised objects (`docs/spec/interaction-model.md` §5), with the
     /// actuator's yaw 0.
     fn poses(world: &Self::World) -> Poses;
 
     /// Re-synchronise with `world` at the first message of a run, without
-    /// training (`gate-model.md` §3, `interaction-model.md` §4). The gate
+    /// training (`docs/spec/gate-model.md` §3, `docs/spec/interaction-model.md` §4). The gate
     /// model deliberately keeps the end of the previous run as its blocks'
-    /// `s_prev` (quirk, `gate-model.md` §3).
+    /// `s_prev` (quirk, `docs/spec/gate-model.md` §3).
     fn reset_objects(&mut self, world: &Self::World);
 
     /// Learn from the transition from the model's stored state into `world`
     /// under `action`, the action that was in force meanwhile; then make
-    /// `world` the stored state (`gate-model.md` §2, `interaction-model.md`
+    /// `world` the stored state (`docs/spec/gate-model.md` §2, `docs/spec/interaction-model.md`
     /// §3). With training off only the stored state moves forward.
     fn update(&mut self, world: &Self::World, action: Action);
 
     /// Predict the world one message after `world` if `action` is in force
-    /// (`gate-model.md` §4, `interaction-model.md` §5). `world` may itself be
+    /// (`docs/spec/gate-model.md` §4, `docs/spec/interaction-model.md` §5). `world` may itself be
     /// a prediction. Never changes what the model has learned.
     fn predict(&self, world: &Self::World, action: Action) -> Self::World;
 
@@ -112,31 +112,31 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     fn is_training(&self) -> bool;
 
     /// Set (`Some`) or clear (`None`) the Move-to-Target goal
-    /// (`planning.md`). Implementations start with [`Target::check`] and may
+    /// (`docs/spec/planning.md`). Implementations start with [`Target::check`] and may
     /// refuse objects they cannot plan for ([`TargetError::UnknownObject`]);
     /// a refused target leaves the previous one in place. The interaction
-    /// model builds its target interaction state here (`features.md` §6.5).
+    /// model builds its target interaction state here (`docs/spec/features.md` §6.5).
     fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError>;
 
     /// Whether a target is set; `act` clears it when it finds the target
-    /// reached (`planning.md` §2, §3).
+    /// reached (`docs/spec/planning.md` §2, §3).
     fn has_target(&self) -> bool;
 
     /// The next action from the model's current state (after the latest
-    /// `update` or `reset_objects`) towards the target: `planning.md`
+    /// `update` or `reset_objects`) towards the target: `docs/spec/planning.md`
     /// `get_action()`. (0, 0) without a target or once it is reached (the
     /// target is then cleared).
     ///
     /// Takes no world: the gate model plans from its own actuator and block
-    /// records (`planning.md` §2), the interaction model from its current
+    /// records (`docs/spec/planning.md` §2), the interaction model from its current
     /// interaction state (§3). `&mut self` because reaching the target clears
     /// it and the inverse model keeps its `current_key` between queries.
-    /// `rng` feeds the exploration fallback (`planning.md` §5): two uniform
+    /// `rng` feeds the exploration fallback (`docs/spec/planning.md` §5): two uniform
     /// samples in [−0.5, 0.5), x first, e.g. `rng.random::<f64>() - 0.5` with
     /// `rand::RngExt`; nothing else may draw from it.
     fn act(&mut self, rng: &mut dyn Rng) -> Action;
 
-    /// Node statistics of every map (`experiments.md` §7.5); key names in
+    /// Node statistics of every map (`docs/spec/experiments.md` §7.5); key names in
     /// [`stat_keys`].
     fn stats(&self) -> ModelStats;
 
@@ -155,7 +155,7 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     }
 }
 
-/// A model's statistics (`gate-model.md` §7, `interaction-model.md` §6).
+/// A model's statistics (`docs/spec/gate-model.md` §7, `docs/spec/interaction-model.md` §6).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ModelStats {
     /// Counters per map, keyed as in [`stat_keys`].
@@ -183,7 +183,7 @@ pub mod stat_keys {
     /// Interaction model: number of Abstract Collections.
     pub const AC_COUNT: &str = "ac_count";
     /// Interaction model: id of the AC with the most nodes (the thesis's
-    /// "AC" columns, `experiments.md` §7.5; ties to the lower id).
+    /// "AC" columns, `docs/spec/experiments.md` §7.5; ties to the lower id).
     pub const AC_LARGEST_ID: &str = "ac_largest_id";
     /// Interaction model: update count of the AC with the most nodes.
     pub const AC_LARGEST_UPDATES: &str = "ac_largest_updates";
@@ -201,7 +201,7 @@ pub mod stat_keys {
 impl ModelStats {
     /// The maps named `"{prefix}{n}"` with a numeric `n`, in ascending `n`
     /// (not string) order — e.g. the ACs in id order, which the original's
-    /// node-count analysis scanned (`experiments.md` §7.5).
+    /// node-count analysis scanned (`docs/spec/experiments.md` §7.5).
     #[must_use]
     pub fn indexed(&self, prefix: &str) -> Vec<(u64, &MapStats)> {
         let mut out: Vec<(u64, &MapStats)> = self

@@ -1,4 +1,4 @@
-//! The model-independent parts of Move to Target (`planning.md`): the
+//! The model-independent parts of Move to Target (`docs/spec/planning.md`): the
 //! constants of §1, circling (§4) and the exploration fallback (§5). Both
 //! learners' `get_action()` (§2, §3) call these with their own inputs.
 
@@ -8,7 +8,7 @@ use rand::{Rng, RngExt};
 use crate::types::Action;
 
 /// A target counts as reached when the difference norm is below this
-/// (`planning.md` §1; no angle wrapping).
+/// (`docs/spec/planning.md` §1; no angle wrapping).
 pub const REACHED: f64 = 0.01;
 /// ε_close: farther than this from the precondition position, circle.
 pub const EPS_CLOSE: f64 = 0.1;
@@ -30,7 +30,7 @@ pub fn norm2(v: Vector2<f64>) -> f64 {
     (v.x * v.x + v.y * v.y).sqrt()
 }
 
-/// `speed · v / |v|`; `v` itself when `|v| = 0`. `planning.md` §3 and §5
+/// `speed · v / |v|`; `v` itself when `|v| = 0`. `docs/spec/planning.md` §3 and §5
 /// state this zero rule for the push and the exploration; for circling it is
 /// a *decision* (the original divided by zero and sent NaN, which only
 /// happens with the actuator exactly at the block's centre).
@@ -44,7 +44,7 @@ pub fn scaled(v: Vector2<f64>, speed: f64) -> Vector2<f64> {
     }
 }
 
-/// `circle(dist, r, α_act, q)` of `planning.md` §4: keep the actuator in the
+/// `circle(dist, r, α_act, q)` of `docs/spec/planning.md` §4: keep the actuator in the
 /// band 0.04 … 0.06 m around the block and move it tangentially, in the
 /// rotational direction that reaches the wanted position `q` (block frame)
 /// the shorter way.
@@ -62,7 +62,7 @@ pub fn circle(dist: f64, r: Vector2<f64>, alpha_act: f64, q: Vector2<f64>) -> Ac
     if dist > CIRCLE_FAR {
         return Action::from_vector(-scaled(r, CIRCLE_SPEED));
     }
-    // Counter-clockwise tangent built from block→actuator (`planning.md` §6:
+    // Counter-clockwise tangent built from block→actuator (`docs/spec/planning.md` §6:
     // the code's sign, not the thesis's).
     let t = scaled(Vector2::new(-r.y, r.x), CIRCLE_SPEED);
     let alpha_tgt = q.y.atan2(q.x);
@@ -71,13 +71,13 @@ pub fn circle(dist: f64, r: Vector2<f64>, alpha_act: f64, q: Vector2<f64>) -> Ac
     let ccw = if delta > 0.0 {
         delta.abs() < PI
     } else {
-        // Δ = 0 lands here: clockwise (`planning.md` §4).
+        // Δ = 0 lands here: clockwise (`docs/spec/planning.md` §4).
         delta.abs() >= PI
     };
     Action::from_vector(if ccw { t } else { -t })
 }
 
-/// The exploration fallback of `planning.md` §5: `u = g + (ξ1, ξ2)` with
+/// The exploration fallback of `docs/spec/planning.md` §5: `u = g + (ξ1, ξ2)` with
 /// ξ uniform in [−0.5, 0.5), drawn from the caller's generator, x first;
 /// `0.3 · u / |u|` (or `u` if `|u| = 0`). `g` is the global vector from the
 /// actuator to the block centre.

@@ -1,7 +1,7 @@
 //! Types shared by every model, the daemon and the experiment driver.
 //!
 //! Nothing here knows about protobuf: the daemon converts wire messages into a
-//! [`Frame`] of [`Observation`]s, the models parse those (`features.md` §1) into
+//! [`Frame`] of [`Observation`]s, the models parse those (`docs/spec/features.md` §1) into
 //! object states, and everything a model hands back for scoring or display is a
 //! model-agnostic [`Poses`].
 
@@ -11,21 +11,21 @@ use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// Id of the actuator sphere (`README.md` §4, `world.md` §3).
+/// Id of the actuator sphere (`docs/spec/README.md` §4, `docs/spec/world.md` §3).
 pub const ACTUATOR_ID: u32 = 8;
 /// Id of the blue block, `blockA` (0.5 × 0.1 m).
 pub const BLUE_ID: u32 = 15;
 /// Id of the red block, `blockB` (0.3 × 0.3 m), only in the two-object scene.
 pub const RED_ID: u32 = 27;
 
-/// Model name of the actuator; `protocol.md` §4 identifies it by this exact name.
+/// Model name of the actuator; `docs/spec/protocol.md` §4 identifies it by this exact name.
 pub const ACTUATOR_NAME: &str = "actuator";
 /// Model name of the blue block (id 15).
 pub const BLUE_NAME: &str = "blockA";
 /// Model name of the red block (id 27).
 pub const RED_NAME: &str = "blockB";
 
-/// The world's model name for an object id (`experiments.md` §2: SetPose
+/// The world's model name for an object id (`docs/spec/experiments.md` §2: SetPose
 /// commands address bodies by name).
 #[must_use]
 pub fn object_name(id: u32) -> Option<&'static str> {
@@ -38,7 +38,7 @@ pub fn object_name(id: u32) -> Option<&'static str> {
 }
 
 /// A primitive action: the actuator's planar velocity in m/s, global frame.
-/// It stays in force until replaced (`README.md` §4).
+/// It stays in force until replaced (`docs/spec/README.md` §4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Action {
     pub vx: f64,
@@ -78,8 +78,8 @@ impl Action {
 
 /// The state `s = (x, y, θ)` of one object in the global frame.
 ///
-/// Parsed states are 3-decimal rounded (`features.md` §1); predicted ones need
-/// not be. θ is never wrapped (`README.md` §5).
+/// Parsed states are 3-decimal rounded (`docs/spec/features.md` §1); predicted ones need
+/// not be. θ is never wrapped (`docs/spec/README.md` §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ObjectState {
     pub x: f64,
@@ -114,8 +114,8 @@ impl ObjectState {
     }
 
     /// `|s − other|` over all three components with the raw angle difference:
-    /// the start-position check (`experiments.md` §2) and the gate model's
-    /// reached test (`planning.md` §2) deliberately do not wrap angles.
+    /// the start-position check (`docs/spec/experiments.md` §2) and the gate model's
+    /// reached test (`docs/spec/planning.md` §2) deliberately do not wrap angles.
     #[must_use]
     pub fn distance_to(&self, other: &ObjectState) -> f64 {
         let dx = self.x - other.x;
@@ -132,7 +132,7 @@ impl ObjectState {
 
 /// One body of a world-state message, as the daemon hands it to the learner
 /// (the protobuf `ModelState` minus what no learner reads: velocities, scale,
-/// type, `is_static`; `protocol.md` §4).
+/// type, `is_static`; `docs/spec/protocol.md` §4).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Observation {
     pub name: String,
@@ -152,13 +152,13 @@ pub struct Frame {
 
 /// Model-agnostic object states of a world state, real or predicted: what the
 /// experiment driver checks start positions against, records and scores
-/// (`experiments.md` §2, §7) and what shadows display.
+/// (`docs/spec/experiments.md` §2, §7) and what shadows display.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Poses {
     /// The actuator (id [`ACTUATOR_ID`]).
     pub actuator: ObjectState,
     /// Every block, keyed by id (ascending; the gate model processes blocks
-    /// in descending id order, `gate-model.md` §1: iterate with `.rev()`).
+    /// in descending id order, `docs/spec/gate-model.md` §1: iterate with `.rev()`).
     pub blocks: BTreeMap<u32, ObjectState>,
 }
 
@@ -184,7 +184,7 @@ impl Poses {
     }
 }
 
-/// A Move-to-Target goal: a global pose for a block (`planning.md`).
+/// A Move-to-Target goal: a global pose for a block (`docs/spec/planning.md`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Target {
     pub id: u32,
@@ -194,7 +194,7 @@ pub struct Target {
 /// Why a [`Target`] cannot be pursued.
 #[derive(Clone, Debug, PartialEq, Error)]
 pub enum TargetError {
-    /// `planning.md` §6: the original raised an error for actuator targets.
+    /// `docs/spec/planning.md` §6: the original raised an error for actuator targets.
     #[error("targets for the actuator (id {ACTUATOR_ID}) are not supported")]
     Actuator,
     #[error("target pose for object {id} is not finite: {pose:?}")]
@@ -227,9 +227,9 @@ impl Target {
 }
 
 /// An object as the gate model tracks it: current state `s` and previous state
-/// `s_prev`, whose difference is the "velocity" feature (`features.md` §1 step 5,
+/// `s_prev`, whose difference is the "velocity" feature (`docs/spec/features.md` §1 step 5,
 /// §3.1). How `s_prev` is maintained (including the stale-after-reset quirk) is
-/// the gate model's business (`gate-model.md` §2–§4).
+/// the gate model's business (`docs/spec/gate-model.md` §2–§4).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrackedObject {
     pub id: u32,
@@ -239,20 +239,20 @@ pub struct TrackedObject {
 
 impl TrackedObject {
     /// A freshly parsed object: `s_prev` is a copy of `s` (zero displacement,
-    /// `features.md` §1 step 5).
+    /// `docs/spec/features.md` §1 step 5).
     #[must_use]
     pub const fn fresh(id: u32, s: ObjectState) -> Self {
         Self { id, s, s_prev: s }
     }
 
-    /// `v(o) = o.s[0:2] − o.s_prev[0:2]` (`features.md` §3.1), metres per update.
+    /// `v(o) = o.s[0:2] − o.s_prev[0:2]` (`docs/spec/features.md` §3.1), metres per update.
     #[must_use]
     pub fn velocity(&self) -> Vector2<f64> {
         Vector2::new(self.s.x - self.s_prev.x, self.s.y - self.s_prev.y)
     }
 
     /// `s_prev := s; s := new` — the in-place move of a record to a newly
-    /// observed state (`gate-model.md` §2, §3).
+    /// observed state (`docs/spec/gate-model.md` §2, §3).
     pub fn advance(&mut self, new: ObjectState) {
         self.s_prev = self.s;
         self.s = new;
@@ -273,7 +273,7 @@ mod tests {
     }
 
     #[test]
-    // The literals are planning.md §6's example, not approximations of π.
+    // The literals are docs/spec/planning.md §6's example, not approximations of π.
     #[allow(clippy::approx_constant)]
     fn distance_to_does_not_wrap_angles() {
         let a = ObjectState::new(0.0, 0.0, -3.14);

@@ -55,12 +55,14 @@ enum Cmd {
     Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
     /// 150 messages at 100 Hz each, and report the blue block's outcome.
-    #[command(long_about = "Run the thesis's calibration sweep (world.md §10).\n\n\
+    #[command(
+        long_about = "Run the thesis's calibration sweep (docs/spec/world.md §10).\n\n\
                       For each start x0 = -0.35 + 0.035·i (i = 0…20): reset, place the actuator at \
                       (x0, 0, 0.03), command Move (0, 0.5) m/s, step 150 messages at 100 Hz \
                       (1500 steps of 1 ms), and report the blue block (blockA): the first message \
                       whose interval contained an actuator–block contact, its final x, y and yaw, \
-                      its translation from the start and its rotation.")]
+                      its translation from the start and its rotation."
+    )]
     Sweep(SweepArgs),
 }
 

@@ -224,7 +224,7 @@ mod tests {
             .map(|s| (s.name.as_str(), s.geometry))
             .collect();
         let size = |x, y, z| Some(pb::shape::Geometry::BoxSize(pb::Vector3d { x, y, z }));
-        // world.md's body table.
+        // docs/spec/world.md's body table.
         assert_eq!(
             shapes,
             [

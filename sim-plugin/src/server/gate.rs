@@ -2,7 +2,7 @@
 //! commands reach the world.
 //!
 //! A command is checked completely before it is accepted, so that an invalid
-//! one is answered at once and the world never sees it (`protocol.md` §3):
+//! one is answered at once and the world never sees it (`docs/spec/protocol.md` §3):
 //! first the message-only checks of [`pushlearn::wire::validate`], then the
 //! scene's (body names, positions), then those that depend on the commands
 //! accepted before it (pause state, ghost count). The last kind is answered

@@ -69,7 +69,7 @@ pub const DEFAULT_SLOW_CLIENT_LIMIT: Duration = Duration::from_secs(5);
 /// ever advancing it; commands beyond it are refused.
 pub const MAX_QUEUED_COMMANDS: usize = 65_536;
 
-/// How the world paces its steps (`world.md` §8).
+/// How the world paces its steps (`docs/spec/world.md` §8).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Timing {
     /// Step continuously at `steps_per_second` wall-clock steps per second
@@ -294,7 +294,7 @@ impl Shared {
 
 /// The message the daemon publishes for `snapshot`: the per-publish work
 /// beyond stepping (the writer then frames it). Public so that the overhead
-/// bench (`benches/round_trip.rs`) can charge the same work to the world
+/// bench (`sim-plugin/benches/round_trip.rs`) can charge the same work to the world
 /// stepped in-process.
 pub fn state_message(
     snapshot: &crate::world::Snapshot,

@@ -30,7 +30,7 @@ const MAX_LAG: Duration = Duration::from_millis(100);
 /// In lock-step, how many published states may wait for their writers'
 /// wake-up while the physics runs on. Waking an idle writer thread costs the
 /// waker ≈ 9 µs on a virtual machine whose idle vCPUs halt (docs/
-/// performance.md §4), a tenth of a 100 Hz interval's work; a client that
+/// docs/performance.md §4), a tenth of a 100 Hz interval's work; a client that
 /// keeps Advances queued gets its states in pairs instead, each pair at
 /// most one interval late. A client that waits for each state before it
 /// advances is never kept waiting: the writers are woken whenever the

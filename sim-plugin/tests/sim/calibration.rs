@@ -1,5 +1,5 @@
-//! The world's acceptance tests: the thesis's physical facts (`world.md`
-//! §10) and the known issues of libode 0.16 (`world.md` §12).
+//! The world's acceptance tests: the thesis's physical facts (`docs/spec/world.md`
+//! §10) and the known issues of libode 0.16 (`docs/spec/world.md` §12).
 //!
 //! The tolerances are the project's calibration bounds; a world that misses
 //! them is mis-configured (friction rule, actuator mass, z clamp, velocity
@@ -117,7 +117,7 @@ fn push_from(space: SpaceKind, x0: f64) -> SweepRow {
     run(&mut world, &SweepOptions::default(), x0).expect("run succeeds")
 }
 
-/// `world.md` §12: with libode 0.16.2's `dHashSpace` at the top level the
+/// `docs/spec/world.md` §12: with libode 0.16.2's `dHashSpace` at the top level the
 /// actuator passes through the block for starts with x0 > 0. The thesis
 /// world therefore uses a simple space; a push from +0.105 must rotate the
 /// block as much as one from −0.105, mirrored.
@@ -138,7 +138,7 @@ fn hash_space_regression_positive_start_pushes_like_the_mirrored_one() {
 
 /// Documents why the top-level space is simple: libode 0.16.2's hash space
 /// misses the actuator–block contact here. If this starts failing, the
-/// library was fixed and the note in `world.md` §12 can be revisited.
+/// library was fixed and the note in `docs/spec/world.md` §12 can be revisited.
 #[test]
 fn hash_space_at_the_top_level_misses_the_contact() {
     let plus = push_from(SpaceKind::Hash, 0.105);
@@ -182,7 +182,7 @@ fn reset_restores_every_body_exactly() {
 }
 
 /// The block must not keep sliding once the actuator has swung off it
-/// (`world.md` §10): by the end of a corner push it is at rest.
+/// (`docs/spec/world.md` §10): by the end of a corner push it is at rest.
 #[test]
 fn block_stops_after_the_actuator_swings_off() {
     let scene = Scene::builtin("one_block").expect("embedded scene parses");
@@ -197,7 +197,7 @@ fn block_stops_after_the_actuator_swings_off() {
     assert!(speed < 1e-3, "still sliding at {speed} m/s");
 }
 
-/// `world.md` §10: the red block rotates only when pushed near its corners.
+/// `docs/spec/world.md` §10: the red block rotates only when pushed near its corners.
 #[test]
 fn red_block_turns_only_when_pushed_near_a_corner() {
     let scene = Scene::builtin("two_blocks").expect("embedded scene parses");

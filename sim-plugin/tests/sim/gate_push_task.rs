@@ -1,9 +1,9 @@
 //! Trace-driven test of the gate model: the Push Task Simulation
-//! (`experiments.md` §3.1) with 10 random training runs, on pushes simulated
+//! (`docs/spec/experiments.md` §3.1) with 10 random training runs, on pushes simulated
 //! by our own world in-process, scored with `learner::eval`.
 //!
 //! The thesis reports, over 20 folds, 0.049 m / 0.15 rad / 0.0022 m after 10
-//! runs (`reference-results.md` §3.4); the original learner re-run on a
+//! runs (`docs/spec/reference-results.md` §3.4); the original learner re-run on a
 //! reconstructed world gives 0.05 m / 0.15 rad / 0.0005 m (§10, no command
 //! latency, as here). The bounds below leave room for 5 folds instead of 20
 //! and for the knife-edge noise §10 describes (up to 0.01 m / 0.03 rad on the
@@ -23,7 +23,7 @@ use crate::push_frames::record_run;
 const FOLDS: u64 = 5;
 const TRAINING_RUNS: usize = 10;
 
-/// `check_start_positions` of `experiments.md` §2 as an assertion: in
+/// `check_start_positions` of `docs/spec/experiments.md` §2 as an assertion: in
 /// lock-step nothing can be stale, so a failure is a bug here.
 fn assert_start(model: &GateModel, frames: &[Frame], x0: f64) {
     let poses = GateModel::poses(&model.parse(&frames[0]).expect("world frames parse"));
@@ -46,7 +46,7 @@ fn gate_model_push_task_after_ten_random_training_runs() {
     let mut node_counts = Vec::new();
 
     for fold in 0..FOLDS {
-        // experiments.md §5: one seeded generator per (N_train, fold).
+        // docs/spec/experiments.md §5: one seeded generator per (N_train, fold).
         let mut rng = ChaCha8Rng::seed_from_u64(fold);
         let mut model = GateModel::default();
         for _ in 0..TRAINING_RUNS {
@@ -58,9 +58,9 @@ fn gate_model_push_task_after_ten_random_training_runs() {
         }
         let stats = model.stats();
         let map = |key: &str| stats.maps[key];
-        // 149 updates per training run (experiments.md §8); the actuator
+        // 149 updates per training run (docs/spec/experiments.md §8); the actuator
         // model sees one input only and keeps its first two nodes
-        // (gate-model.md §8, reference-results.md §4.2).
+        // (docs/spec/gate-model.md §8, docs/spec/reference-results.md §4.2).
         assert_eq!(
             map(stat_keys::GATE).update_calls,
             149 * TRAINING_RUNS as u64

@@ -1,8 +1,8 @@
 //! Trace-driven acceptance test of the interaction model: the Push Task
-//! Simulation on random training data (`experiments.md` §3.1) with pushes
+//! Simulation on random training data (`docs/spec/experiments.md` §3.1) with pushes
 //! simulated in-process by our own world, scored with `learner::eval`.
 //!
-//! Reference (`reference-results.md` §3.2, 20 folds, after 10 training
+//! Reference (`docs/spec/reference-results.md` §3.2, 20 folds, after 10 training
 //! runs): block position 0.117 m, orientation 0.327 rad over all 21 test
 //! positions; the original re-run on a reconstructed world (§10) gave
 //! 0.13 m / 0.33 rad. The bounds below (0.15 m, 0.40 rad over 5 folds) leave
@@ -46,7 +46,7 @@ fn push_task_after_ten_random_training_runs() {
     let mut folds = Vec::new();
     for fold in 0..FOLDS {
         // One seeded generator per fold for the training starts
-        // (`experiments.md` §5).
+        // (`docs/spec/experiments.md` §5).
         let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_0000 + fold);
         let mut model = InteractionModel::default();
         for _ in 0..TRAINING_RUNS {
@@ -103,7 +103,7 @@ fn push_task_after_ten_random_training_runs() {
     }
 
     for f in &folds {
-        // 149 updates per training run (`experiments.md` §2, §8).
+        // 149 updates per training run (`docs/spec/experiments.md` §2, §8).
         assert_eq!(f.acs_updates, 149 * TRAINING_RUNS as u64);
     }
     assert!(

@@ -302,7 +302,7 @@ fn builtin_scenes_load_by_name() {
     for name in names {
         let scene = Scene::load(name).expect("loads");
         assert_eq!(scene.name, name);
-        // The original's red-block inertia is kept (world.md §12).
+        // The original's red-block inertia is kept (docs/spec/world.md §12).
         if let Some(red) = scene.body_index("blockB") {
             assert_eq!(
                 scene.bodies[red].inertia,

@@ -26,7 +26,7 @@ pub fn frame(s: &Snapshot) -> Frame {
 }
 
 /// The 151 messages of one push-task run from `x0` as the driver meets them:
-/// 150 processed and the one that ends the run (`experiments.md` §2).
+/// 150 processed and the one that ends the run (`docs/spec/experiments.md` §2).
 pub fn record_run(world: &mut World, x0: f64) -> Vec<Frame> {
     let action = [PUSH_ACTION.vx, PUSH_ACTION.vy];
     record_push_run(world, x0, action, MESSAGES_PER_RUN + 1)

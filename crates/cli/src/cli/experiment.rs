@@ -33,7 +33,7 @@ pub struct ExperimentArgs {
 #[derive(Debug, Subcommand)]
 enum ExperimentCommand {
     /// Push Task Simulation: train the forward model on N pushes, then
-    /// predict 150 steps of 21 test pushes without feedback (experiments.md §3).
+    /// predict 150 steps of 21 test pushes without feedback (docs/spec/experiments.md §3).
     #[command(after_help = "Thesis tables:\n  \
         pushlearn experiment push-task --model gate                               # §3.4, §4.2\n  \
         pushlearn experiment push-task --model interaction                        # §3.2, §4.1\n  \
@@ -46,7 +46,7 @@ enum ExperimentCommand {
         pushlearn experiment push-task --model interaction --variant draft --selector tree --train-runs 3,10")]
     PushTask(PushTaskArgs),
     /// Move to Target: train on 8 fixed pushes, then plan pushes until the
-    /// block reaches a target pose (experiments.md §4).
+    /// block reaches a target pose (docs/spec/experiments.md §4).
     #[command(after_help = "Thesis tables:\n  \
         pushlearn experiment move-to-target --model gate          # §8.2\n  \
         pushlearn experiment move-to-target --model interaction   # §8.1")]

@@ -1,4 +1,4 @@
-//! Generalisation with constant feedback (`experiments.md` §3.4), a
+//! Generalisation with constant feedback (`docs/spec/experiments.md` §3.4), a
 //! qualitative experiment: no training phase; in each test run the model
 //! keeps learning from the real states while its predictions are chained
 //! without correction. The thesis showed images only; we report, per run,
@@ -73,7 +73,7 @@ impl<M: Model> Task<M> for FeedbackTask {
                 let next = match core.last_prediction.take() {
                     None => {
                         // Predicted before the model registers the world, as
-                        // in the original (`experiments.md` §3.4).
+                        // in the original (`docs/spec/experiments.md` §3.4).
                         let first = model.predict(world, direction);
                         model.reset_objects(world);
                         core.last_action = Some(Action::ZERO);

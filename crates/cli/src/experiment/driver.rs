@@ -1,4 +1,4 @@
-//! The message handler common to every experiment (`experiments.md` §2): the
+//! The message handler common to every experiment (`docs/spec/experiments.md` §2): the
 //! state machine that drops the message after a reset, verifies start
 //! positions (correcting them with SetPose), and hands every other message
 //! to the current experiment's [`Task`].
@@ -16,11 +16,11 @@ use serde::{Deserialize, Serialize};
 
 use pushlearn::wire::pb::client_message::Payload;
 
-/// `experiments.md` §2: a start pose farther than this (norm over x, y, θ,
+/// `docs/spec/experiments.md` §2: a start pose farther than this (norm over x, y, θ,
 /// unwrapped) from the expected one is corrected.
 pub const START_TOLERANCE: f64 = 0.01;
 
-/// z of a SetPose for the actuator and for blocks (`protocol.md` §6).
+/// z of a SetPose for the actuator and for blocks (`docs/spec/protocol.md` §6).
 pub const ACTUATOR_Z: f64 = 0.03;
 /// See [`ACTUATOR_Z`].
 pub const BLOCK_Z: f64 = 0.05;
@@ -47,7 +47,7 @@ impl std::ops::AddAssign for Counters {
     }
 }
 
-/// The driver variables of `experiments.md` §2 and the run primitives of
+/// The driver variables of `docs/spec/experiments.md` §2 and the run primitives of
 /// §2.1; the tasks change them only through these methods and fields.
 #[derive(Debug)]
 pub struct Core<M: Model> {
@@ -119,7 +119,7 @@ impl<M: Model> Core<M> {
     /// `start_run` / `start_target_run`: place the actuator at `actuator`
     /// (yaw 0) and expect the blocks at `blocks`. `ignore_next` is false for
     /// Move to Target, whose original did not drop a message there
-    /// (`experiments.md` §8; the position check covers it).
+    /// (`docs/spec/experiments.md` §8; the position check covers it).
     pub fn start_run(
         &mut self,
         actuator: (f64, f64),
@@ -179,7 +179,7 @@ impl<M: Model> Core<M> {
     }
 }
 
-/// One experiment's handler (`experiments.md` §3–§4): called for every
+/// One experiment's handler (`docs/spec/experiments.md` §3–§4): called for every
 /// message that passed the common checks, with the model's parse of it.
 pub trait Task<M: Model> {
     /// Handles one message. Commands go through `core`; the job ends with
@@ -187,7 +187,7 @@ pub trait Task<M: Model> {
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World);
 }
 
-/// The state machine of `experiments.md` §2 for one job: a fresh model and
+/// The state machine of `docs/spec/experiments.md` §2 for one job: a fresh model and
 /// the task that drives it.
 #[derive(Debug)]
 pub struct Driver<M: Model, T: Task<M>> {
@@ -275,7 +275,7 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     }
 }
 
-/// Expected start poses of the blocks in push-task runs (`experiments.md`
+/// Expected start poses of the blocks in push-task runs (`docs/spec/experiments.md`
 /// §2.1; the red block's entry only matters in the two-object scene).
 #[must_use]
 pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {

@@ -1,5 +1,5 @@
 //! A driver's connection to one world: the socket side of
-//! `experiments.md` §2 and the pacing of `world.md` §8.
+//! `docs/spec/experiments.md` §2 and the pacing of `docs/spec/world.md` §8.
 //!
 //! * **lock-step**: the world waits for Advance after every publish. The
 //!   link sends Advance, takes the first state produced after it (its
@@ -9,7 +9,7 @@
 //!   driver's commands are always in force from the next interval on.
 //! * **realtime**: the world does not wait. The link handles every state as
 //!   it comes and counts the messages whose handling took longer than the
-//!   original's budget of 2/f seconds (`experiments.md` §6).
+//!   original's budget of 2/f seconds (`docs/spec/experiments.md` §6).
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};

@@ -1,4 +1,4 @@
-//! The thesis's experiments over the real sockets (`experiments.md`).
+//! The thesis's experiments over the real sockets (`docs/spec/experiments.md`).
 //!
 //! * [`driver`]: the message handler common to all experiments (§2), pure;
 //! * [`push_task`], [`constant_feedback`], [`move_to_target`]: the
@@ -28,16 +28,16 @@ use link::Pacing;
 use pushlearn::client::ClientError;
 
 /// Largest command latency, in physics steps, of the world's latency
-/// emulation (`world.md` §8: default L_max = 5).
+/// emulation (`docs/spec/world.md` §8: default L_max = 5).
 pub const LATENCY_MAX_STEPS: u32 = 5;
 
-/// The thesis's model update rate (`experiments.md` §6).
+/// The thesis's model update rate (`docs/spec/experiments.md` §6).
 pub const RATE_HZ: u32 = 100;
 
-/// The constant-feedback images' rate (`experiments.md` §3.4, configuration 2).
+/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4, configuration 2).
 pub const LOW_RATE_HZ: u32 = 10;
 
-/// How the world is timed (`world.md` §8).
+/// How the world is timed (`docs/spec/world.md` §8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {

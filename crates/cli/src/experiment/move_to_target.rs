@@ -1,8 +1,8 @@
-//! Move to Target (`experiments.md` §4): the inverse-model test.
+//! Move to Target (`docs/spec/experiments.md` §4): the inverse-model test.
 //!
 //! One job is one (target, repetition): a fresh model, the eight fixed
 //! training runs of §4.1, then one test run in which the model plans every
-//! action towards the target (`planning.md`) while it keeps learning. The
+//! action towards the target (`docs/spec/planning.md`) while it keeps learning. The
 //! run ends when the model finds the target reached or after the step limit.
 
 use std::collections::BTreeMap;

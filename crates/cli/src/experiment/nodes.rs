@@ -1,4 +1,4 @@
-//! Node statistics over folds (`experiments.md` §7.5): mean and population
+//! Node statistics over folds (`docs/spec/experiments.md` §7.5): mean and population
 //! standard deviation of every map's counters, and for the interaction
 //! model the Abstract Collections, by the thesis's stated definition and by
 //! what its analysis script actually computed.

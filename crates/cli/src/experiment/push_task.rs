@@ -1,4 +1,4 @@
-//! Push Task Simulation (`experiments.md` §3): the forward-model test.
+//! Push Task Simulation (`docs/spec/experiments.md` §3): the forward-model test.
 //!
 //! One job is one (N_train, fold): a fresh model, N_train training runs
 //! pushing straight ahead from the job's training starts, then one chained
@@ -26,14 +26,14 @@ use super::ExperimentError;
 /// Name used for seeds and reports.
 pub const EXPERIMENT: &str = "push-task";
 
-/// The thesis's learning-curve N_train values (`experiments.md` §3.1).
+/// The thesis's learning-curve N_train values (`docs/spec/experiments.md` §3.1).
 pub const DEFAULT_TRAIN_RUNS: [usize; 7] = [1, 2, 3, 5, 10, 20, 30];
 
-/// Training starts of the two-object experiment (`experiments.md` §3.3); the
+/// Training starts of the two-object experiment (`docs/spec/experiments.md` §3.3); the
 /// first variant uses the first six.
 pub const TWO_OBJECT_TRAINING_STARTS: [f64; 7] = [-0.18, 0.18, 0.0, -0.73, -0.47, -0.6, -0.4];
 
-/// The push-task variants of `experiments.md` §3.1–§3.4.
+/// The push-task variants of `docs/spec/experiments.md` §3.1–§3.4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Variant {
@@ -52,7 +52,7 @@ pub enum Variant {
 }
 
 /// Seed of the draft protocol's test starts: the original reseeded its
-/// generator with 4321 before every test phase (`experiments.md` §5), which
+/// generator with 4321 before every test phase (`docs/spec/experiments.md` §5), which
 /// is what the draft's "another seed is set after the training is done, so
 /// that all models are tested on the same starting positions" describes.
 /// The original's generator cannot be reproduced, so the 20 starts differ
@@ -76,7 +76,7 @@ pub fn draft_test_positions() -> Vec<f64> {
 
 /// How a push-task experiment places its runs and how fast the world
 /// publishes: the variant's protocol, changed by the driver's
-/// configuration bits (`experiments.md` §1: 2 LOWFREQ, 4 ALLOWMISSPOSITIONS,
+/// configuration bits (`docs/spec/experiments.md` §1: 2 LOWFREQ, 4 ALLOWMISSPOSITIONS,
 /// 8 FIXFIRSTTHREETRAININGRUNS).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Protocol {
@@ -208,7 +208,7 @@ pub struct PushJob {
 
 impl PushJob {
     /// The jobs of one experiment in report order: for each N_train, for each
-    /// fold (`experiments.md` §3, outer loops).
+    /// fold (`docs/spec/experiments.md` §3, outer loops).
     #[must_use]
     pub fn all(
         protocol: impl Into<Protocol>,
@@ -276,7 +276,7 @@ pub struct PushTask {
 }
 
 /// A test run's end: the real state of the message that ended it and the
-/// chained prediction scored against it (`experiments.md` §7.2).
+/// chained prediction scored against it (`docs/spec/experiments.md` §7.2).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EndPoses {
     /// The run's start x of the actuator.

@@ -3,7 +3,7 @@
 //! In lock-step without latency emulation the world is a deterministic
 //! function of the commands it received since its last reset: `Reset`
 //! restores every body, clears the contacts and reseeds QuickStep's random
-//! stream (`world.md` §12), and the state that survives a reset — the
+//! stream (`docs/spec/world.md` §12), and the state that survives a reset — the
 //! actuator command and the publish rate — is set by the reset batch itself
 //! or tracked here. So the frames a driver sees after a reset batch depend
 //! only on

@@ -67,7 +67,7 @@ impl Plan {
 
     /// Commands sent before a job's first Advance: with latency emulation
     /// the job's latency seed, so that the world's jitter does not depend on
-    /// earlier jobs or on which worker runs the job (`experiments.md` §5).
+    /// earlier jobs or on which worker runs the job (`docs/spec/experiments.md` §5).
     fn job_setup(&self, latency_seed: u64) -> Vec<Payload> {
         if self.mode.jitter() {
             vec![Payload::latency_seed(latency_seed)]
@@ -85,7 +85,7 @@ fn drive<M: Model, T: Task<M>>(
     rate_hz: u32,
     setup: Vec<Payload>,
 ) -> Result<(T, Timing, super::driver::Counters), ExperimentError> {
-    // A fold starts from an untrained instance (`experiments.md` §2 new_fold).
+    // A fold starts from an untrained instance (`docs/spec/experiments.md` §2 new_fold).
     let model = untrained
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner)
@@ -96,7 +96,7 @@ fn drive<M: Model, T: Task<M>>(
     Ok((task, timing, counters))
 }
 
-/// Push Task Simulation (`experiments.md` §3.1–§3.3).
+/// Push Task Simulation (`docs/spec/experiments.md` §3.1–§3.3).
 ///
 /// # Errors
 /// The first failing job, or a summary that cannot be formed.
@@ -143,7 +143,7 @@ pub fn push_task<M: Model>(
     })
 }
 
-/// Generalisation with constant feedback (`experiments.md` §3.4): one job
+/// Generalisation with constant feedback (`docs/spec/experiments.md` §3.4): one job
 /// with both test runs, at 10 Hz. `untrained` must use the 10 Hz thresholds.
 ///
 /// # Errors
@@ -190,7 +190,7 @@ pub fn constant_feedback<M: Model>(
     })
 }
 
-/// Move to Target (`experiments.md` §4).
+/// Move to Target (`docs/spec/experiments.md` §4).
 ///
 /// # Errors
 /// The first failing job.

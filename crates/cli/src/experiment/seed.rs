@@ -1,4 +1,4 @@
-//! Seeds (`experiments.md` §5): every job gets its own generator for training
+//! Seeds (`docs/spec/experiments.md` §5): every job gets its own generator for training
 //! starts and the planner's exploration, and its own seed for the world's
 //! latency emulation, both derived from the user's `--seed`, the experiment
 //! and the job's coordinates. A job's results therefore do not depend on

@@ -3,11 +3,11 @@
 //!
 //! For every world state: parse it, re-synchronise (first state) or update
 //! the model with the action that was in force, choose the next action (a
-//! fixed one, or the planner towards a target, `planning.md`), predict the
+//! fixed one, or the planner towards a target, `docs/spec/planning.md`), predict the
 //! next state, and send Move — plus, optionally, the prediction as the
 //! `*Shadow` ghost poses. In lock-step the daemon then sends Advance; in
 //! realtime it measures each message's work against the 2/f budget
-//! (`experiments.md` §6).
+//! (`docs/spec/experiments.md` §6).
 
 use std::time::{Duration, Instant};
 
@@ -188,7 +188,7 @@ impl<M: Model> Learner<M> {
 }
 
 /// The predicted poses, and the blue block's target if there is one, as one
-/// SetPose of the ghost bodies (`world.md` §3). The target is sent with every
+/// SetPose of the ghost bodies (`docs/spec/world.md` §3). The target is sent with every
 /// prediction rather than once, because a Reset clears the ghosts.
 fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
     let ghost = |id, s: ObjectState, suffix: &str| {

@@ -2,7 +2,7 @@
 //! breaks (the world restarted, the network failed) it reconnects with
 //! exponential backoff, logging every attempt, and re-synchronises the model
 //! on the first state after the gap; when the world reports a physics
-//! blow-up (it has reset itself, `protocol.md` §6) it re-synchronises too.
+//! blow-up (it has reset itself, `docs/protocol.md` §6) it re-synchronises too.
 //! In neither case does the model train on a transition across the gap.
 
 use std::time::{Duration, Instant};

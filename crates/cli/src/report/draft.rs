@@ -1,5 +1,5 @@
 //! The thesis draft's push-task tables (draft §6.1.2, Tables 6.1 "Test1"
-//! and 6.2 "Test2", chapter 6 of `/work/shared/thesis-draft.txt`): per
+//! and 6.2 "Test2", chapter 6 of the thesis draft): per
 //! model configuration the actuator's and the block's key-point score —
 //! final difference, accumulated difference and mean difference — as the
 //! mean over the test runs, ours beside the draft's.
@@ -273,7 +273,7 @@ pub fn tables(out: &mut impl Write, report: &DraftReport) -> io::Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "Same runs, final thesis errors (experiments.md §7.2) and AC selector agreement"
+        "Same runs, final thesis errors (docs/spec/experiments.md §7.2) and AC selector agreement"
     )?;
     writeln!(
         out,

@@ -21,7 +21,7 @@ use crate::experiment::nodes::NodeSummary;
 use crate::experiment::push_task::CurveEntry;
 
 /// How an experiment's run went: message counts, the timing requirement of
-/// `experiments.md` §6, start-position corrections.
+/// `docs/spec/experiments.md` §6, start-position corrections.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RunInfo {
     pub workers: usize,
@@ -31,7 +31,7 @@ pub struct RunInfo {
     /// Messages whose handling took longer than `budget_seconds`.
     pub too_slow: u64,
     pub too_slow_fraction: f64,
-    /// 2/f (`experiments.md` §6).
+    /// 2/f (`docs/spec/experiments.md` §6).
     pub budget_seconds: f64,
     pub mean_handling_ms: f64,
     /// Median and 99th percentile of the handling times (within 1/16).

@@ -1,5 +1,5 @@
 //! Figures of the report documents, each written as PNG and SVG: learning
-//! curves with error bars beside the thesis's (`reference-results.md` §3.2,
+//! curves with error bars beside the thesis's (`docs/spec/reference-results.md` §3.2,
 //! §3.4), per-position errors (§5, §6), top-down snapshots of actual versus
 //! predicted end configurations (predicted bodies translucent, as in the
 //! thesis's figures), constant-feedback errors per message (§7) and Move to

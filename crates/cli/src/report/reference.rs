@@ -1,5 +1,5 @@
 //! The thesis's numbers, as data, each table with its source in
-//! `/work/shared/spec/reference-results.md` ([text]: printed in the thesis;
+//! `docs/spec/reference-results.md` ([text]: printed in the thesis;
 //! [figure]: read out of its vector figures to about ±0.0005). The report
 //! prints them beside ours; nothing else uses them.
 
@@ -13,7 +13,7 @@ pub struct Ms(pub f64, pub f64);
 
 /// One N_train of a learning curve (§3.2, §3.4): all 21 positions and the
 /// 15 interacting ones; the actuator over the interacting positions is the
-/// original script's (mean + std) / 2 value (`experiments.md` §7.4).
+/// original script's (mean + std) / 2 value (`docs/spec/experiments.md` §7.4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CurveRef {
     pub train_runs: usize,
@@ -115,7 +115,7 @@ pub fn move_to_target(model: crate::models::ModelKind) -> &'static [MttRef; 4] {
     }
 }
 
-/// Interaction model learning curve, random training data: `reference-results.md` §3.2 [figure].
+/// Interaction model learning curve, random training data: `docs/spec/reference-results.md` §3.2 [figure].
 pub const INTERACTION_CURVE: [CurveRef; 7] = [
     CurveRef {
         train_runs: 1,
@@ -181,7 +181,7 @@ pub const INTERACTION_CURVE: [CurveRef; 7] = [
         actuator_interacting_quirk: Ms(0.0276, 0.0206),
     },
 ];
-/// Gate model learning curve, random training data: `reference-results.md` §3.4 [figure].
+/// Gate model learning curve, random training data: `docs/spec/reference-results.md` §3.4 [figure].
 pub const GATE_CURVE: [CurveRef; 7] = [
     CurveRef {
         train_runs: 1,
@@ -247,7 +247,7 @@ pub const GATE_CURVE: [CurveRef; 7] = [
         actuator_interacting_quirk: Ms(0.0014, 0.0005),
     },
 ];
-/// Interaction model node counts after training: `reference-results.md` §4.1 [text].
+/// Interaction model node counts after training: `docs/spec/reference-results.md` §4.1 [text].
 /// "AC Updates / AC Nodes" and "# ACs" are the original script's quirky values (§7.5).
 pub const INTERACTION_NODES: [InteractionNodesRef; 7] = [
     InteractionNodesRef {
@@ -307,7 +307,7 @@ pub const INTERACTION_NODES: [InteractionNodesRef; 7] = [
         acs_nodes: Ms(1086.95, 76.74),
     },
 ];
-/// Gate model node counts after training: `reference-results.md` §4.2 [text].
+/// Gate model node counts after training: `docs/spec/reference-results.md` §4.2 [text].
 pub const GATE_NODES: [GateNodesRef; 7] = [
     GateNodesRef {
         train_runs: 1,
@@ -360,7 +360,7 @@ pub const GATE_NODES: [GateNodesRef; 7] = [
     },
 ];
 /// Interaction model, three selected training runs, per test position:
-/// `reference-results.md` §5.2 [figure].
+/// `docs/spec/reference-results.md` §5.2 [figure].
 pub const INTERACTION_FIXED_THREE: [PositionRef; 21] = [
     PositionRef {
         x0: -0.35,
@@ -469,7 +469,7 @@ pub const INTERACTION_FIXED_THREE: [PositionRef; 21] = [
     },
 ];
 /// Gate model, three selected training runs, per test position:
-/// `reference-results.md` §5.3 [figure].
+/// `docs/spec/reference-results.md` §5.3 [figure].
 pub const GATE_FIXED_THREE: [PositionRef; 21] = [
     PositionRef {
         x0: -0.35,
@@ -577,7 +577,7 @@ pub const GATE_FIXED_THREE: [PositionRef; 21] = [
         ori: Ms(0.0, 0.0),
     },
 ];
-/// Gate model, two objects, six training runs: `reference-results.md` §6.1 [figure].
+/// Gate model, two objects, six training runs: `docs/spec/reference-results.md` §6.1 [figure].
 pub const TWO_OBJECTS_SIX: [TwoObjectRef; 21] = [
     TwoObjectRef {
         x0: -0.8,
@@ -727,7 +727,7 @@ pub const TWO_OBJECTS_SIX: [TwoObjectRef; 21] = [
         blue_ori: Ms(0.0, 0.0),
     },
 ];
-/// Gate model, two objects, seven training runs: `reference-results.md` §6.2 [figure].
+/// Gate model, two objects, seven training runs: `docs/spec/reference-results.md` §6.2 [figure].
 pub const TWO_OBJECTS_SEVEN: [TwoObjectRef; 21] = [
     TwoObjectRef {
         x0: -0.8,
@@ -877,7 +877,7 @@ pub const TWO_OBJECTS_SEVEN: [TwoObjectRef; 21] = [
         blue_ori: Ms(0.0, 0.0),
     },
 ];
-/// Interaction model, Move to Target, targets 1–4: `reference-results.md` §8.1 [text].
+/// Interaction model, Move to Target, targets 1–4: `docs/spec/reference-results.md` §8.1 [text].
 pub const INTERACTION_MTT: [MttRef; 4] = [
     MttRef {
         reached: 3,
@@ -908,7 +908,7 @@ pub const INTERACTION_MTT: [MttRef; 4] = [
         steps_reached: Some(1730.5),
     },
 ];
-/// Gate model, Move to Target, targets 1–4: `reference-results.md` §8.2 [text].
+/// Gate model, Move to Target, targets 1–4: `docs/spec/reference-results.md` §8.2 [text].
 pub const GATE_MTT: [MttRef; 4] = [
     MttRef {
         reached: 4,
@@ -960,7 +960,7 @@ mod tests {
             INTERACTION_NODES.map(|r| r.train_runs),
             GATE_CURVE.map(|r| r.train_runs)
         );
-        // 149 updates per training run (`experiments.md` §8).
+        // 149 updates per training run (`docs/spec/experiments.md` §8).
         for r in GATE_NODES {
             assert_eq!(r.gate_updates, 149.0 * r.train_runs as f64);
         }

@@ -99,7 +99,7 @@ fn curve(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::
     writeln!(
         out,
         "The 15 interacting test positions (−0.245 … 0.245) [{source}]; last column: the thesis \
-         script's actuator value, mean of (mean + std) / 2 (experiments.md §7.4)"
+         script's actuator value, mean of (mean + std) / 2 (docs/spec/experiments.md §7.4)"
     )?;
     writeln!(
         out,
@@ -280,7 +280,7 @@ fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::
             writeln!(
                 out,
                 "Node counts when training ended: mean (population std) over folds [§4.1; thesis: random \
-                 training data; its AC columns are the script's values, experiments.md §7.5]"
+                 training data; its AC columns are the script's values, docs/spec/experiments.md §7.5]"
             )?;
             writeln!(
                 out,
@@ -357,7 +357,7 @@ pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
 }
 
 /// The constant-feedback report: per run, the error of each chained
-/// prediction (qualitative, `experiments.md` §3.4).
+/// prediction (qualitative, `docs/spec/experiments.md` §3.4).
 ///
 /// # Errors
 /// Writing to `out`.

@@ -1,5 +1,5 @@
 //! The AIM network: prototypes per (feature, sign), training and the greedy
-//! query (inverse-model.md §2, §4).
+//! query (docs/spec/inverse-model.md §2, §4).
 
 use serde::{Deserialize, Serialize};
 
@@ -32,7 +32,7 @@ impl PrototypeKey {
         Self { feature, sign }
     }
 
-    /// `key_of(j)` of inverse-model.md §4 for a component `D_j = v`: `(j,
+    /// `key_of(j)` of docs/spec/inverse-model.md §4 for a component `D_j = v`: `(j,
     /// sign v)`, but `(0, +)` for a zero of either sign (the original keyed
     /// prototypes by the text of `j · sign(v)`, which is "0" for every zero
     /// component), and `None` for NaN (no prototype can match it).
@@ -49,7 +49,7 @@ impl PrototypeKey {
     }
 }
 
-/// Averaging Inverse Model (inverse-model.md).
+/// Averaging Inverse Model (docs/spec/inverse-model.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "InverseModelState")]
 pub struct InverseModel {
@@ -119,7 +119,7 @@ impl InverseModel {
         self.current_key = None;
     }
 
-    /// `train(p, d)` of inverse-model.md §2.1: every change component with
+    /// `train(p, d)` of docs/spec/inverse-model.md §2.1: every change component with
     /// `|d_i| > eps_dif` trains prototype `(i, sign d_i)` with weight `|d_i|`.
     ///
     /// # Panics
@@ -149,7 +149,7 @@ impl InverseModel {
         }
     }
 
-    /// `preconditions_for(D)` of inverse-model.md §4: the precondition
+    /// `preconditions_for(D)` of docs/spec/inverse-model.md §4: the precondition
     /// vector to reach next for the target difference `D`, or `None` if no
     /// component of `D` has a prototype.
     pub fn preconditions_for(&mut self, d: &[f64]) -> Option<Vec<f64>> {

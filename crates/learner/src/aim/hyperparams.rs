@@ -1,4 +1,4 @@
-//! AIM parameters (inverse-model.md §1): unchecked [`AimParams`], validated
+//! AIM parameters (docs/spec/inverse-model.md §1): unchecked [`AimParams`], validated
 //! once into [`AimConfig`].
 
 use serde::{Deserialize, Serialize};

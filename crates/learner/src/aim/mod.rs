@@ -1,5 +1,5 @@
 //! AIM — the Averaging Inverse Model, also called TIIM
-//! (`spec/inverse-model.md`).
+//! (`docs/spec/inverse-model.md`).
 //!
 //! Answers "in which situation does feature i change in direction ±?" by
 //! averaging, per (feature, sign) prototype, the preconditions that produced

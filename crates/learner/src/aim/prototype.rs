@@ -1,11 +1,11 @@
 //! One AIM prototype: per sign combination accumulators, merging and
-//! preconditions (inverse-model.md §3).
+//! preconditions (docs/spec/inverse-model.md §3).
 
 use serde::{Deserialize, Serialize};
 
 use super::hyperparams::AimConfig;
 
-/// Accumulators of one sign combination (inverse-model.md §3).
+/// Accumulators of one sign combination (docs/spec/inverse-model.md §3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Combination {
     /// The sign combination `c` (−1, 0 or +1 per precondition component).
@@ -18,7 +18,7 @@ pub struct Combination {
     pub n: u64,
 }
 
-/// One group of the on-the-fly merge (inverse-model.md §3.2).
+/// One group of the on-the-fly merge (docs/spec/inverse-model.md §3.2).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MergedGroup {
     /// Sign combination of `s / w`, recomputed after merging.
@@ -33,7 +33,7 @@ pub struct MergedGroup {
 
 /// Result of [`Prototype::preconditions`]: the best precondition vector and,
 /// when a second group contributes more than `ratio` × the best average, an
-/// alternative (inverse-model.md §3.3).
+/// alternative (docs/spec/inverse-model.md §3.3).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Preconditions {
     /// P1.
@@ -46,7 +46,7 @@ pub struct Preconditions {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Prototype {
     dim: usize,
-    /// In first-insertion order (inverse-model.md §6: the original's hash
+    /// In first-insertion order (docs/spec/inverse-model.md §6: the original's hash
     /// map order is replaced by this order, a decision of the spec).
     combinations: Vec<Combination>,
 }
@@ -67,7 +67,7 @@ pub fn sign_combination(p: &[f64], eps_node: f64) -> Vec<i8> {
         .collect()
 }
 
-/// `equivalent(a, b)` of inverse-model.md §3.2: no opposing signs and at most
+/// `equivalent(a, b)` of docs/spec/inverse-model.md §3.2: no opposing signs and at most
 /// `max_zero_mismatch` components where exactly one of the two is 0.
 fn equivalent(a: &[i8], b: &[i8], max_zero_mismatch: usize) -> bool {
     let mut mismatches = 0;
@@ -101,7 +101,7 @@ impl Prototype {
         &self.combinations
     }
 
-    /// `train(p, w)` of inverse-model.md §3.1.
+    /// `train(p, w)` of docs/spec/inverse-model.md §3.1.
     ///
     /// # Panics
     /// If `p.len() != dim`.
@@ -125,7 +125,7 @@ impl Prototype {
         }
     }
 
-    /// The merge of inverse-model.md §3.2, computed afresh (the stored
+    /// The merge of docs/spec/inverse-model.md §3.2, computed afresh (the stored
     /// accumulators are not modified).
     pub fn merge(&self, config: &AimConfig) -> Vec<MergedGroup> {
         let params = config.params();
@@ -174,7 +174,7 @@ impl Prototype {
         result
     }
 
-    /// `preconditions()` of inverse-model.md §3.3; `None` if never trained.
+    /// `preconditions()` of docs/spec/inverse-model.md §3.3; `None` if never trained.
     pub fn preconditions(&self, config: &AimConfig) -> Option<Preconditions> {
         let merged = self.merge(config);
         let avg = |g: &MergedGroup| g.w / g.n as f64;

@@ -1,4 +1,4 @@
-//! The worked examples of inverse-model.md §5 and scenarios pinning the
+//! The worked examples of docs/spec/inverse-model.md §5 and scenarios pinning the
 //! merge and query rules.
 
 use super::*;
@@ -146,7 +146,7 @@ fn colliding_recomputed_key_overwrites_in_the_original_position() {
     // Zero-count order: b (2 zeros), a, e, d (1), c (0).
     // Group 1 = b + a + d, recomputed key (1,−1,1); group 2 = e, key
     // (−1,1,0); group 3 = c, key (1,−1,1) again: it replaces group 1 in
-    // slot 0 (original behaviour, inverse-model.md §6).
+    // slot 0 (original behaviour, docs/spec/inverse-model.md §6).
     let mut proto = Prototype::new(3);
     proto.train(&[0.0, -1.0, 0.002], 0.01, &cfg()); // a (0,−1,1)
     proto.train(&[0.0, 0.0, 0.002], 1.0, &cfg()); // b (0,0,1)

@@ -1,4 +1,4 @@
-//! The AITM data structure, query and update (aitm.md §1–§5).
+//! The AITM data structure, query and update (docs/spec/aitm.md §1–§5).
 
 use std::borrow::Cow;
 use std::collections::BTreeSet;
@@ -11,7 +11,7 @@ use super::hyperparams::{AitmConfig, QueryMode};
 use super::index::KdIndex;
 
 /// Node count from which the winner search goes through the spatial index
-/// ([`KdIndex`]); below it the contiguous scan is as fast (aitm.md §7: the
+/// ([`KdIndex`]); below it the contiguous scan is as fast (docs/spec/aitm.md §7: the
 /// thesis's maps stay near 1100 nodes).
 pub const INDEX_MIN_NODES: usize = 512;
 
@@ -19,11 +19,11 @@ pub const INDEX_MIN_NODES: usize = 512;
 /// this many), so that a removal does not move every later row.
 const COMPACT_MIN_GAPS: usize = 64;
 
-/// Identifier of a node, unique within one map (aitm.md §1: a per-map counter
+/// Identifier of a node, unique within one map (docs/spec/aitm.md §1: a per-map counter
 /// starting at 0, incremented per insertion). Ids are never reused.
 pub type NodeId = u64;
 
-/// Counters reported by the experiments (`experiments.md`).
+/// Counters reported by the experiments (`docs/spec/experiments.md`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct MapStats {
     /// Number of `update` invocations.
@@ -56,7 +56,7 @@ pub(crate) struct Ranking {
     pub(crate) second: Option<usize>,
 }
 
-/// Adapted Instantaneous Topological Map (aitm.md).
+/// Adapted Instantaneous Topological Map (docs/spec/aitm.md).
 ///
 /// Nodes are kept in insertion order (removals preserve the order of the
 /// others). Their inputs, outputs and linear maps live in flat row-major
@@ -142,7 +142,7 @@ impl Aitm {
 
     /// Searches winners through the spatial index once the map holds
     /// `nodes` nodes (default [`INDEX_MIN_NODES`]; `usize::MAX`: always scan).
-    /// The answers are the same either way (aitm.md §7); only the time
+    /// The answers are the same either way (docs/spec/aitm.md §7); only the time
     /// differs.
     pub fn set_index_min(&mut self, nodes: usize) {
         self.index_min = nodes;
@@ -209,7 +209,7 @@ impl Aitm {
         self.position(id).map(|i| self.view(i))
     }
 
-    /// `f(x, mode)` of aitm.md §3 in the configured mode: a fresh vector of
+    /// `f(x, mode)` of docs/spec/aitm.md §3 in the configured mode: a fresh vector of
     /// length `output_dim`, the zero vector for an empty map.
     ///
     /// # Panics
@@ -230,7 +230,7 @@ impl Aitm {
         }
     }
 
-    /// Classifier answer (aitm.md §6): `None` if the map has no nodes (never
+    /// Classifier answer (docs/spec/aitm.md §6): `None` if the map has no nodes (never
     /// trained) or no output component, otherwise the first component of the
     /// winner's local output truncated toward zero. With integer storage and
     /// `A = 0` this is the winner's stored label.
@@ -259,7 +259,7 @@ impl Aitm {
         self.update(x, &[label as f64]);
     }
 
-    /// One training step `update(x, y)` of aitm.md §4.
+    /// One training step `update(x, y)` of docs/spec/aitm.md §4.
     ///
     /// # Panics
     /// If `x.len() != input_dim` or `y.len() != output_dim` (programming
@@ -275,7 +275,7 @@ impl Aitm {
         );
         self.update_calls += 1;
 
-        // aitm.md §4: while the map holds at most one node, every sample is
+        // docs/spec/aitm.md §4: while the map holds at most one node, every sample is
         // inserted without edges, whatever its input (even a duplicate).
         let Some(Ranking {
             winner,
@@ -287,7 +287,7 @@ impl Aitm {
         };
         let n_id = self.ids[winner];
         let s_id = self.ids[second];
-        // Taken before any adaptation (aitm.md §4).
+        // Taken before any adaptation (docs/spec/aitm.md §4).
         let delta_ws: Vec<f64> = self
             .w_in_row(winner)
             .iter()
@@ -314,7 +314,7 @@ impl Aitm {
 
         self.prune_edges(n_id, s_id, &delta_ws);
 
-        // Output-driven insertion (aitm.md §4). Both comparisons are strict
+        // Output-driven insertion (docs/spec/aitm.md §4). Both comparisons are strict
         // and exact, with left-to-right norms.
         let eps_out = insertion_threshold(lr_sq_norm(y).sqrt());
         if lr_distance(&y_hat, y) > eps_out {
@@ -328,7 +328,7 @@ impl Aitm {
                 for (w, t) in self.w_out_row_mut(n).iter_mut().zip(y) {
                     *w += 0.5 * (t - *w);
                     if classifier {
-                        // aitm.md §6: the original's integer label array
+                        // docs/spec/aitm.md §6: the original's integer label array
                         // truncated the halfway value toward zero in place.
                         *w = w.trunc();
                     }
@@ -336,7 +336,7 @@ impl Aitm {
             }
         }
 
-        // Too-close second winner (aitm.md §4, following the code: deleted
+        // Too-close second winner (docs/spec/aitm.md §4, following the code: deleted
         // when *closer* than ε_max, §8). The squared norm is the
         // left-to-right sum of squares, compared without a square root.
         let eps_max = self.config.eps_max();
@@ -345,7 +345,7 @@ impl Aitm {
         }
     }
 
-    /// The nearest and second-nearest node (aitm.md §2): brute-force scan with
+    /// The nearest and second-nearest node (docs/spec/aitm.md §2): brute-force scan with
     /// the blocked ranking distance; exact comparisons, ties to the earlier
     /// node. A NaN distance ranks after every number. `None` for an empty map.
     ///
@@ -377,7 +377,7 @@ impl Aitm {
         self.index.is_some()
     }
 
-    /// [`Aitm::rank_two`] by the brute-force scan of aitm.md §2.
+    /// [`Aitm::rank_two`] by the brute-force scan of docs/spec/aitm.md §2.
     pub(crate) fn rank_two_scan(&self, x: &[f64]) -> Option<Ranking> {
         // The instances' input sizes get a loop with the dimension known at
         // compile time (same arithmetic, unrolled).
@@ -478,7 +478,7 @@ impl Aitm {
         }
     }
 
-    /// `exp(−|x − w_in(c)|² / σ²)` with the ranking distance (aitm.md §2, §3).
+    /// `exp(−|x − w_in(c)|² / σ²)` with the ranking distance (docs/spec/aitm.md §2, §3).
     /// Follows the code, not the thesis, which prints `exp(‖x − w‖ / σ²)`
     /// (§8).
     fn weight(&self, c: usize, x: &[f64]) -> f64 {
@@ -487,7 +487,7 @@ impl Aitm {
         (-(d * d) / (sigma * sigma)).exp()
     }
 
-    /// `f(x, mode)` given the ranking (aitm.md §3).
+    /// `f(x, mode)` given the ranking (docs/spec/aitm.md §3).
     fn estimate(&self, x: &[f64], ranking: Ranking, mode: QueryMode) -> Vec<f64> {
         let m = self.output_dim;
         let n = ranking.winner;
@@ -549,7 +549,7 @@ impl Aitm {
         out
     }
 
-    /// Local Linear Map adaptation of the winner (aitm.md §4), only called
+    /// Local Linear Map adaptation of the winner (docs/spec/aitm.md §4), only called
     /// when a learning rate is non-zero. This is the textbook rule: the
     /// original used `y − w_out + A·e` where the rule has `y − w_out − A·e`
     /// (= `y − y_n(x)`), and updated `A` with the already adapted `w_out`
@@ -601,7 +601,7 @@ impl Aitm {
         }
     }
 
-    /// Thales-sphere edge pruning of the ITM (aitm.md §4), over a snapshot
+    /// Thales-sphere edge pruning of the ITM (docs/spec/aitm.md §4), over a snapshot
     /// of the winner's neighbours in ascending id order.
     fn prune_edges(&mut self, n_id: NodeId, s_id: NodeId, delta_ws: &[f64]) {
         let n = self
@@ -632,7 +632,7 @@ impl Aitm {
         }
     }
 
-    /// aitm.md §5: detach the node from every neighbour (ascending id order);
+    /// docs/spec/aitm.md §5: detach the node from every neighbour (ascending id order);
     /// a neighbour left without edges is deleted too while more than two
     /// nodes (counting this one) remain. This can delete the winner of the
     /// current update; original behaviour, kept.
@@ -718,7 +718,7 @@ impl Aitm {
     }
 
     /// Appends a node for (x, y), optionally connected to `edge_to`.
-    /// Classifiers store the label truncated toward zero (aitm.md §6).
+    /// Classifiers store the label truncated toward zero (docs/spec/aitm.md §6).
     fn insert(&mut self, x: &[f64], y: &[f64], edge_to: Option<NodeId>) {
         let id = self.inserts;
         self.inserts += 1;
@@ -764,7 +764,7 @@ impl Aitm {
 }
 
 /// The winner and second winner among rows given by their sums of squared
-/// differences in row order (aitm.md §2): distances are the square roots,
+/// differences in row order (docs/spec/aitm.md §2): distances are the square roots,
 /// compared exactly, ties to the earlier row, NaN after every number.
 #[inline(always)]
 fn rank_rows(sq_sums: impl Iterator<Item = (usize, f64)>) -> Option<Ranking> {
@@ -800,7 +800,7 @@ fn rank_rows(sq_sums: impl Iterator<Item = (usize, f64)>) -> Option<Ranking> {
     })
 }
 
-/// ε_out of aitm.md §4 for a target output of norm `nu`: `10^floor(log10 ν)`,
+/// ε_out of docs/spec/aitm.md §4 for a target output of norm `nu`: `10^floor(log10 ν)`,
 /// except 0.1 for norms in [1, 10) and 10⁻³ for a zero output. Follows the
 /// code, which applies the 0.1 case whenever `floor(log10 ν) = 0`; the thesis
 /// writes it for `log10 ν = 0` only (§8).

@@ -1,17 +1,17 @@
-//! The exact floating-point summation orders of aitm.md §2 and §4.
+//! The exact floating-point summation orders of docs/spec/aitm.md §2 and §4.
 //!
 //! With 3-decimal inputs, mathematically equal distances are common, and the
 //! last bit of a computed distance decides winners and threshold tests. The
 //! order of the additions is therefore part of the specification.
 
-/// Ranking distance `|a − b|` of aitm.md §2: the square root of the squared
+/// Ranking distance `|a − b|` of docs/spec/aitm.md §2: the square root of the squared
 /// component differences summed in the blocked ("pairwise") order.
 #[inline]
 pub(crate) fn ranking_distance(a: &[f64], b: &[f64]) -> f64 {
     pairwise_sq_sum(a, b).sqrt()
 }
 
-/// Sum of `(a_j − b_j)²` in the order of aitm.md §2: left to right below 8
+/// Sum of `(a_j − b_j)²` in the order of docs/spec/aitm.md §2: left to right below 8
 /// components; for 8 to 128 components eight interleaved partial sums
 /// combined as a balanced tree, then the `n mod 8` remaining terms in index
 /// order. Above 128 components (not used by any instance) the slice is split
@@ -55,7 +55,7 @@ pub(crate) fn pairwise_sq_sum(a: &[f64], b: &[f64]) -> f64 {
     }
 }
 
-/// Threshold norm `|a − b|` of aitm.md §4: square root of the left-to-right
+/// Threshold norm `|a − b|` of docs/spec/aitm.md §4: square root of the left-to-right
 /// sum of squares.
 #[inline]
 pub(crate) fn lr_distance(a: &[f64], b: &[f64]) -> f64 {
@@ -89,7 +89,7 @@ mod tests {
     use super::*;
 
     /// Reference: the blocked order written out literally for 8 and 10
-    /// components (aitm.md §2).
+    /// components (docs/spec/aitm.md §2).
     fn literal(e: &[f64]) -> f64 {
         let b8 = ((e[0] + e[1]) + (e[2] + e[3])) + ((e[4] + e[5]) + (e[6] + e[7]));
         match e.len() {
@@ -136,7 +136,7 @@ mod tests {
                 }
             }
         }
-        // aitm.md §2: the two orders differ for a large share of inputs, so
+        // docs/spec/aitm.md §2: the two orders differ for a large share of inputs, so
         // this check is not vacuous.
         assert!(differs > 100, "{differs}");
     }

@@ -1,4 +1,4 @@
-//! AITM hyperparameters (aitm.md §1, §6): unchecked [`AitmParams`], validated
+//! AITM hyperparameters (docs/spec/aitm.md §1, §6): unchecked [`AitmParams`], validated
 //! once into [`AitmConfig`].
 
 use serde::{Deserialize, Serialize};
@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::errors::AitmError;
 
 /// How a map answers queries and computes its own estimate ŷ during
-/// `update` (aitm.md §3; the same mode is used for both, §6).
+/// `update` (docs/spec/aitm.md §3; the same mode is used for both, §6).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum QueryMode {
     /// The winner's local linear output.
@@ -21,10 +21,10 @@ pub enum QueryMode {
 /// [`AitmParams::check`] (or `AitmConfig::try_from`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct AitmParams {
-    /// Width σ of the Gaussian interpolation weights (aitm.md §3).
+    /// Width σ of the Gaussian interpolation weights (docs/spec/aitm.md §3).
     pub sigma: f64,
     /// ε_max: inputs closer than this to the winner do not get a new node, and
-    /// second winners closer than this to the winner are deleted (aitm.md §4).
+    /// second winners closer than this to the winner are deleted (docs/spec/aitm.md §4).
     pub eps_max: f64,
     /// Learning rate of the winner's input vector.
     pub eta_in: f64,
@@ -34,17 +34,17 @@ pub struct AitmParams {
     pub eta_a: f64,
     /// Query mode, used for queries and for ŷ inside `update`.
     pub mode: QueryMode,
-    /// Whether outputs are class labels stored as integers (aitm.md §6).
+    /// Whether outputs are class labels stored as integers (docs/spec/aitm.md §6).
     pub classifier: bool,
 }
 
-/// σ of every instance in the specification (aitm.md §6).
+/// σ of every instance in the specification (docs/spec/aitm.md §6).
 pub const SIGMA: f64 = 0.05;
-/// ε_max of every instance in the specification (aitm.md §6).
+/// ε_max of every instance in the specification (docs/spec/aitm.md §6).
 pub const EPS_MAX: f64 = 0.001;
 
 impl AitmParams {
-    /// The evaluated regressor parameters (aitm.md §6): σ 0.05, ε_max 0.001,
+    /// The evaluated regressor parameters (docs/spec/aitm.md §6): σ 0.05, ε_max 0.001,
     /// all learning rates 0, real-valued outputs.
     pub fn regressor(mode: QueryMode) -> Self {
         Self {
@@ -58,7 +58,7 @@ impl AitmParams {
         }
     }
 
-    /// The evaluated classifier parameters (gate, ACS; aitm.md §6): as
+    /// The evaluated classifier parameters (gate, ACS; docs/spec/aitm.md §6): as
     /// [`AitmParams::regressor`] with WINNER and integer labels.
     pub fn classifier() -> Self {
         Self {
@@ -161,7 +161,7 @@ impl AitmConfig {
     }
 
     /// Whether any learning rate is non-zero (the winner adaptation of
-    /// aitm.md §4 then has an effect).
+    /// docs/spec/aitm.md §4 then has an effect).
     pub(crate) fn adapts(&self) -> bool {
         self.0.eta_in != 0.0 || self.0.eta_out != 0.0 || self.0.eta_a != 0.0
     }

@@ -1,4 +1,4 @@
-//! A spatial index for the winner and second winner (aitm.md §2, §7): a
+//! A spatial index for the winner and second winner (docs/spec/aitm.md §2, §7): a
 //! dynamic k-d tree over the rows of `w_in`.
 //!
 //! The spec asks for exactly what the brute-force scan returns: the two
@@ -16,7 +16,7 @@
 //! the insertion order. Removal takes a row out of its leaf; bounding boxes
 //! only ever grow, so they stay conservative.
 //!
-//! The layout is chosen for maps that outgrow the caches (aitm.md §7: the
+//! The layout is chosen for maps that outgrow the caches (docs/spec/aitm.md §7: the
 //! thesis's named weakness is a memory that slows down as it grows). A
 //! search touches a few dozen nodes and leaves wherever they lie, so each
 //! touch should cost as few cache misses as possible:
@@ -205,7 +205,7 @@ fn f64_next_up(x: f64) -> f64 {
 pub(crate) type Candidate = (f64, f64, usize);
 
 /// Whether candidate `a` ranks before `b`: smaller distance, or equal
-/// distance and earlier row (aitm.md §2).
+/// distance and earlier row (docs/spec/aitm.md §2).
 #[inline]
 pub(crate) fn ranks_before(a: Candidate, b: Candidate) -> bool {
     a.0 < b.0 || (a.0 == b.0 && a.2 < b.2)

@@ -1,4 +1,4 @@
-//! AITM — the Adapted Instantaneous Topological Map (`spec/aitm.md`).
+//! AITM — the Adapted Instantaneous Topological Map (`docs/spec/aitm.md`).
 //!
 //! A growing graph of nodes in input space, each with an output vector and a
 //! local linear map, used as every forward model and classifier of both

@@ -137,7 +137,7 @@ proptest! {
         }
     }
 
-    /// aitm.md §7: the spatial index returns exactly the scan's winner and
+    /// docs/spec/aitm.md §7: the spatial index returns exactly the scan's winner and
     /// second winner, and a map searching through it evolves bit for bit
     /// like one that scans, through insertions, deletions (gaps and their
     /// compaction) and, with η > 0, moving nodes.

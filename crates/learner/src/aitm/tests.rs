@@ -1,4 +1,4 @@
-//! Hand-built scenarios pinning each rule of aitm.md. Each test names the
+//! Hand-built scenarios pinning each rule of docs/spec/aitm.md. Each test names the
 //! rule it pins; breaking that rule makes the test fail.
 
 use std::collections::BTreeSet;
@@ -203,7 +203,7 @@ fn halfway_rule_for_regressors_keeps_fractions() {
 
 #[test]
 fn classifier_halfway_rule_truncates_toward_zero() {
-    // aitm.md §6, plus a negative case where floor would differ.
+    // docs/spec/aitm.md §6, plus a negative case where floor would differ.
     let cases = [
         (1, 0, 0),
         (0, 1, 0),
@@ -320,7 +320,7 @@ fn second_winner_exactly_at_eps_max_is_kept() {
 
 #[test]
 fn deletion_cascade_can_delete_the_winner() {
-    // aitm.md §5: the winner's only edge is to a too-close second winner.
+    // docs/spec/aitm.md §5: the winner's only edge is to a too-close second winner.
     let mut map = build(
         AitmConfig::regressor(QueryMode::Winner),
         &[
@@ -451,7 +451,7 @@ fn ties_go_to_the_earlier_node() {
 }
 
 /// Inputs found by search: the two candidate nodes are at mathematically
-/// equal distance from `x`, but the blocked sum (aitm.md §2) puts `a` a last
+/// equal distance from `x`, but the blocked sum (docs/spec/aitm.md §2) puts `a` a last
 /// bit closer while a left-to-right sum puts `b` closer.
 fn summation_order_case(dim: usize) -> ([f64; 10], [f64; 10], [f64; 10]) {
     if dim == 8 {
@@ -521,7 +521,7 @@ fn besttwo_blends_with_gaussian_weights() {
     let expected = (kn * 1.0 + ks * 3.0) / (kn + ks);
     let got = map.query(&[x])[0];
     assert!((got - expected).abs() < 1e-12, "{got} vs {expected}");
-    // Not the thesis's printed formula exp(d/σ²) (aitm.md §8), which would
+    // Not the thesis's printed formula exp(d/σ²) (docs/spec/aitm.md §8), which would
     // favour the farther node.
     let (tn, ts) = ((dn / sq).exp(), (ds / sq).exp());
     assert!((got - (tn + ts * 3.0) / (tn + ts)).abs() > 0.1);

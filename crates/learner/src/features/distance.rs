@@ -1,4 +1,4 @@
-//! Distance and closing between two objects (`features.md` §5).
+//! Distance and closing between two objects (`docs/spec/features.md` §5).
 
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
@@ -57,7 +57,7 @@ fn norm(v: Vector2<f64>) -> f64 {
     (v.x * v.x + v.y * v.y).sqrt()
 }
 
-/// Closest point to `c` on the segment from `a` to `b` (`features.md` §5 step 4).
+/// Closest point to `c` on the segment from `a` to `b` (`docs/spec/features.md` §5 step 4).
 #[must_use]
 pub fn closest_point_on_segment(a: Vector2<f64>, b: Vector2<f64>, c: Vector2<f64>) -> Vector2<f64> {
     let ab = b - a;
@@ -94,7 +94,7 @@ fn world_corners(body: &Body, shape: &Shape) -> Vec<Vector2<f64>> {
 
 /// The first smallest entry over every corner of `from` (in order) and every
 /// segment of `to` (in order), distances reduced by `from_radius`
-/// (`features.md` §5 steps 2, 3, 5).
+/// (`docs/spec/features.md` §5 steps 2, 3, 5).
 fn first_min(
     from: &[Vector2<f64>],
     from_radius: f64,
@@ -124,7 +124,7 @@ fn contact(a: &Body, sa: &Shape, b: &Body, sb: &Shape) -> (f64, Vector2<f64>) {
     let (ca, cb) = (world_corners(a, sa), world_corners(b, sb));
     let l1 = first_min(&ca, sa.radius, &cb, sb.segments);
     let l2 = first_min(&cb, sb.radius, &ca, sa.segments);
-    // features.md §5 step 5: L1 only when strictly closer; on equality L2 wins.
+    // docs/spec/features.md §5 step 5: L1 only when strictly closer; on equality L2 wins.
     // The normal always points from A to B: L1's corner c is A's, L2's is B's.
     let (dist, n) = match (l1, l2) {
         (Some(e1), Some(e2)) if e1.dist < e2.dist => (e1.dist, e1.q - e1.c),
@@ -146,7 +146,7 @@ fn closing(n: Vector2<f64>, a: &Body, b: &Body) -> f64 {
     r3(n.x * dv.x + n.y * dv.y)
 }
 
-/// `dist_closing(A, B)` (`features.md` §5): rounded signed distance between A
+/// `dist_closing(A, B)` (`docs/spec/features.md` §5): rounded signed distance between A
 /// (the reference) and B, and the rounded closing speed along the normal from
 /// A towards B.
 #[must_use]
@@ -158,7 +158,7 @@ pub fn dist_closing(a: &Body, b: &Body) -> DistClosing {
     }
 }
 
-/// The clamped variant `dist(A, B) = r3(max(dist, 0))` (`features.md` §5;
+/// The clamped variant `dist(A, B) = r3(max(dist, 0))` (`docs/spec/features.md` §5;
 /// only the interaction model's circling uses it).
 #[must_use]
 pub fn dist(a_id: u32, a: &ObjectState, b_id: u32, b: &ObjectState) -> f64 {
@@ -191,7 +191,7 @@ mod tests {
         );
     }
 
-    /// features.md §7 example 2.
+    /// docs/spec/features.md §7 example 2.
     #[test]
     fn example_2_dist_closing() {
         let act = body(ACTUATOR_ID, 0.0, 0.0, 0.0, 0.0, 0.5);
@@ -225,7 +225,7 @@ mod tests {
         );
     }
 
-    /// features.md §7 example 3.
+    /// docs/spec/features.md §7 example 3.
     #[test]
     fn example_3_point_to_segment() {
         let q = closest_point_on_segment(

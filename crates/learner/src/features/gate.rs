@@ -1,4 +1,4 @@
-//! Gate model features (`features.md` §3).
+//! Gate model features (`docs/spec/features.md` §3).
 
 use nalgebra::Vector2;
 
@@ -11,17 +11,17 @@ use crate::types::{ObjectState, TrackedObject};
 pub const RELATIVE_FEATURES_DIM: usize = 8;
 /// Number of components of a local change Δ (and of the actuator change).
 pub const LOCAL_CHANGE_DIM: usize = 3;
-/// The prediction boost of the evaluated configuration (`README.md` §6; the
+/// The prediction boost of the evaluated configuration (`docs/spec/README.md` §6; the
 /// unused flag 64 of the original set 1.5).
 pub const DEFAULT_PREDICTION_BOOST: f64 = 1.0;
 
-/// Relative interaction features `φ(ref, other)` (`features.md` §3.2):
+/// Relative interaction features `φ(ref, other)` (`docs/spec/features.md` §3.2):
 /// `[id_ref, id_other, distance, closing, rel_x, rel_y, v_other_x, v_other_y]`.
 ///
 /// `reference` is the block, `other` the actuator. The distance is the signed
 /// one (not clamped); components 6–7 are the other object's own displacement
 /// rotated into the reference frame, not the difference of displacements
-/// (`features.md` §8: follow the code).
+/// (`docs/spec/features.md` §8: follow the code).
 #[must_use]
 pub fn relative_features(
     reference: &TrackedObject,
@@ -43,7 +43,7 @@ pub fn relative_features(
     ]
 }
 
-/// Local change `Δ(pre, post)` in the frame of `pre` (`features.md` §3.3):
+/// Local change `Δ(pre, post)` in the frame of `pre` (`docs/spec/features.md` §3.3):
 /// rounded rotated position change, raw (unrounded, unwrapped) yaw change.
 /// Also the planning target difference `Δ(current block, target)`.
 #[must_use]
@@ -54,7 +54,7 @@ pub fn local_change(pre: &ObjectState, post: &ObjectState) -> [f64; LOCAL_CHANGE
 }
 
 /// A global state from the current state `s` and a predicted local change
-/// (`features.md` §3.4): `(p + r3(R(θ)·b·Δ̂[0:2]), θ + b·Δ̂[2])` with boost `b`.
+/// (`docs/spec/features.md` §3.4): `(p + r3(R(θ)·b·Δ̂[0:2]), θ + b·Δ̂[2])` with boost `b`.
 ///
 /// The boost scales the predicted change before it is rotated and rounded
 /// *(decision: the spec only says the change is multiplied by it; with the
@@ -78,13 +78,13 @@ pub fn apply_local_change(
 }
 
 /// The actuator model's training output: the plain global difference
-/// `new − old` (`features.md` §3.5).
+/// `new − old` (`docs/spec/features.md` §3.5).
 #[must_use]
 pub fn actuator_change(old: &ObjectState, new: &ObjectState) -> [f64; LOCAL_CHANGE_DIM] {
     [new.x - old.x, new.y - old.y, new.theta - old.theta]
 }
 
-/// The predicted actuator state `r3(s + Δ̂)` (`features.md` §3.5).
+/// The predicted actuator state `r3(s + Δ̂)` (`docs/spec/features.md` §3.5).
 #[must_use]
 pub fn apply_actuator_change(s: &ObjectState, delta: [f64; LOCAL_CHANGE_DIM]) -> ObjectState {
     ObjectState {
@@ -107,7 +107,7 @@ mod tests {
         }
     }
 
-    /// features.md §7 example 1.
+    /// docs/spec/features.md §7 example 1.
     #[test]
     fn example_1_relative_features() {
         let block = TrackedObject::fresh(BLUE_ID, ObjectState::new(0.0, 0.5, 0.0));
@@ -126,7 +126,7 @@ mod tests {
     #[test]
     fn velocity_features_are_the_others_own_displacement() {
         // Both move up by 0.005: closing is 0 (relative motion), but φ[6:8]
-        // is the actuator's own displacement, not the difference (features.md §8).
+        // is the actuator's own displacement, not the difference (docs/spec/features.md §8).
         let block = TrackedObject {
             id: BLUE_ID,
             s: ObjectState::new(0.0, 0.5, 0.0),
@@ -157,7 +157,7 @@ mod tests {
         assert_eq!(relative_features(&block, &act)[2], -0.015);
     }
 
-    /// features.md §7 example 4.
+    /// docs/spec/features.md §7 example 4.
     #[test]
     fn example_4_local_change() {
         let d = local_change(

@@ -1,4 +1,4 @@
-//! Interaction model features (`features.md` §6).
+//! Interaction model features (`docs/spec/features.md` §6).
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -17,17 +17,17 @@ use crate::types::{Action, ObjectState, Poses, Target, ACTUATOR_ID};
 /// Number of interaction-state components.
 pub const INTERACTION_DIM: usize = 8;
 /// Interaction state plus local action: the input of the ACs, the ACS and the
-/// global AIM (`interaction-model.md` §1).
+/// global AIM (`docs/spec/interaction-model.md` §1).
 pub const INTERACTION_INPUT_DIM: usize = INTERACTION_DIM + 2;
-/// The components of a target difference that planning uses (`features.md` §6.5).
+/// The components of a target difference that planning uses (`docs/spec/features.md` §6.5).
 pub const TARGET_FEATURES: [usize; 3] = [2, 3, 4];
-/// ε_noise at 100 Hz (`README.md` §6; the thesis's table says 0.01).
+/// ε_noise at 100 Hz (`docs/spec/README.md` §6; the thesis's table says 0.01).
 pub const EPS_NOISE_100HZ: f64 = 0.001;
 /// ε_noise at 10 Hz.
 pub const EPS_NOISE_10HZ: f64 = 0.01;
 
 /// The key of an ordered object pair, written "n1,n2" (e.g. "15,8")
-/// (`features.md` §6.1). Ordered by (reference, secondary); serialised as the
+/// (`docs/spec/features.md` §6.1). Ordered by (reference, secondary); serialised as the
 /// string so that it can key JSON maps.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(into = "String", try_from = "String")]
@@ -83,11 +83,11 @@ impl TryFrom<String> for PairKey {
     }
 }
 
-/// An interaction state ι(o1, o2) (`features.md` §6.1): eight components plus
+/// An interaction state ι(o1, o2) (`docs/spec/features.md` §6.1): eight components plus
 /// the attached frame of the reference object at the time it was computed.
 ///
 /// A prediction changes `components` but keeps `t`, `t_inv` and `theta_ref`
-/// (`interaction-model.md` §5), so the attachments are stored, never derived
+/// (`docs/spec/interaction-model.md` §5), so the attachments are stored, never derived
 /// from the components.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct InteractionState {
@@ -102,7 +102,7 @@ pub struct InteractionState {
     pub theta_ref: f64,
 }
 
-/// Objects extracted from an interaction state (`features.md` §6.4).
+/// Objects extracted from an interaction state (`docs/spec/features.md` §6.4).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ExtractedPair {
     pub reference_id: u32,
@@ -120,7 +120,7 @@ fn id_from_component(v: f64) -> u32 {
 }
 
 impl InteractionState {
-    /// ι(o1, o2) from object states (`features.md` §6.1).
+    /// ι(o1, o2) from object states (`docs/spec/features.md` §6.1).
     #[must_use]
     pub fn new(
         reference_id: u32,
@@ -156,14 +156,14 @@ impl InteractionState {
         )
     }
 
-    /// The global action in this state's reference frame (`features.md` §6.2).
+    /// The global action in this state's reference frame (`docs/spec/features.md` §6.2).
     #[must_use]
     pub fn local_action(&self, action: Action) -> Vector2<f64> {
         local_action(self.theta_ref, action)
     }
 
     /// `[ι (8), a_local (2)]`, the input of the ACs, the ACS and the global
-    /// AIM (`interaction-model.md` §3).
+    /// AIM (`docs/spec/interaction-model.md` §3).
     #[must_use]
     pub fn input(&self, action: Action) -> [f64; INTERACTION_INPUT_DIM] {
         let a = self.local_action(action);
@@ -172,7 +172,7 @@ impl InteractionState {
     }
 
     /// Global object states encoded by this state, through its attached `T`
-    /// (`features.md` §6.4); unrounded.
+    /// (`docs/spec/features.md` §6.4); unrounded.
     #[must_use]
     pub fn extract(&self) -> ExtractedPair {
         let c = &self.components;
@@ -187,13 +187,13 @@ impl InteractionState {
     }
 }
 
-/// `a_local = R(θ_ref)ᵀ a`, not rounded (`features.md` §6.2).
+/// `a_local = R(θ_ref)ᵀ a`, not rounded (`docs/spec/features.md` §6.2).
 #[must_use]
 pub fn local_action(theta_ref: f64, action: Action) -> Vector2<f64> {
     local_vec(theta_ref, action.to_vector())
 }
 
-/// Every interaction state of a world (`features.md` §6.1): ι(n1, n2) for each
+/// Every interaction state of a world (`docs/spec/features.md` §6.1): ι(n1, n2) for each
 /// object `n1` other than the actuator and each object `n2 ≠ n1`.
 #[must_use]
 pub fn interaction_states(poses: &Poses) -> BTreeMap<PairKey, InteractionState> {
@@ -210,7 +210,7 @@ pub fn interaction_states(poses: &Poses) -> BTreeMap<PairKey, InteractionState> 
     states
 }
 
-/// The episode difference `d(pre, post)` (`features.md` §6.3): `post`
+/// The episode difference `d(pre, post)` (`docs/spec/features.md` §6.3): `post`
 /// re-expressed in `pre`'s frame, minus `pre`; not rounded.
 #[must_use]
 pub fn episode_difference(
@@ -229,7 +229,7 @@ pub fn episode_difference(
 }
 
 /// The changed-feature set `S = { i : |d_i| > ε_noise }`, ascending
-/// (`features.md` §6.3). Strict: a change of exactly ε_noise is noise.
+/// (`docs/spec/features.md` §6.3). Strict: a change of exactly ε_noise is noise.
 #[must_use]
 pub fn changed_features(d: &[f64], eps_noise: f64) -> Vec<usize> {
     d.iter()
@@ -240,7 +240,7 @@ pub fn changed_features(d: &[f64], eps_noise: f64) -> Vec<usize> {
 }
 
 /// Object states from predicted interaction states ("finalisation",
-/// `interaction-model.md` §5): each state's pair is extracted in key order,
+/// `docs/spec/interaction-model.md` §5): each state's pair is extracted in key order,
 /// later pairs overwriting earlier ones. `None` if no state yields the
 /// actuator (e.g. an empty map).
 #[must_use]
@@ -258,7 +258,7 @@ pub fn poses_from_states(states: &BTreeMap<PairKey, InteractionState>) -> Option
     })
 }
 
-/// The target interaction state (`features.md` §6.5): ι(target block, dummy
+/// The target interaction state (`docs/spec/features.md` §6.5): ι(target block, dummy
 /// actuator at (0, 0, 0) with id 8). Planning uses only components
 /// [`TARGET_FEATURES`] of differences to it.
 #[must_use]
@@ -297,7 +297,7 @@ mod tests {
         ObjectState::new(x, y, theta)
     }
 
-    /// features.md §7 example 6.
+    /// docs/spec/features.md §7 example 6.
     #[test]
     fn example_6_interaction_state() {
         let s = InteractionState::new(
@@ -349,7 +349,7 @@ mod tests {
         assert_eq!(s.components[7], -6.0);
     }
 
-    /// features.md §7 example 7.
+    /// docs/spec/features.md §7 example 7.
     #[test]
     fn example_7_episode_difference_and_changed_set() {
         let block = blue_at(0.0, 0.5, 0.0);
@@ -430,7 +430,7 @@ mod tests {
             &ObjectState::new(0.0, -0.2, 0.0),
         );
         let d = episode_difference(&pre, &post);
-        // Turning "by 0.083" across ±π shows up as −6.2 (README.md §5).
+        // Turning "by 0.083" across ±π shows up as −6.2 (docs/spec/README.md §5).
         assert!(close(d[4], -6.2));
         assert!(close(d[7], 6.2));
 
@@ -465,7 +465,7 @@ mod tests {
         assert_eq!(changed_features(&[0.0, 1e-300], 0.0), vec![1]);
     }
 
-    /// features.md §7 example 8.
+    /// docs/spec/features.md §7 example 8.
     #[test]
     fn example_8_extraction() {
         let s = InteractionState {

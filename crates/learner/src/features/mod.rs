@@ -1,10 +1,10 @@
-//! Feature computation (`features.md`): the "domain knowledge given to the
+//! Feature computation (`docs/spec/features.md`): the "domain knowledge given to the
 //! models from outside".
 //!
-//! | `features.md` | Here |
+//! | `docs/spec/features.md` | Here |
 //! |---|---|
 //! | §1 parsing, yaw ↔ quaternion | [`parse_frame`], [`quaternion_to_yaw`], [`yaw_to_quaternion`] |
-//! | `README.md` §5 rounding | [`r3`] |
+//! | `docs/spec/README.md` §5 rounding | [`r3`] |
 //! | §2 frames and transforms | [`transform`], [`inverse_transform`], [`local_point`], [`local_vec`], [`global_point`], [`global_vec`] |
 //! | §3 gate model features | [`relative_features`], [`local_change`], [`apply_local_change`], [`actuator_change`], [`apply_actuator_change`] |
 //! | §4 shape table | [`Shape`] |

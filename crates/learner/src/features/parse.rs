@@ -1,5 +1,5 @@
-//! Parsing a world-state [`Frame`] into object states (`features.md` §1,
-//! `protocol.md` §4), and the reverse yaw → quaternion conversion.
+//! Parsing a world-state [`Frame`] into object states (`docs/spec/features.md` §1,
+//! `docs/spec/protocol.md` §4), and the reverse yaw → quaternion conversion.
 
 use std::collections::BTreeMap;
 
@@ -18,11 +18,11 @@ pub enum ParseError {
     NoActuator,
     #[error("the frame has more than one model named \"{ACTUATOR_NAME}\"")]
     DuplicateActuator,
-    /// The ids are feature components (`README.md` §7.1), so a renumbered
+    /// The ids are feature components (`docs/spec/README.md` §7.1), so a renumbered
     /// actuator would silently change every feature vector.
     #[error("the actuator has id {id}, expected {ACTUATOR_ID}")]
     ActuatorId { id: u32 },
-    /// Only ids with an entry in the shape table (`features.md` §4) other than
+    /// Only ids with an entry in the shape table (`docs/spec/features.md` §4) other than
     /// the actuator's can be blocks.
     #[error("model {name:?} has id {id}, which is not a block id of the learner's shape table")]
     UnknownBlock { name: String, id: u32 },
@@ -47,7 +47,7 @@ pub enum ParseError {
     },
 }
 
-/// What parsing does with the actuator's yaw (`features.md` §1 step 4).
+/// What parsing does with the actuator's yaw (`docs/spec/features.md` §1 step 4).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ActuatorYaw {
     /// The gate model: `θ := 0` after parsing.
@@ -57,7 +57,7 @@ pub enum ActuatorYaw {
     Keep,
 }
 
-/// Models the learner ignores (`protocol.md` §4): `ground_plane`, anything whose
+/// Models the learner ignores (`docs/spec/protocol.md` §4): `ground_plane`, anything whose
 /// name contains `wall` or `Shadow`.
 #[must_use]
 pub fn is_skipped(name: &str) -> bool {
@@ -65,7 +65,7 @@ pub fn is_skipped(name: &str) -> bool {
 }
 
 /// Yaw of an orientation quaternion `[x, y, z, w]`, unrounded
-/// (`features.md` §1 step 2): normalised first, 0 for the zero quaternion.
+/// (`docs/spec/features.md` §1 step 2): normalised first, 0 for the zero quaternion.
 /// Non-finite components give NaN (`parse_frame` rejects them before).
 #[must_use]
 pub fn quaternion_to_yaw(q: [f64; 4]) -> f64 {
@@ -87,7 +87,7 @@ pub fn quaternion_to_yaw(q: [f64; 4]) -> f64 {
 }
 
 /// The pose quaternion `[x, y, z, w] = [0, 0, sin(θ/2), cos(θ/2)]` for a yaw
-/// (`features.md` §1, used by SetPose commands).
+/// (`docs/spec/features.md` §1, used by SetPose commands).
 #[must_use]
 pub fn yaw_to_quaternion(theta: f64) -> [f64; 4] {
     let half = theta / 2.0;
@@ -119,7 +119,7 @@ fn rounded(name: &str, field: &'static str, value: f64) -> Result<f64, ParseErro
     }
 }
 
-/// `s = (r3(x), r3(y), r3(yaw))` of one observation (`features.md` §1 steps
+/// `s = (r3(x), r3(y), r3(yaw))` of one observation (`docs/spec/features.md` §1 steps
 /// 1–3). The z coordinate is not read, so it is not checked either.
 pub fn parse_observation(obs: &Observation) -> Result<ObjectState, ParseError> {
     let name = obs.name.as_str();
@@ -142,8 +142,8 @@ pub fn parse_observation(obs: &Observation) -> Result<ObjectState, ParseError> {
     })
 }
 
-/// Parse a frame into the actuator's and the blocks' states (`features.md` §1,
-/// `protocol.md` §4).
+/// Parse a frame into the actuator's and the blocks' states (`docs/spec/features.md` §1,
+/// `docs/spec/protocol.md` §4).
 ///
 /// The actuator is the model named exactly `actuator` and must carry id 8;
 /// skipped models ([`is_skipped`]) are ignored without any check; every other

@@ -1,8 +1,8 @@
-//! The 3-decimal rounding `r3` (`README.md` §5), the system's only noise filter.
+//! The 3-decimal rounding `r3` (`docs/spec/README.md` §5), the system's only noise filter.
 
 use nalgebra::Vector2;
 
-/// `r3(v) = rint(v · 1000) / 1000`, ties to even (`README.md` §5).
+/// `r3(v) = rint(v · 1000) / 1000`, ties to even (`docs/spec/README.md` §5).
 ///
 /// The multiplication comes first and the tie is decided on the product, as
 /// the original's `numpy.round(v, 3)` did; so e.g. `r3(0.0005) == 0.0`,

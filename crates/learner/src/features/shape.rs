@@ -1,9 +1,9 @@
-//! The learner-side object shape table (`features.md` §4).
+//! The learner-side object shape table (`docs/spec/features.md` §4).
 
 use crate::types::{ACTUATOR_ID, BLUE_ID, RED_ID};
 
 /// Corners (in the object's own frame), segments between corners (pairs of
-/// corner indices) and radius of an object, in the order `features.md` §4
+/// corner indices) and radius of an object, in the order `docs/spec/features.md` §4
 /// gives them; the order decides ties in `dist_closing` (§5 step 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shape {

@@ -1,7 +1,7 @@
-//! Frames and transforms (`features.md` §2).
+//! Frames and transforms (`docs/spec/features.md` §2).
 //!
 //! Every product is written out in the spec's fixed evaluation order
-//! *(decision, `features.md` §2)*: a homogeneous product row is
+//! *(decision, `docs/spec/features.md` §2)*: a homogeneous product row is
 //! `(M_r0·qx + M_r1·qy) + M_r2`, a 3 × 3 product entry
 //! `(a_r0·b_0c + a_r1·b_1c) + a_r2·b_2c`. nalgebra's own products may sum in a
 //! different order, and a last-bit difference can flip a 3-decimal rounding or
@@ -22,7 +22,7 @@ pub fn transform(theta: f64, p: Vector2<f64>) -> Matrix3<f64> {
 }
 
 /// `T⁻¹(θ, p)` built as `(Rᵀ, −Rᵀp)` with the translation entries exactly as
-/// `features.md` §2 writes them, not by general inversion.
+/// `docs/spec/features.md` §2 writes them, not by general inversion.
 #[must_use]
 pub fn inverse_transform(theta: f64, p: Vector2<f64>) -> Matrix3<f64> {
     let (c, s) = (theta.cos(), theta.sin());
@@ -95,7 +95,7 @@ mod tests {
         (a - b).abs().max() < 1e-4
     }
 
-    /// features.md §7 example 5.
+    /// docs/spec/features.md §7 example 5.
     #[test]
     fn example_5_global_point_and_vector() {
         let p = Vector2::new(0.0, 0.5);
@@ -117,7 +117,7 @@ mod tests {
         ));
     }
 
-    /// features.md §7 example 6: the T⁻¹ translation column, unrounded.
+    /// docs/spec/features.md §7 example 6: the T⁻¹ translation column, unrounded.
     #[test]
     fn example_6_inverse_translation_column() {
         let ti = inverse_transform(FRAC_PI_3, Vector2::new(3.0, 2.0));

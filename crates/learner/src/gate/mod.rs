@@ -1,14 +1,14 @@
 //! The object-state model with gating function, "gate model"
-//! (`spec/gate-model.md`), and its Move-to-Target planner (`planning.md` §2,
+//! (`docs/spec/gate-model.md`), and its Move-to-Target planner (`docs/spec/planning.md` §2,
 //! §4, §5).
 //!
 //! * [`GateModel`]: the [`Model`](crate::Model) implementation — actuator
 //!   forward model, the gate classifier shared by all blocks, per-block
 //!   forward and inverse models;
 //! * [`GateWorld`]: its world state, whose blocks are records with identity
-//!   (`gate-model.md` §4.1);
+//!   (`docs/spec/gate-model.md` §4.1);
 //! * [`GateParams`] / [`GateConfig`]: rate-dependent thresholds, prediction
-//!   boost and the hard-coded variants of `gate-model.md` §5.
+//!   boost and the hard-coded variants of `docs/spec/gate-model.md` §5.
 
 mod model;
 mod params;

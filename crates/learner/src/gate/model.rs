@@ -1,5 +1,5 @@
 //! The gate model's state, update, re-synchronisation and prediction
-//! (`gate-model.md` §1–§4, §7).
+//! (`docs/spec/gate-model.md` §1–§4, §7).
 
 use std::collections::BTreeMap;
 
@@ -18,21 +18,21 @@ use crate::features::{
 use crate::model::{stat_keys, Model, ModelStats};
 use crate::types::{Action, Frame, ObjectState, Poses, Target, TargetError, TrackedObject};
 
-/// ε_change (`gate-model.md` §2, `README.md` §6): a block "changed" when its
+/// ε_change (`docs/spec/gate-model.md` §2, `docs/spec/README.md` §6): a block "changed" when its
 /// local change has a norm above this, i.e. any rounding-level change.
 pub const EPS_CHANGE: f64 = 0.0;
 
 /// The hard-coded actuator's displacement per unit of action: the 100 Hz step
-/// length (`gate-model.md` §5, flag 16).
+/// length (`docs/spec/gate-model.md` §5, flag 16).
 pub const HARD_CODED_ACTUATOR_STEP: f64 = 0.01;
 
 /// Input dimension of the actuator forward model: the action (vx, vy).
 const ACTION_DIM: usize = 2;
 
-/// Label of a gate sample whose block changed (`gate-model.md` §1).
+/// Label of a gate sample whose block changed (`docs/spec/gate-model.md` §1).
 const CHANGED: i64 = 1;
 
-/// Value of the stats labels for a hard-coded part (`gate-model.md` §5).
+/// Value of the stats labels for a hard-coded part (`docs/spec/gate-model.md` §5).
 pub const HARD_CODED_LABEL: &str = "hard-coded";
 
 /// Longest block-predictor input: φ and the three velocities of USE_DYNS.
@@ -68,7 +68,7 @@ fn predictor_input(
     (x, RELATIVE_FEATURES_DIM + extra.dim())
 }
 
-/// The models of one block id (`gate-model.md` §1): forward model φ → Δ and
+/// The models of one block id (`docs/spec/gate-model.md` §1): forward model φ → Δ and
 /// the inverse model, created together on the block's first observed change.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Predictor {
@@ -99,12 +99,12 @@ impl Predictor {
     }
 }
 
-/// The object-state model with gating function (`gate-model.md`).
+/// The object-state model with gating function (`docs/spec/gate-model.md`).
 ///
 /// An actuator forward model (action → actuator change), one gate classifier
 /// shared by all blocks ("does the actuator change this block in the next
 /// step?") and per block id a forward model and an inverse model of the
-/// block's change; plus the planner of `planning.md` §2 ([`Model::act`]).
+/// block's change; plus the planner of `docs/spec/planning.md` §2 ([`Model::act`]).
 ///
 /// ```
 /// use learner::gate::{GateConfig, GateModel, GateWorld};
@@ -207,7 +207,7 @@ impl GateModel {
     }
 
     /// Whether the gate predicts that the actuator changes the block described
-    /// by `phi` in the next step (`gate-model.md` §4: 0 if never trained).
+    /// by `phi` in the next step (`docs/spec/gate-model.md` §4: 0 if never trained).
     pub(super) fn influences(&self, phi: &[f64; RELATIVE_FEATURES_DIM]) -> bool {
         if self.config.params().hard_coded_gate {
             hard_coded_gate(phi)
@@ -216,7 +216,7 @@ impl GateModel {
         }
     }
 
-    /// The predicted actuator for action `a` from `from` (`gate-model.md` §4):
+    /// The predicted actuator for action `a` from `from` (`docs/spec/gate-model.md` §4):
     /// `s = r3(from.s + Δ̂a)`, `s_prev = from.s`. Always the model's own
     /// actuator forward model; zero change while it has no nodes.
     pub(super) fn predict_actuator(&self, from: &TrackedObject, a: Action) -> TrackedObject {
@@ -238,7 +238,7 @@ impl GateModel {
     }
 
     /// The predictor's next state of block `o` with features `phi`
-    /// (`features.md` §3.4, times the prediction boost), `None` without a
+    /// (`docs/spec/features.md` §3.4, times the prediction boost), `None` without a
     /// predictor for its id.
     pub(super) fn predictor_state(
         &self,
@@ -255,10 +255,10 @@ impl GateModel {
         ))
     }
 
-    /// `gate-model.md` §2 for one known block `k` newly observed as `o`,
+    /// `docs/spec/gate-model.md` §2 for one known block `k` newly observed as `o`,
     /// with the model's actuator already moved to the new state.
     fn train_block(&mut self, k: &TrackedObject, o: &TrackedObject, act: &TrackedObject) {
-        // gate-model.md §2: OLD block state with NEW actuator state, the
+        // docs/spec/gate-model.md §2: OLD block state with NEW actuator state, the
         // pairing predict() presents (predicted actuator, current block).
         let phi = relative_features(k, act);
         let delta = local_change(&k.s, &o.s);
@@ -279,7 +279,7 @@ impl GateModel {
     }
 
     /// The model's record for `block`'s id, adopting `block` itself if the id
-    /// is new (`gate-model.md` §4.1); `None` after an adoption.
+    /// is new (`docs/spec/gate-model.md` §4.1); `None` after an adoption.
     fn known_or_adopt(&mut self, block: &SharedBlock) -> Option<SharedBlock> {
         match self.records.get(&block.id()) {
             Some(r) => Some(r.0.clone()),
@@ -291,7 +291,7 @@ impl GateModel {
     }
 }
 
-/// The hard-coded gate (`gate-model.md` §5, flag 32): contact within this
+/// The hard-coded gate (`docs/spec/gate-model.md` §5, flag 32): contact within this
 /// step (`closing ≤ −distance`), or resting contact.
 pub(super) fn hard_coded_gate(phi: &[f64; RELATIVE_FEATURES_DIM]) -> bool {
     let (distance, closing) = (phi[2], phi[3]);
@@ -310,7 +310,7 @@ impl Model for GateModel {
     type World = GateWorld;
 
     fn parse(&self, frame: &Frame) -> Result<GateWorld, ParseError> {
-        // features.md §1 step 4: the gate model zeroes the actuator's yaw.
+        // docs/spec/features.md §1 step 4: the gate model zeroes the actuator's yaw.
         Ok(GateWorld::from_poses(&parse_frame(
             frame,
             ActuatorYaw::ForceZero,
@@ -325,7 +325,7 @@ impl Model for GateModel {
         for block in world.blocks.iter().rev() {
             let o = block.get();
             if let Some(k) = self.known_or_adopt(block) {
-                // gate-model.md §3 quirk: s_prev becomes the previous run's
+                // docs/spec/gate-model.md §3 quirk: s_prev becomes the previous run's
                 // last state.
                 k.advance(o.s);
             }
@@ -343,7 +343,7 @@ impl Model for GateModel {
         }
         act.advance(new.s);
         let act = *act;
-        // gate-model.md §1: descending id; it orders the shared gate's samples.
+        // docs/spec/gate-model.md §1: descending id; it orders the shared gate's samples.
         for block in world.blocks.iter().rev() {
             // Read before any write: `block` may be the model's record itself.
             let o = block.get();
@@ -375,7 +375,7 @@ impl Model for GateModel {
                         s,
                         s_prev: o.s,
                     }),
-                    // gate-model.md §4 quirk: the same record, own s_prev included.
+                    // docs/spec/gate-model.md §4 quirk: the same record, own s_prev included.
                     None => block.clone(),
                 }
             })

@@ -1,4 +1,4 @@
-//! Gate model configuration (`gate-model.md` §1, §5; `experiments.md` §1):
+//! Gate model configuration (`docs/spec/gate-model.md` §1, §5; `docs/spec/experiments.md` §1):
 //! unchecked [`GateParams`], validated once into [`GateConfig`].
 
 use serde::{Deserialize, Serialize};
@@ -8,7 +8,7 @@ use crate::aim::{AimConfig, AimError, AimParams};
 use crate::aitm::{AitmConfig, AitmError, AitmParams, QueryMode};
 use crate::features::DEFAULT_PREDICTION_BOOST;
 
-/// The boost of configuration flag 64 (`gate-model.md` §5).
+/// The boost of configuration flag 64 (`docs/spec/gate-model.md` §5).
 pub const FLAG_PREDICTION_BOOST: f64 = 1.5;
 
 pub use crate::flags;
@@ -18,7 +18,7 @@ pub use crate::flags;
 /// linVelY and angVel among an object's features).
 ///
 /// *(decision)* The learner's frames carry no message velocities
-/// (`protocol.md` §4: no evaluated learner reads them), so the velocities
+/// (`docs/spec/protocol.md` §4: no evaluated learner reads them), so the velocities
 /// are the block's displacement since its previous state, in that previous
 /// state's frame and rounded to 3 decimals, and its yaw change: the
 /// message's velocities times the message period up to the world's
@@ -71,20 +71,20 @@ pub enum GateError {
 /// Unchecked gate model parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GateParams {
-    /// Thresholds of the per-block inverse models (`inverse-model.md` §1);
+    /// Thresholds of the per-block inverse models (`docs/spec/inverse-model.md` §1);
     /// the only rate-dependent part of the gate model.
     pub aim: AimParams,
-    /// Factor on predicted block changes (`gate-model.md` §5): 1.0 in every
+    /// Factor on predicted block changes (`docs/spec/gate-model.md` §5): 1.0 in every
     /// reported result, 1.5 with flag 64.
     pub prediction_boost: f64,
     /// Flag 16: the actuator moves `0.01 · a` per message and its forward
-    /// model is never trained (`gate-model.md` §5).
+    /// model is never trained (`docs/spec/gate-model.md` §5).
     pub hard_coded_actuator: bool,
     /// Flag 32: a geometric rule replaces the learned gate, which is then
-    /// never trained (`gate-model.md` §5).
+    /// never trained (`docs/spec/gate-model.md` §5).
     pub hard_coded_gate: bool,
     /// η_in = η_out = η_A of the actuator and block forward models
-    /// (`aitm.md` §4): 0 in every final result, varied in the thesis
+    /// (`docs/spec/aitm.md` §4): 0 in every final result, varied in the thesis
     /// draft's tables ("ITM η").
     #[serde(default)]
     pub forward_learning_rate: f64,
@@ -117,7 +117,7 @@ impl GateParams {
     }
 
     /// The parameters of one of the original's configuration numbers
-    /// (`experiments.md` §1). Driver-only bits (4, 8) are accepted and have
+    /// (`docs/spec/experiments.md` §1). Driver-only bits (4, 8) are accepted and have
     /// no effect here; undefined bits are refused.
     pub fn from_config_number(number: u32) -> Result<Self, GateError> {
         let bad = number & !flags::ALL;
@@ -177,7 +177,7 @@ pub struct GateConfig {
     /// `params.aim`, checked.
     aim: AimConfig,
     /// The actuator and block forward models' configuration (BESTTWO,
-    /// `aitm.md` §6, with `params.forward_learning_rate`), checked.
+    /// `docs/spec/aitm.md` §6, with `params.forward_learning_rate`), checked.
     forward: AitmConfig,
 }
 

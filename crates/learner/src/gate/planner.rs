@@ -1,4 +1,4 @@
-//! Move to Target with the gate model: `get_action()` (`planning.md` §2),
+//! Move to Target with the gate model: `get_action()` (`docs/spec/planning.md` §2),
 //! circling (§4) and the exploration fallback (§5).
 
 use nalgebra::Vector2;
@@ -18,7 +18,7 @@ pub const PASS_MIN: f64 = 0.01;
 pub const PASS_MAX: f64 = 0.2;
 
 impl GateModel {
-    /// `get_action()` of `planning.md` §2, from the model's actuator and its
+    /// `get_action()` of `docs/spec/planning.md` §2, from the model's actuator and its
     /// record of the target block.
     pub(super) fn get_action(&mut self, rng: &mut dyn Rng) -> Action {
         let Some(target) = self.target else {
@@ -51,7 +51,7 @@ impl GateModel {
         }
         if dn > EPS_CLOSE_ENOUGH {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
-            // planning.md §2: the gate as a safety check on the straight move.
+            // docs/spec/planning.md §2: the gate as a safety check on the straight move.
             let a_hat = self.predict_actuator(&act, u);
             let phi = relative_features(&b, &a_hat);
             if !self.influences(&phi) {
@@ -64,7 +64,7 @@ impl GateModel {
             return u;
         }
         let n = norm2(v_star);
-        // planning.md §2: at 10 Hz the raw displacement passes through.
+        // docs/spec/planning.md §2: at 10 Hz the raw displacement passes through.
         if n == 0.0 || (PASS_MIN < n && n < PASS_MAX) {
             return Action::from_vector(v_star);
         }
@@ -72,7 +72,7 @@ impl GateModel {
     }
 }
 
-/// `circle_gate(B, Act, q)` (`planning.md` §4): the distance and the
+/// `circle_gate(B, Act, q)` (`docs/spec/planning.md` §4): the distance and the
 /// actuator's angle come from `φ(B, Act)`, `r` is the global vector from the
 /// block to the actuator.
 fn circle_gate(b: &TrackedObject, act: &TrackedObject, q: Vector2<f64>) -> Action {

@@ -1,4 +1,4 @@
-//! Tests of the gate model (`gate-model.md`) and its planner (`planning.md`
+//! Tests of the gate model (`docs/spec/gate-model.md`) and its planner (`docs/spec/planning.md`
 //! §2, §4, §5): every rule and quirk pinned by a test that fails if it is
 //! broken.
 
@@ -100,7 +100,7 @@ fn synthetic_run(x0: f64, messages: usize) -> Vec<GateWorld> {
         .collect()
 }
 
-/// Trains the way the push-task driver does (`experiments.md` §2):
+/// Trains the way the push-task driver does (`docs/spec/experiments.md` §2):
 /// `reset_objects` on the first message of a run, `update` on the others.
 fn train(model: &mut GateModel, starts: &[f64]) {
     for &x0 in starts {
@@ -434,7 +434,7 @@ fn predict_does_not_change_the_model() {
 
 #[test]
 fn a_chain_started_at_the_adopting_message_follows_the_real_block() {
-    // The constant-feedback pattern (experiments.md §3.4) on a fresh model.
+    // The constant-feedback pattern (docs/spec/experiments.md §3.4) on a fresh model.
     let mut m = GateModel::default();
     let w1 = world((0.0, 0.17), &blue(0.0, 0.25, 0.0));
     let p1 = m.predict(&w1, PUSH);
@@ -469,7 +469,7 @@ fn a_chain_started_at_the_adopting_message_follows_the_real_block() {
 
 #[test]
 fn a_chain_from_a_known_block_is_independent_of_the_model() {
-    // The push-task test pattern (experiments.md §2 test_step): the block is
+    // The push-task test pattern (docs/spec/experiments.md §2 test_step): the block is
     // known, so reset_objects does not adopt the world's block.
     let mut m = GateModel::default();
     m.reset_objects(&world((0.0, 0.0), &blue(0.0, 0.25, 0.0)));
@@ -608,7 +608,7 @@ fn parse_forces_the_actuator_yaw_to_zero_and_starts_fresh() {
 
 #[test]
 fn the_model_learns_a_synthetic_push() {
-    // As with the fixed training runs (reference-results.md §5.1): after
+    // As with the fixed training runs (docs/spec/reference-results.md §5.1): after
     // pushes left, right and in the centre, a central push is predicted over
     // 150 chained steps. The gate's boundary on this perfectly regular data
     // is decided by exact distance ties, so the onset may be a few messages

@@ -1,4 +1,4 @@
-//! The gate model's world state (`gate-model.md` §1) and its shared block
+//! The gate model's world state (`docs/spec/gate-model.md` §1) and its shared block
 //! records (§4.1).
 //!
 //! The original kept objects with identity: the model adopts a world state's
@@ -52,7 +52,7 @@ impl SharedBlock {
         }
     }
 
-    /// `s_prev := s; s := new`, in place (`gate-model.md` §2, §3).
+    /// `s_prev := s; s := new`, in place (`docs/spec/gate-model.md` §2, §3).
     pub(super) fn advance(&self, new: ObjectState) {
         let mut cell = self.cell.lock().unwrap_or_else(PoisonError::into_inner);
         *cell = (new, cell.0);
@@ -101,12 +101,12 @@ impl<'de> Deserialize<'de> for Record {
 }
 
 /// A world state of the gate model: the actuator and the blocks, each with
-/// `s` and `s_prev` (`gate-model.md` §1), parsed or predicted.
+/// `s` and `s_prev` (`docs/spec/gate-model.md` §1), parsed or predicted.
 ///
-/// Blocks are records with identity (`gate-model.md` §4.1): cloning a world
+/// Blocks are records with identity (`docs/spec/gate-model.md` §4.1): cloning a world
 /// shares them, and a block the model has adopted as its record keeps
 /// showing the model's current state. The actuator is a plain value (the
-/// model keeps a copy, `gate-model.md` §2).
+/// model keeps a copy, `docs/spec/gate-model.md` §2).
 #[derive(Clone, Debug)]
 pub struct GateWorld {
     pub(super) actuator: TrackedObject,
@@ -115,7 +115,7 @@ pub struct GateWorld {
 }
 
 impl GateWorld {
-    /// A world of freshly observed objects (`s_prev = s`, `features.md` §1
+    /// A world of freshly observed objects (`s_prev = s`, `docs/spec/features.md` §1
     /// step 5). The actuator's state is taken as it is: parsing for the gate
     /// model has already set its yaw to 0.
     #[must_use]
@@ -165,7 +165,7 @@ impl GateWorld {
     }
 
     /// Whether both worlds hold the very same record for block `id`
-    /// (`gate-model.md` §4.1): then every in-place update of one is seen by
+    /// (`docs/spec/gate-model.md` §4.1): then every in-place update of one is seen by
     /// the other.
     #[must_use]
     pub fn shares_block(&self, other: &GateWorld, id: u32) -> bool {

@@ -1,5 +1,5 @@
 //! State, update, reset, prediction and statistics of the interaction model
-//! (`interaction-model.md` §1–§6). Planning is in `planner.rs`.
+//! (`docs/spec/interaction-model.md` §1–§6). Planning is in `planner.rs`.
 
 use std::collections::BTreeMap;
 
@@ -18,7 +18,7 @@ use crate::features::{
 use crate::model::{stat_keys, Model, ModelStats};
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 
-/// The interaction model's world state (`interaction-model.md` §2): the
+/// The interaction model's world state (`docs/spec/interaction-model.md` §2): the
 /// object states (parsed with the actuator's reported yaw, or finalised from
 /// a prediction with actuator yaw 0) and every interaction state computed
 /// from them, by pair key (with one block only "15,8").
@@ -27,13 +27,13 @@ pub struct InteractionWorld {
     /// Kept for recording, scoring and finalisation; the model itself reads
     /// only `states`.
     pub poses: Poses,
-    /// ι(n1, n2) for every block n1 and every other object n2 (`features.md` §6.1).
+    /// ι(n1, n2) for every block n1 and every other object n2 (`docs/spec/features.md` §6.1).
     pub states: BTreeMap<PairKey, InteractionState>,
 }
 
 impl InteractionWorld {
     /// The world of these object states, with freshly computed interaction
-    /// states (`features.md` §6.1, which rounds the relative positions).
+    /// states (`docs/spec/features.md` §6.1, which rounds the relative positions).
     #[must_use]
     pub fn from_poses(poses: Poses) -> Self {
         let states = interaction_states(&poses);
@@ -42,7 +42,7 @@ impl InteractionWorld {
 }
 
 /// One Abstract Collection: the episodes whose changed-feature set is
-/// `features` (`interaction-model.md` §1). Its episodes and local inverse
+/// `features` (`docs/spec/interaction-model.md` §1). Its episodes and local inverse
 /// model, never used by the original, are not kept.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AbstractCollection {
@@ -76,7 +76,7 @@ impl AbstractCollection {
     }
 }
 
-/// A Move-to-Target goal and its target interaction state (`features.md`
+/// A Move-to-Target goal and its target interaction state (`docs/spec/features.md`
 /// §6.5). Serialised as the target alone: the state is recomputed, which is
 /// deterministic, so a restored model plans bit-identically.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -101,7 +101,7 @@ impl From<Goal> for Target {
     }
 }
 
-/// The pairwise interaction-state model (`interaction-model.md`).
+/// The pairwise interaction-state model (`docs/spec/interaction-model.md`).
 ///
 /// ```
 /// use learner::interaction::InteractionModel;
@@ -131,10 +131,10 @@ pub struct InteractionModel {
     #[serde(skip)]
     pub(super) index: BTreeMap<Vec<usize>, usize>,
     /// The ACS: `[ι, a_local]` → AC id; by default the AITM classifier with
-    /// integer labels (`aitm.md` §6), else one of the draft's selectors.
+    /// integer labels (`docs/spec/aitm.md` §6), else one of the draft's selectors.
     pub(super) selector: Selector,
     pub(super) selector_trained: bool,
-    /// The single global AIM (`interaction-model.md` §8).
+    /// The single global AIM (`docs/spec/interaction-model.md` §8).
     pub(super) inverse: InverseModel,
     /// Current interaction states by pair key.
     pub(super) current: BTreeMap<PairKey, InteractionState>,
@@ -197,7 +197,7 @@ impl InteractionModel {
     }
 
     /// One pair's sample of [`Model::selection`]: the AC the model's own
-    /// assignment gives to the transition `old` → `new` (the AC of its changed-feature set, `interaction-model.md` §3),
+    /// assignment gives to the transition `old` → `new` (the AC of its changed-feature set, `docs/spec/interaction-model.md` §3),
     /// `None` if no AC has that set, together with the AC the selector
     /// chooses for `old` under `action`: one sample of the selector's
     /// accuracy on real transitions. Changes nothing.
@@ -254,7 +254,7 @@ impl InteractionModel {
         k
     }
 
-    /// One training episode (`interaction-model.md` §3) from `old` to `new`
+    /// One training episode (`docs/spec/interaction-model.md` §3) from `old` to `new`
     /// under `action`.
     fn learn(&mut self, old: &InteractionState, new: &InteractionState, action: Action) {
         let d = episode_difference(old, new);
@@ -269,7 +269,7 @@ impl InteractionModel {
         self.inverse.train(&x, &d);
     }
 
-    /// The predicted interaction state for one pair (`interaction-model.md`
+    /// The predicted interaction state for one pair (`docs/spec/interaction-model.md`
     /// §5, before finalisation): same `T`, `T⁻¹`, `θ_ref`; the selected AC's
     /// output added to the components `S_k`.
     #[must_use]
@@ -293,7 +293,7 @@ impl InteractionModel {
     }
 }
 
-/// "AC with the most nodes" (`experiments.md` §7.5, the thesis's
+/// "AC with the most nodes" (`docs/spec/experiments.md` §7.5, the thesis's
 /// definition; ties go to the lower id *(decision)*) and the original
 /// analysis script's two quirky AC columns, added to `extra`.
 pub(super) fn ac_summary(acs: &[MapStats], extra: &mut BTreeMap<String, f64>) {
@@ -402,7 +402,7 @@ impl Model for InteractionModel {
         self.get_action(rng)
     }
 
-    /// §6 and `experiments.md` §7.5: the ACS and every AC (`ac/{k}`, with its
+    /// §6 and `docs/spec/experiments.md` §7.5: the ACS and every AC (`ac/{k}`, with its
     /// changed-feature list under the same key in `labels`), the number of
     /// ACs, the AC with the most nodes and the original script's AC columns.
     fn stats(&self) -> ModelStats {

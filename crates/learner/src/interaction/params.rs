@@ -1,5 +1,5 @@
-//! Parameters of the interaction model (`interaction-model.md` §3,
-//! `README.md` §6): unchecked [`InteractionParams`], validated once into
+//! Parameters of the interaction model (`docs/spec/interaction-model.md` §3,
+//! `docs/spec/README.md` §6): unchecked [`InteractionParams`], validated once into
 //! [`InteractionConfig`].
 
 use serde::{Deserialize, Serialize};
@@ -12,18 +12,18 @@ use crate::features::{EPS_NOISE_100HZ, EPS_NOISE_10HZ};
 use crate::flags;
 
 /// Unchecked parameters. The ACs are WINNER regressors and the ACS a WINNER
-/// classifier with the evaluated values of `aitm.md` §6 unless the draft's
+/// classifier with the evaluated values of `docs/spec/aitm.md` §6 unless the draft's
 /// variants are chosen (`ac_learning_rate`, `selector`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct InteractionParams {
     /// ε_noise: a feature belongs to an episode's changed-feature set if
-    /// `|d_i| > eps_noise` (`interaction-model.md` §3, §8: 0.001 at 100 Hz,
+    /// `|d_i| > eps_noise` (`docs/spec/interaction-model.md` §3, §8: 0.001 at 100 Hz,
     /// not the thesis table's 0.01).
     pub eps_noise: f64,
-    /// The global inverse model's thresholds (`inverse-model.md` §1),
+    /// The global inverse model's thresholds (`docs/spec/inverse-model.md` §1),
     /// validated on their own.
     pub aim: AimConfig,
-    /// η_in = η_out = η_A of every AC's forward model (`aitm.md` §4); 0 in
+    /// η_in = η_out = η_A of every AC's forward model (`docs/spec/aitm.md` §4); 0 in
     /// the evaluated configuration, varied in the thesis draft's tables.
     #[serde(default)]
     pub ac_learning_rate: f64,
@@ -45,7 +45,7 @@ impl InteractionParams {
         }
     }
 
-    /// 10 Hz (configuration bit 2, `experiments.md` §1): ε_noise 0.01 and
+    /// 10 Hz (configuration bit 2, `docs/spec/experiments.md` §1): ε_noise 0.01 and
     /// the 10 Hz AIM thresholds.
     #[must_use]
     pub fn hz10() -> Self {
@@ -57,7 +57,7 @@ impl InteractionParams {
     }
 
     /// The parameters of one of the original's configuration numbers
-    /// (`experiments.md` §1): bit 2 selects the 10 Hz thresholds, the
+    /// (`docs/spec/experiments.md` §1): bit 2 selects the 10 Hz thresholds, the
     /// driver's bits (4, 8) change nothing here; the gate model's bits (1,
     /// 16, 32, 64) and undefined ones are refused, since the interaction
     /// model has no such parts.

@@ -1,4 +1,4 @@
-//! Move to Target for the interaction model (`planning.md` §3, §4).
+//! Move to Target for the interaction model (`docs/spec/planning.md` §3, §4).
 
 use nalgebra::Vector2;
 
@@ -12,7 +12,7 @@ use crate::planning::{
 };
 use crate::types::{Action, ACTUATOR_ID};
 
-/// `circle_interaction(ι_c, q)` (`planning.md` §4): the clamped distance
+/// `circle_interaction(ι_c, q)` (`docs/spec/planning.md` §4): the clamped distance
 /// between the block and actuator extracted from `ι_c`, the block→actuator
 /// vector `R(θ_ref)·ι_c[5:7]` and the actuator's angle `atan2(ι6, ι5)`.
 #[must_use]
@@ -25,7 +25,7 @@ pub fn circle_interaction(current: &InteractionState, q: Vector2<f64>) -> Action
 }
 
 impl InteractionModel {
-    /// `get_action()` of `planning.md` §3 for the pair (target block,
+    /// `get_action()` of `docs/spec/planning.md` §3 for the pair (target block,
     /// actuator). Without a current state for that pair (the model has seen
     /// no world with the block yet) there is nothing to plan from: (0, 0),
     /// the target kept *(decision)*.
@@ -69,7 +69,7 @@ impl InteractionModel {
             return circle_interaction(&current, q);
         }
         if distance > EPS_CLOSE_ENOUGH {
-            // No safety check in this model (`planning.md` §6).
+            // No safety check in this model (`docs/spec/planning.md` §6).
             return Action::from_vector(scaled(delta, APPROACH_SPEED));
         }
         Action::from_vector(scaled(push, APPROACH_SPEED))

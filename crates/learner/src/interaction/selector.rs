@@ -1,5 +1,5 @@
 //! The Abstract Collection Selector as a pluggable choice: the final
-//! thesis's AITM classifier (`interaction-model.md` §1, the default), the
+//! thesis's AITM classifier (`docs/spec/interaction-model.md` §1, the default), the
 //! draft's decision tree trained on every stored (interaction state, action)
 //! → AC pair (thesis draft §3.2.2, §4.2.2), its incremental variant that
 //! keeps no references (asked for in draft §4.2.2), and the naive

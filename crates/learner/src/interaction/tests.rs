@@ -1,5 +1,5 @@
-//! Tests of the interaction model: every rule of `interaction-model.md` and
-//! the interaction parts of `planning.md`.
+//! Tests of the interaction model: every rule of `docs/spec/interaction-model.md` and
+//! the interaction parts of `docs/spec/planning.md`.
 
 use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
@@ -135,7 +135,7 @@ fn parse_keeps_the_actuator_yaw_and_builds_one_state_per_pair() {
     let w = model.parse(&frame).expect("valid frame");
     assert_eq!(w.poses.actuator.theta, 0.3);
     assert_eq!(w.states.keys().copied().collect::<Vec<_>>(), vec![KEY]);
-    // Component 7 = θ_actuator − θ_block with the reported yaw (features.md §6.1).
+    // Component 7 = θ_actuator − θ_block with the reported yaw (docs/spec/features.md §6.1).
     assert_eq!(w.states[&KEY].components[7], 0.3 - 0.1);
     assert_eq!(InteractionModel::poses(&w), w.poses);
 
@@ -195,7 +195,7 @@ fn acs_are_created_per_new_changed_set_with_ids_in_creation_order() {
 
 #[test]
 fn episode_of_features_example_7_trains_ac_6_with_d6() {
-    // features.md §7 example 7 through the model: S = {6}, d6 = 0.05.
+    // docs/spec/features.md §7 example 7 through the model: S = {6}, d6 = 0.05.
     let mut m = InteractionModel::default();
     m.reset_objects(&world((0.0, 0.5, 0.0), (0.0, 0.0, 0.0)));
     m.update(
@@ -254,7 +254,7 @@ fn the_empty_set_ac_has_zero_dimensional_outputs() {
     let ac = &m.collections()[0];
     assert!(ac.features().is_empty());
     assert_eq!(ac.forward().output_dim(), 0);
-    // aitm.md §6: after its first two nodes it never inserts again.
+    // docs/spec/aitm.md §6: after its first two nodes it never inserts again.
     assert_eq!(ac.forward().stats().nodes, 2);
     assert_eq!(ac.forward().stats().update_calls, 5);
     // Its prediction adds nothing.
@@ -275,7 +275,7 @@ fn epsilon_noise_follows_the_configuration() {
         m.collections()[0].features().to_vec()
     };
     assert_eq!(run(InteractionConfig::hz100()), vec![6]);
-    // At 10 Hz a 5 mm step is noise (interaction-model.md §8).
+    // At 10 Hz a 5 mm step is noise (docs/spec/interaction-model.md §8).
     assert_eq!(run(InteractionConfig::hz10()), Vec::<usize>::new());
     // The threshold is strict: a change of exactly ε_noise is noise.
     let b = base();
@@ -323,7 +323,7 @@ fn a_pair_seen_for_the_first_time_is_stored_without_training() {
 
 #[test]
 fn acs_labels_are_truncated_integers() {
-    // aitm.md §6: a node holding 0 hit by label 1 at the same input stores
+    // docs/spec/aitm.md §6: a node holding 0 hit by label 1 at the same input stores
     // trunc(0.5) = 0, so the selector keeps choosing AC 0 there.
     let b = base();
     let a = Action::new(0.0, 0.5);
@@ -354,7 +354,7 @@ fn acs_labels_of_ten_and_more_need_an_error_above_ten_to_insert() {
     // Twelve ACs from twelve changed sets, one episode each, the inputs
     // 0.1 apart along the local action's y: labels 0 … 9 each insert a
     // selector node (threshold 0.1), labels 10 and 11 do not (threshold 10,
-    // the winner's label 9 is off by less), aitm.md §4, §8.
+    // the winner's label 9 is off by less), docs/spec/aitm.md §4, §8.
     let sets: [&[usize]; 12] = [
         &[2],
         &[3],

@@ -22,7 +22,7 @@ pub struct HoeffdingParams {
     /// Candidate thresholds per feature, equally spaced over the leaf's range.
     pub split_points: usize,
     /// Smallest standard deviation of a Gaussian estimate: the inputs are
-    /// rounded to 0.001 (`features.md` §1), so a class whose feature never
+    /// rounded to 0.001 (`docs/spec/features.md` §1), so a class whose feature never
     /// varied is still spread over one rounding unit.
     pub min_std: f64,
 }
