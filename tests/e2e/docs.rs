@@ -1,13 +1,11 @@
 //! `docs/protocol.md` must stay true: its hex examples are checked against the
 //! real encoder and its schema listing against `proto/pushlearn.proto`.
 
-use std::path::Path;
-
 use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::{ClientMessage, ServerMessage};
 
 fn read(relative: &str) -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
+    let path = crate::process::repo_root().join(relative);
     std::fs::read_to_string(&path)
         .unwrap_or_else(|err| panic!("cannot read {}: {err}", path.display()))
 }

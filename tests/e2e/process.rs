@@ -2,6 +2,7 @@
 //! that a hung child fails its test instead of hanging the suite.
 
 use std::io::{BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::mpsc;
 use std::thread::{self, JoinHandle};
@@ -9,6 +10,12 @@ use std::time::{Duration, Instant};
 
 /// Generous: only there to turn a hang into a failure.
 pub const CHILD_LIMIT: Duration = Duration::from_secs(60);
+
+/// The repository's top level: these tests belong to `crates/cli`, but read
+/// the docs, the schema and the examples of the whole repository.
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
 
 pub fn run(mut command: Command) -> Output {
     command

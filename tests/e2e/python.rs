@@ -1,7 +1,7 @@
 //! The Python example client: its generated module must match the schema,
 //! and the script must work against the real daemon.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
 use pushlearn::wire::pb;
@@ -10,9 +10,7 @@ use crate::daemon::{self, Daemon};
 use crate::process::{run, text};
 
 fn example_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
-        .join("python")
+    crate::process::repo_root().join("examples").join("python")
 }
 
 /// `examples/python/pushlearn_pb2.py` as it must be for the current schema.
