@@ -21,9 +21,9 @@ use plotters::prelude::*;
 use serde::Deserialize;
 
 use super::reference::{self, Ms};
-use super::{FeedbackReport, MttReport, PushReport};
-use crate::experiment::push_task::{BlockCurve, CurveEntry, EndPoses};
 use crate::models::ModelKind;
+use crate::results::push_task::{BlockCurve, CurveEntry, EndPoses, PositionSummary};
+use crate::results::{FeedbackReport, MttReport, PushReport};
 
 /// What can go wrong while writing figures.
 #[derive(Debug, thiserror::Error)]
@@ -467,7 +467,7 @@ fn position_panels(block: &BlockCurve, name: &str, refs: &[(f64, Ms, Ms)]) -> [P
     let hi = xs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let panel = |what: &str,
                  unit: &str,
-                 get: fn(&crate::experiment::push_task::PositionSummary) -> MeanStd,
+                 get: fn(&PositionSummary) -> MeanStd,
                  r: fn(&(f64, Ms, Ms)) -> Ms| {
         let mut series = vec![ours(
             "ours",
@@ -1312,10 +1312,10 @@ mod tests {
     use learner::ModelStats;
 
     use super::*;
-    use crate::experiment::driver::Counters;
-    use crate::experiment::move_to_target::{ErrorTrace, MttRun, TargetSummary};
-    use crate::experiment::push_task::{summarise, Protocol, PushJobResult, Variant};
-    use crate::report::{RunInfo, Setup, TargetEntry};
+    use crate::results::move_to_target::{ErrorTrace, MttRun, TargetSummary};
+    use crate::results::push_task::{summarise, PushJobResult};
+    use crate::results::run_info::{Counters, RunInfo};
+    use crate::results::{Setup, TargetEntry};
 
     /// A fresh directory under the system's temporary one.
     fn scratch(name: &str) -> PathBuf {
@@ -1353,7 +1353,7 @@ mod tests {
     }
 
     fn push_report(train_runs: &[usize], folds: usize) -> PushReport {
-        let xs = Variant::Random.test_positions();
+        let xs = learner::eval::test_positions().to_vec();
         let jobs: Vec<PushJobResult> = train_runs
             .iter()
             .flat_map(|&n| (0..folds).map(move |f| (n, f)))
@@ -1410,7 +1410,7 @@ mod tests {
             variant: "random".into(),
             folds,
             train_runs: train_runs.to_vec(),
-            results: summarise(&Protocol::new(Variant::Random, 0), train_runs, &jobs).unwrap(),
+            results: summarise(&xs, &[BLUE_ID], train_runs, &jobs).unwrap(),
             run: RunInfo::default(),
         }
     }
