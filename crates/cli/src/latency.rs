@@ -11,6 +11,12 @@ const SUB: u64 = 16;
 /// Exact buckets for 0‥15 ns, then 16 per octave up to 2⁴¹ ns (≈ 37 min).
 const BUCKETS: usize = 16 + 37 * 16;
 
+/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz).
+#[must_use]
+pub fn budget(publish_rate_hz: u32) -> Duration {
+    Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
+}
+
 /// A histogram of durations.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Latencies {
@@ -135,6 +141,12 @@ impl std::fmt::Display for LatencySummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_budget_is_two_intervals() {
+        assert_eq!(budget(100), Duration::from_millis(20));
+        assert_eq!(budget(10), Duration::from_millis(200));
+    }
 
     #[test]
     fn buckets_cover_their_values_within_a_sixteenth() {

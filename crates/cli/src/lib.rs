@@ -7,6 +7,8 @@
 //! * [`models`]: the learners by name;
 //! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
 //!   and figures;
+//! * [`results`]: what the experiments measured, as plain data: filled by
+//!   [`experiment`], rendered by [`report`];
 //! * [`view`]: the browser viewer (`pushlearn view`).
 //!
 //! The wire types and the world client come from the root protocol crate,
@@ -19,4 +21,5 @@ pub mod learn;
 pub mod load;
 pub mod models;
 pub mod report;
+pub mod results;
 pub mod view;

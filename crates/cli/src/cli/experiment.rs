@@ -7,14 +7,16 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::{Model, ObjectState};
-use pushlearn_cli::experiment::move_to_target::{MAX_STEPS, REPETITIONS, TARGETS};
-use pushlearn_cli::experiment::push_task::{Protocol, Variant};
+use pushlearn_cli::experiment::move_to_target::MAX_STEPS;
+use pushlearn_cli::experiment::push_task::protocol::{Protocol, Variant};
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::{self, Plan};
 use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
 use pushlearn_cli::experiment::{Mode, LOW_RATE_HZ, RATE_HZ};
 use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
 use pushlearn_cli::report::{self, draft, table};
+use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
+use pushlearn_cli::results::{FeedbackReport, MttReport, PushReport};
 
 /// Run one of the thesis's experiments and print its table beside the
 /// thesis's numbers.
@@ -469,7 +471,7 @@ struct Push<'a> {
 }
 
 impl WithModel for Push<'_> {
-    type Output = Result<report::PushReport>;
+    type Output = Result<PushReport>;
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::push_task(
             untrained,
@@ -487,7 +489,7 @@ struct Feedback<'a> {
 }
 
 impl WithModel for Feedback<'_> {
-    type Output = Result<report::FeedbackReport>;
+    type Output = Result<FeedbackReport>;
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::constant_feedback(untrained, self.plan)?)
     }
@@ -502,7 +504,7 @@ struct MoveToTarget<'a> {
 }
 
 impl WithModel for MoveToTarget<'_> {
-    type Output = Result<report::MttReport>;
+    type Output = Result<MttReport>;
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         Ok(run::move_to_target(
             untrained,

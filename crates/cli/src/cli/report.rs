@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use pushlearn_cli::models::ModelKind;
-use pushlearn_cli::report::{plot, table, AnyReport};
+use pushlearn_cli::report::{plot, table};
+use pushlearn_cli::results::AnyReport;
 
 /// Print the table or draw the figures of a report saved with `--json`.
 #[derive(Debug, Args)]

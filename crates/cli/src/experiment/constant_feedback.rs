@@ -6,22 +6,12 @@
 
 use learner::eval::{RunErrors, PUSH_ACTION};
 use learner::{Action, Model};
-use serde::{Deserialize, Serialize};
 
 use super::driver::{push_task_blocks, Core, Task};
+use crate::results::constant_feedback::FeedbackRun;
 
 /// Name used for seeds and reports.
 pub const EXPERIMENT: &str = "push-task/constant-feedback";
-
-/// One test run: its start and the error of each message's prediction.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct FeedbackRun {
-    pub x0: f64,
-    /// Errors of the prediction made on message k against message k + 1,
-    /// for every message of the run that had a prediction, the last one
-    /// (which ended the run) included.
-    pub errors: Vec<RunErrors>,
-}
 
 /// The §3.4 handler. Note the spec's quirk, kept here: the step counter is
 /// never incremented, so only the actuator's 1 m distance ends a run.

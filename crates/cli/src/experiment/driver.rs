@@ -12,8 +12,8 @@ use std::collections::BTreeMap;
 
 use learner::eval::{actuator_left_area, RunStepper, MESSAGES_PER_RUN};
 use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID, ACTUATOR_NAME};
-use serde::{Deserialize, Serialize};
 
+use crate::results::run_info::Counters;
 use pushlearn::wire::pb::client_message::Payload;
 
 /// `docs/spec/experiments.md` §2: a start pose farther than this (norm over x, y, θ,
@@ -24,28 +24,6 @@ pub const START_TOLERANCE: f64 = 0.01;
 pub const ACTUATOR_Z: f64 = 0.03;
 /// See [`ACTUATOR_Z`].
 pub const BLOCK_Z: f64 = 0.05;
-
-/// Counters of one driver, summed over jobs for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Counters {
-    /// Every world state offered to the driver while it was not done.
-    pub messages: u64,
-    /// Messages dropped after a reset or repositioning (`ignore`).
-    pub ignored: u64,
-    /// Failed start-position checks, each answered with a SetPose.
-    pub reset_errors: u64,
-    /// Frames the model could not parse (not a model step).
-    pub parse_errors: u64,
-}
-
-impl std::ops::AddAssign for Counters {
-    fn add_assign(&mut self, other: Self) {
-        self.messages += other.messages;
-        self.ignored += other.ignored;
-        self.reset_errors += other.reset_errors;
-        self.parse_errors += other.parse_errors;
-    }
-}
 
 /// The driver variables of `docs/spec/experiments.md` §2 and the run primitives of
 /// §2.1; the tasks change them only through these methods and fields.

@@ -12,7 +12,7 @@
 //!   original's budget of 2/f seconds (`docs/spec/experiments.md` §6).
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use learner::Model;
 use serde::{Deserialize, Serialize};
@@ -21,7 +21,8 @@ use super::driver::{Driver, Task};
 use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
 use super::ExperimentError;
 use crate::frame::frame_from_state;
-use crate::latency::Latencies;
+use crate::latency::budget;
+use crate::results::run_info::Timing;
 use pushlearn::client::{ClientOptions, SimClient};
 use pushlearn::wire::pb::client_message::Payload;
 use pushlearn::wire::TimingMode;
@@ -42,62 +43,6 @@ impl Pacing {
             Pacing::Realtime => TimingMode::Realtime,
         }
     }
-}
-
-/// Handling times of the messages of one or more jobs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Timing {
-    /// States handled.
-    pub messages: u64,
-    /// States whose handling (parse, model work, sending the commands) took
-    /// longer than 2/f.
-    pub too_slow: u64,
-    /// Sum of the handling times, seconds.
-    pub busy_seconds: f64,
-    /// The longest handling time, seconds.
-    pub max_seconds: f64,
-    /// All handling times, for percentiles (not serialised).
-    #[serde(skip)]
-    pub histogram: Latencies,
-}
-
-impl Timing {
-    fn record(&mut self, took: Duration, budget: Duration) {
-        self.messages += 1;
-        if took > budget {
-            self.too_slow += 1;
-        }
-        let s = took.as_secs_f64();
-        self.busy_seconds += s;
-        self.max_seconds = self.max_seconds.max(s);
-        self.histogram.record(took);
-    }
-
-    /// Fraction of messages that were too slow (0 without messages).
-    #[must_use]
-    pub fn too_slow_fraction(&self) -> f64 {
-        if self.messages == 0 {
-            0.0
-        } else {
-            self.too_slow as f64 / self.messages as f64
-        }
-    }
-}
-
-impl std::ops::AddAssign for Timing {
-    fn add_assign(&mut self, other: Self) {
-        self.messages += other.messages;
-        self.too_slow += other.too_slow;
-        self.busy_seconds += other.busy_seconds;
-        self.max_seconds = self.max_seconds.max(other.max_seconds);
-        self.histogram += other.histogram;
-    }
-}
-
-/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz).
-#[must_use]
-pub fn budget(publish_rate_hz: u32) -> Duration {
-    Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
 }
 
 /// One connection to a world, with its own single-threaded runtime so that a
@@ -303,32 +248,4 @@ async fn resync_world(
         }
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_budget_is_two_intervals() {
-        assert_eq!(budget(100), Duration::from_millis(20));
-        assert_eq!(budget(10), Duration::from_millis(200));
-    }
-
-    #[test]
-    fn timing_counts_only_messages_over_budget() {
-        let mut t = Timing::default();
-        let b = budget(100);
-        t.record(Duration::from_millis(5), b);
-        t.record(Duration::from_millis(25), b);
-        t.record(Duration::from_millis(20), b);
-        assert_eq!((t.messages, t.too_slow), (3, 1));
-        assert!((t.too_slow_fraction() - 1.0 / 3.0).abs() < 1e-12);
-        assert!((t.max_seconds - 0.025).abs() < 1e-12);
-        let mut sum = Timing::default();
-        sum += t;
-        sum += t;
-        assert_eq!((sum.messages, sum.too_slow), (6, 2));
-        assert_eq!(Timing::default().too_slow_fraction(), 0.0);
-    }
 }

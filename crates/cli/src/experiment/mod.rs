@@ -2,20 +2,21 @@
 //!
 //! * [`driver`]: the message handler common to all experiments (§2), pure;
 //! * [`push_task`], [`constant_feedback`], [`move_to_target`]: the
-//!   experiments' handlers (§3, §3.4, §4), their jobs and their summaries;
+//!   experiments' handlers (§3, §3.4, §4) and their jobs;
 //! * [`link`]: a driver's connection to one world, paced in lock-step or
 //!   realtime;
 //! * [`workers`]: one world process per worker, jobs spread over workers
 //!   and gathered back in job order;
 //! * [`replay`]: recorded runs reused in `lockstep` mode;
 //! * [`run`]: whole experiments, from jobs to report documents;
-//! * [`seed`]: per-job seeds (§5); [`nodes`]: node statistics (§7.5).
+//! * [`seed`]: per-job seeds (§5).
+//!
+//! What the jobs measure, and its summaries, are [`crate::results`].
 
 pub mod constant_feedback;
 pub mod driver;
 pub mod link;
 pub mod move_to_target;
-pub mod nodes;
 pub mod push_task;
 pub mod replay;
 pub mod run;
@@ -125,12 +126,9 @@ pub enum ExperimentError {
     /// A test run ended before the model made a prediction.
     #[error("{job}: test run {run} ended before any prediction was made")]
     NoPrediction { job: String, run: usize },
-    /// No errors were recorded for a block at some test position.
-    #[error("no errors were recorded for block {id} at some test position")]
-    MissingBlock { id: u32 },
-    /// An N_train value without finished jobs.
-    #[error("no finished job for N_train = {n_train}")]
-    NoJobs { n_train: usize },
+    /// The jobs' results cannot be summarised.
+    #[error(transparent)]
+    Summary(#[from] crate::results::push_task::SummaryError),
     /// A job produced no result (its worker died).
     #[error("job {index} produced no result")]
     JobLost { index: usize },

@@ -8,14 +8,18 @@ use learner::{Model, ObjectState};
 
 use super::constant_feedback::FeedbackTask;
 use super::driver::{Driver, Task};
-use super::link::{Timing, WorldLink};
-use super::move_to_target::{MttJob, MttJobResult, MttTask, TargetSummary};
-use super::nodes::NodeSummary;
-use super::push_task::{summarise, Protocol, PushJob, PushJobResult, PushTask, Variant};
+use super::link::WorldLink;
+use super::move_to_target::{MttJob, MttTask};
+use super::push_task::protocol::{Protocol, PushJob, Variant};
+use super::push_task::task::PushTask;
 use super::replay::RunCache;
 use super::workers::{run_jobs, Worker, WorldSource};
 use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
-use crate::report::{FeedbackReport, MttReport, PushReport, RunInfo, Setup, TargetEntry};
+use crate::results::move_to_target::{MttJobResult, TargetSummary};
+use crate::results::nodes::NodeSummary;
+use crate::results::push_task::{summarise, PushJobResult};
+use crate::results::run_info::{Counters, RunInfo, Timing};
+use crate::results::{FeedbackReport, MttReport, PushReport, Setup, TargetEntry};
 use pushlearn::wire::pb::client_message::Payload;
 
 /// Where and how an experiment runs.
@@ -84,7 +88,7 @@ fn drive<M: Model, T: Task<M>>(
     task: T,
     rate_hz: u32,
     setup: Vec<Payload>,
-) -> Result<(T, Timing, super::driver::Counters), ExperimentError> {
+) -> Result<(T, Timing, Counters), ExperimentError> {
     // A fold starts from an untrained instance (`docs/spec/experiments.md` §2 new_fold).
     let model = untrained
         .lock()
@@ -129,11 +133,16 @@ pub fn push_task<M: Model>(
         progress,
     )?;
     Ok(PushReport {
-        setup: plan.setup(super::push_task::EXPERIMENT),
+        setup: plan.setup(crate::results::push_task::EXPERIMENT),
         variant: variant.as_str().to_owned(),
         folds,
         train_runs: train_runs.to_vec(),
-        results: summarise(protocol, train_runs, &results)?,
+        results: summarise(
+            &protocol.test_positions,
+            variant.blocks(),
+            train_runs,
+            &results,
+        )?,
         run: plan.with_reuse(RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
@@ -177,7 +186,7 @@ pub fn constant_feedback<M: Model>(
     )?;
     let (task, timing, counters) = results.pop().ok_or(ExperimentError::JobLost { index: 0 })?;
     Ok(FeedbackReport {
-        setup: plan.setup(super::push_task::EXPERIMENT),
+        setup: plan.setup(crate::results::push_task::EXPERIMENT),
         variant: Variant::ConstantFeedback.as_str().to_owned(),
         publish_rate_hz: LOW_RATE_HZ,
         runs: task.runs,
@@ -238,7 +247,7 @@ pub fn move_to_target<M: Model>(
         })
         .collect();
     Ok(MttReport {
-        setup: plan.setup(super::move_to_target::EXPERIMENT),
+        setup: plan.setup(crate::results::move_to_target::EXPERIMENT),
         repetitions,
         max_steps,
         targets: entries,

@@ -17,8 +17,8 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::experiment::driver::{ACTUATOR_Z, BLOCK_Z};
-use crate::experiment::link::budget;
 use crate::frame::frame_from_state;
+use crate::latency::budget;
 use crate::latency::{Latencies, LatencySummary};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};

@@ -14,9 +14,9 @@ use learner::keypoints::KeyPointScore;
 use learner::{ACTUATOR_ID, BLUE_ID};
 use serde::{Deserialize, Serialize};
 
-use super::{PushReport, Setup};
-use crate::experiment::push_task::{CurveEntry, SelectionCount};
 use crate::models::{ConfigFlag, ModelKind, ModelOptions};
+use crate::results::push_task::{CurveEntry, SelectionCount};
+use crate::results::{PushReport, Setup};
 
 /// (final dif, cumDif, mean dif) as printed in the draft (3 decimals).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

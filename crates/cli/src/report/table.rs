@@ -8,10 +8,12 @@ use learner::eval::MeanStd;
 use learner::{stat_keys, BLUE_ID};
 
 use super::reference::{self, Ms};
-use super::{FeedbackReport, MttReport, PushReport, RunInfo};
-use crate::experiment::nodes::NodeSummary;
-use crate::experiment::push_task::{BlockCurve, CurveEntry};
 use crate::models::ModelKind;
+use crate::results::move_to_target::{REPETITIONS, TARGETS};
+use crate::results::nodes::{MapSummary, NodeSummary};
+use crate::results::push_task::{BlockCurve, CurveEntry};
+use crate::results::run_info::RunInfo;
+use crate::results::{FeedbackReport, MttReport, PushReport};
 
 fn ms(m: MeanStd) -> String {
     format!("{:.4} ± {:.4}", m.mean, m.std)
@@ -226,10 +228,7 @@ fn two_objects(out: &mut impl Write, entry: &CurveEntry) -> io::Result<()> {
 
 fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::Result<()> {
     writeln!(out)?;
-    let get =
-        |n: &NodeSummary, key: &str, f: fn(&crate::experiment::nodes::MapSummary) -> MeanStd| {
-            n.map(key).map(f)
-        };
+    let get = |n: &NodeSummary, key: &str, f: fn(&MapSummary) -> MeanStd| n.map(key).map(f);
     match model {
         ModelKind::Gate => {
             writeln!(
@@ -423,14 +422,14 @@ pub fn move_to_target(
         "{:<28}  {:<12}  {:<16}  {:<16}  {:<36}",
         "Target (x, y, θ)", "Reached", "Pos [m]", "Ori [rad]", "# steps"
     )?;
-    let thesis_targets = crate::experiment::move_to_target::TARGETS;
+    let thesis_targets = TARGETS;
     for entry in &report.targets {
         let s = &entry.summary;
         let [x, y, theta] = entry.target;
         let r = thesis_targets
             .iter()
             .position(|t| t.x == x && t.y == y && t.theta == theta)
-            .filter(|_| report.repetitions == crate::experiment::move_to_target::REPETITIONS)
+            .filter(|_| report.repetitions == REPETITIONS)
             .and_then(|i| reference::move_to_target(model).get(i));
         let opt = |v: Option<f64>, digits: usize| {
             v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
@@ -468,4 +467,43 @@ pub fn move_to_target(
         )?;
     }
     run_info(out, &report.run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::results::test_support::{mtt_report, push_report};
+
+    #[test]
+    fn move_to_target_table_shows_no_reference_for_one_repetition() {
+        let report = mtt_report();
+        let mut text = Vec::new();
+        move_to_target(&mut text, &report, ModelKind::Interaction).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        assert!(text.contains("0/1"), "{text}");
+        assert!(text.contains("3000.0 (–)"), "{text}");
+        // One repetition is not the thesis's protocol: no reference shown.
+        assert!(!text.contains("2689.2"), "{text}");
+    }
+
+    #[test]
+    fn learning_curve_table_shows_the_thesis_beside_ours() {
+        let report = push_report("random", &[1, 3]);
+        let mut text = Vec::new();
+        push(&mut text, &report, ModelKind::Gate).unwrap();
+        let text = String::from_utf8(text).unwrap();
+        // §3.4 row N_train = 3, all positions and interacting.
+        assert!(text.contains("[0.1405 ± 0.1292]"), "{text}");
+        assert!(text.contains("[0.1557 ± 0.1154]"), "{text}");
+        // §4.2 node counts, N_train = 1.
+        assert!(text.contains("[3.7 (0.46)]"), "{text}");
+        assert!(text.contains("400 messages"), "{text}");
+        let mut fixed = Vec::new();
+        let report = push_report("fixed-three", &[3]);
+        push(&mut fixed, &report, ModelKind::Interaction).unwrap();
+        let fixed = String::from_utf8(fixed).unwrap();
+        // §5.2 position 9 (x0 = −0.07).
+        assert!(fixed.contains("[0.0536 ± 0.0205]"), "{fixed}");
+        assert!(fixed.contains("-0.070"), "{fixed}");
+    }
 }

@@ -1,0 +1,303 @@
+//! What every figure is drawn with: the embedded font, writing a figure as
+//! PNG and SVG, the colours, axis ranges, and panels of points with error
+//! bars laid out in a grid.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use learner::eval::MeanStd;
+use learner::{ACTUATOR_ID, RED_ID};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::PlotError;
+use crate::report::reference::Ms;
+
+const FONT: &[u8] = include_bytes!("../../../../../assets/fonts/DejaVuSans.ttf");
+
+/// Registers the embedded font once as "sans-serif".
+fn font() -> Result<(), PlotError> {
+    static REGISTERED: OnceLock<Result<(), String>> = OnceLock::new();
+    REGISTERED
+        .get_or_init(|| {
+            plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+                .map_err(|_| "not a TrueType font".to_owned())
+        })
+        .clone()
+        .map_err(|reason| PlotError::Embedded {
+            what: "font",
+            reason,
+        })
+}
+
+/// Drawing errors are reported as text: plotters' error types are generic
+/// over the backend.
+pub(super) type Drawn = Result<(), String>;
+
+pub(super) trait OrText<T> {
+    fn or_text(self) -> Result<T, String>;
+}
+
+impl<T, E: std::fmt::Display> OrText<T> for Result<T, E> {
+    fn or_text(self) -> Result<T, String> {
+        self.map_err(|e| e.to_string())
+    }
+}
+
+/// One figure, drawable on any backend.
+pub(super) trait Figure {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn;
+}
+
+/// Writes `figure` as `dir/stem.png` and `dir/stem.svg`.
+pub(super) fn write(
+    figure: &impl Figure,
+    dir: &Path,
+    stem: &str,
+    written: &mut Vec<PathBuf>,
+) -> Result<(), PlotError> {
+    let png = dir.join(format!("{stem}.png"));
+    let svg = dir.join(format!("{stem}.svg"));
+    let failed = |path: &Path| {
+        let path = path.to_path_buf();
+        move |reason| PlotError::Draw { path, reason }
+    };
+    {
+        let root = BitMapBackend::new(&png, figure.size()).into_drawing_area();
+        figure
+            .draw(&root)
+            .and_then(|()| root.present().or_text())
+            .map_err(failed(&png))?;
+    }
+    {
+        let root = SVGBackend::new(&svg, figure.size()).into_drawing_area();
+        figure
+            .draw(&root)
+            .and_then(|()| root.present().or_text())
+            .map_err(failed(&svg))?;
+    }
+    written.push(png);
+    written.push(svg);
+    Ok(())
+}
+
+pub(super) fn prepare(dir: &Path) -> Result<(), PlotError> {
+    font()?;
+    std::fs::create_dir_all(dir).map_err(|source| PlotError::Dir {
+        path: dir.to_path_buf(),
+        source,
+    })
+}
+
+// ---------------------------------------------------------------- colours
+
+const OURS: RGBColor = RGBColor(31, 119, 180);
+const THESIS: RGBColor = RGBColor(214, 95, 14);
+pub(super) const EXTRA: RGBColor = RGBColor(44, 160, 44);
+const ACTUATOR: RGBColor = RGBColor(60, 60, 60);
+const BLUE_BLOCK: RGBColor = RGBColor(40, 90, 220);
+const RED_BLOCK: RGBColor = RGBColor(220, 50, 40);
+pub(super) const TARGET: RGBColor = RGBColor(120, 120, 120);
+/// Opacity of predicted (and target) bodies in the snapshots.
+pub(super) const TRANSLUCENT: f64 = 0.3;
+
+/// A distinct colour for the k-th line of a family.
+pub(super) fn palette(k: usize) -> RGBColor {
+    const COLOURS: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+    ];
+    COLOURS[k % COLOURS.len()]
+}
+
+pub(super) fn body_colour(id: u32) -> RGBColor {
+    match id {
+        ACTUATOR_ID => ACTUATOR,
+        RED_ID => RED_BLOCK,
+        _ => BLUE_BLOCK,
+    }
+}
+
+// ------------------------------------------------------------ axis ranges
+
+/// A value axis from 0 to a bit above the largest of `tops` (so that every
+/// error bar fits), or 0…1 when there is nothing finite to show.
+fn value_range(tops: impl IntoIterator<Item = f64>) -> Range<f64> {
+    let top = tops
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold(0.0_f64, f64::max);
+    if top > 0.0 {
+        0.0..top * 1.08
+    } else {
+        0.0..1.0
+    }
+}
+
+/// `lo…hi` widened by `pad` on both sides (and to a minimal width).
+pub(super) fn padded(lo: f64, hi: f64, pad: f64) -> Range<f64> {
+    if lo.is_finite() && hi.is_finite() && lo <= hi {
+        (lo - pad)..(hi + pad).max(lo + pad)
+    } else {
+        -1.0..1.0
+    }
+}
+
+// ----------------------------------------------------------- error panels
+
+/// One series of a panel: points with optional error bars.
+pub(super) struct Series {
+    pub(super) label: String,
+    pub(super) colour: RGBColor,
+    /// (x, mean, std); std 0 draws no bar.
+    pub(super) points: Vec<(f64, f64, f64)>,
+    pub(super) bars: bool,
+}
+
+impl Series {
+    fn tops(&self) -> impl Iterator<Item = f64> + '_ {
+        self.points.iter().map(|&(_, m, s)| m + s)
+    }
+}
+
+/// Points of `ours`, and of the thesis's values where it has them.
+pub(super) fn ours(label: &str, points: Vec<(f64, MeanStd)>) -> Series {
+    Series {
+        label: label.to_owned(),
+        colour: OURS,
+        points: points
+            .into_iter()
+            .map(|(x, m)| (x, m.mean, m.std))
+            .collect(),
+        bars: true,
+    }
+}
+
+pub(super) fn thesis(points: Vec<(f64, Ms)>) -> Option<Series> {
+    (!points.is_empty()).then(|| Series {
+        label: "thesis".to_owned(),
+        colour: THESIS,
+        points: points.into_iter().map(|(x, Ms(m, s))| (x, m, s)).collect(),
+        bars: true,
+    })
+}
+
+pub(super) struct Panel {
+    pub(super) title: String,
+    pub(super) x_desc: String,
+    pub(super) y_desc: String,
+    pub(super) x_range: Range<f64>,
+    /// Drawn at x + offset·k for the k-th series, so bars do not overlap.
+    pub(super) offset: f64,
+    /// x is a count (training runs, messages, steps): labels without decimals.
+    pub(super) counts: bool,
+    pub(super) series: Vec<Series>,
+}
+
+impl Panel {
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> Drawn {
+        let y_range = value_range(self.series.iter().flat_map(Series::tops));
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(34)
+            .y_label_area_size(52)
+            .build_cartesian_2d(self.x_range.clone(), y_range)
+            .or_text()?;
+        let whole = |x: &f64| format!("{x:.0}");
+        let mut mesh = chart.configure_mesh();
+        if self.counts {
+            mesh.x_label_formatter(&whole);
+        }
+        mesh.x_desc(self.x_desc.as_str())
+            .y_desc(self.y_desc.as_str())
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(WHITE)
+            .draw()
+            .or_text()?;
+        let centre = (self.series.len() as f64 - 1.0) / 2.0;
+        for (k, s) in self.series.iter().enumerate() {
+            let shift = self.offset * (k as f64 - centre);
+            let colour = s.colour;
+            let line: Vec<(f64, f64)> = s.points.iter().map(|&(x, m, _)| (x + shift, m)).collect();
+            chart
+                .draw_series(LineSeries::new(line, colour.stroke_width(2)))
+                .or_text()?
+                .label(s.label.as_str())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            if s.bars {
+                chart
+                    .draw_series(s.points.iter().map(|&(x, m, sd)| {
+                        ErrorBar::new_vertical(x + shift, m - sd, m, m + sd, colour.filled(), 6)
+                    }))
+                    .or_text()?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font(("sans-serif", 11))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK.mix(0.4))
+            .draw()
+            .or_text()
+    }
+}
+
+/// Panels side by side (`columns` per row).
+pub(super) struct Grid {
+    pub(super) title: String,
+    pub(super) columns: usize,
+    pub(super) panel_size: (u32, u32),
+    pub(super) panels: Vec<Panel>,
+}
+
+impl Figure for Grid {
+    fn size(&self) -> (u32, u32) {
+        let rows = self.panels.len().div_ceil(self.columns.max(1)).max(1);
+        (
+            self.panel_size.0 * self.columns as u32,
+            self.panel_size.1 * rows as u32 + 30,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn {
+        root.fill(&WHITE).or_text()?;
+        let body = root.titled(&self.title, ("sans-serif", 17)).or_text()?;
+        let rows = self.panels.len().div_ceil(self.columns.max(1)).max(1);
+        let areas = body.split_evenly((rows, self.columns.max(1)));
+        for (panel, area) in self.panels.iter().zip(&areas) {
+            panel.draw(area)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn value_axes_cover_every_bar() {
+        let r = value_range([0.1, 0.35, f64::NAN, 0.2]);
+        assert_eq!(r.start, 0.0);
+        assert!(r.end > 0.35 && r.end < 0.4);
+        assert_eq!(value_range([f64::NAN]), 0.0..1.0);
+        assert_eq!(value_range([0.0]), 0.0..1.0);
+        let p = padded(-0.35, 0.35, 0.03);
+        assert!(p.start < -0.35 && p.end > 0.35);
+    }
+}

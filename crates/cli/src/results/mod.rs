@@ -1,0 +1,259 @@
+//! What the experiments measured, as plain data: each job's results, their
+//! summaries in the thesis's terms, and the documents that hold them
+//! ([`PushReport`], [`FeedbackReport`], [`MttReport`]). The experiments
+//! (`crate::experiment`) fill them; the reports (`crate::report`) render
+//! them as JSON, tables and figures, and read them back.
+//!
+//! * [`push_task`], [`constant_feedback`], [`move_to_target`]: the
+//!   experiments' results and summaries (`docs/spec/experiments.md` §7);
+//! * [`nodes`]: node statistics over folds (§7.5);
+//! * [`run_info`]: how a run went (message counts, handling times).
+//!
+//! Every document separates what the experiment measured (`results`,
+//! `runs`, `targets`: identical for identical seeds in lock-step) from how
+//! the run went (`run`: wall-clock times, too-slow counts).
+
+pub mod constant_feedback;
+pub mod move_to_target;
+pub mod nodes;
+pub mod push_task;
+pub mod run_info;
+#[cfg(test)]
+pub(crate) mod test_support;
+
+use serde::{Deserialize, Serialize};
+
+use constant_feedback::FeedbackRun;
+use move_to_target::{MttRun, TargetSummary};
+use nodes::NodeSummary;
+use push_task::CurveEntry;
+use run_info::RunInfo;
+
+/// What identifies an experiment's configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Setup {
+    pub experiment: String,
+    pub model: String,
+    pub mode: String,
+    pub seed: u64,
+}
+
+#[cfg(test)]
+impl Setup {
+    /// The setup of the tests' reports: `model` in lock-step, seed 1.
+    pub(crate) fn for_tests(experiment: &str, model: &str) -> Self {
+        Self {
+            experiment: experiment.into(),
+            model: model.into(),
+            mode: "lockstep".into(),
+            seed: 1,
+        }
+    }
+}
+
+/// `pushlearn experiment push-task` (all variants but constant feedback).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PushReport {
+    #[serde(flatten)]
+    pub setup: Setup,
+    pub variant: String,
+    pub folds: usize,
+    pub train_runs: Vec<usize>,
+    pub results: Vec<CurveEntry>,
+    pub run: RunInfo,
+}
+
+/// `pushlearn experiment push-task --variant constant-feedback`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FeedbackReport {
+    #[serde(flatten)]
+    pub setup: Setup,
+    pub variant: String,
+    pub publish_rate_hz: u32,
+    pub runs: Vec<FeedbackRun>,
+    pub run: RunInfo,
+}
+
+/// One target of `pushlearn experiment move-to-target`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TargetEntry {
+    /// (x, y, θ) of the blue block.
+    pub target: [f64; 3],
+    pub runs: Vec<MttRun>,
+    pub summary: TargetSummary,
+    /// Node statistics over repetitions when training ended.
+    pub nodes_after_training: NodeSummary,
+}
+
+/// `pushlearn experiment move-to-target`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MttReport {
+    #[serde(flatten)]
+    pub setup: Setup,
+    pub repetitions: usize,
+    pub max_steps: u64,
+    pub targets: Vec<TargetEntry>,
+    pub run: RunInfo,
+}
+
+/// Any report document, as read back from its JSON.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnyReport {
+    Push(PushReport),
+    Feedback(FeedbackReport),
+    MoveToTarget(MttReport),
+}
+
+/// Why a saved report cannot be read back.
+#[derive(Debug, thiserror::Error)]
+pub enum ReadError {
+    #[error("not JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("not a pushlearn report: no \"experiment\" key")]
+    NoExperiment,
+    #[error("unknown experiment {0:?} (expected push-task or move-to-target)")]
+    UnknownExperiment(String),
+}
+
+impl AnyReport {
+    /// Parses a document written by `--json`, telling the kinds apart by
+    /// their `experiment` and `variant` keys.
+    ///
+    /// # Errors
+    /// Not JSON, or not one of the report documents.
+    pub fn from_json(text: &str) -> Result<Self, ReadError> {
+        let value: serde_json::Value = serde_json::from_str(text)?;
+        let experiment = value
+            .get("experiment")
+            .and_then(serde_json::Value::as_str)
+            .ok_or(ReadError::NoExperiment)?;
+        Ok(match experiment {
+            push_task::EXPERIMENT => {
+                if value.get("variant").and_then(serde_json::Value::as_str)
+                    == Some(constant_feedback::VARIANT)
+                {
+                    AnyReport::Feedback(serde_json::from_value(value)?)
+                } else {
+                    AnyReport::Push(serde_json::from_value(value)?)
+                }
+            }
+            move_to_target::EXPERIMENT => AnyReport::MoveToTarget(serde_json::from_value(value)?),
+            other => return Err(ReadError::UnknownExperiment(other.to_owned())),
+        })
+    }
+
+    /// The report's setup (experiment, model, mode, seed).
+    #[must_use]
+    pub fn setup(&self) -> &Setup {
+        match self {
+            AnyReport::Push(r) => &r.setup,
+            AnyReport::Feedback(r) => &r.setup,
+            AnyReport::MoveToTarget(r) => &r.setup,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use serde_json::Value;
+
+    use super::test_support::{mtt_report, push_report};
+    use super::*;
+
+    fn keys(v: &Value) -> Vec<&str> {
+        v.as_object()
+            .map(|o| o.keys().map(String::as_str).collect())
+            .unwrap_or_default()
+    }
+
+    #[test]
+    fn push_task_json_has_the_documented_shape() {
+        let report = push_report("random", &[1, 3]);
+        let v: Value = serde_json::to_value(&report).unwrap();
+        for k in [
+            "experiment",
+            "model",
+            "variant",
+            "mode",
+            "folds",
+            "seed",
+            "results",
+            "run",
+        ] {
+            assert!(v.get(k).is_some(), "missing {k}: {:?}", keys(&v));
+        }
+        assert_eq!(v["experiment"], "push-task");
+        assert_eq!(v["variant"], "random");
+        let r = &v["results"][1];
+        assert_eq!(r["train_runs"], 3);
+        for k in ["block_pos_err", "block_ori_err", "actuator_pos_err"] {
+            assert!(r[k]["mean"].is_f64() && r[k]["std"].is_f64(), "{k}: {r}");
+            assert!(r["interacting"][k]["mean"].is_f64(), "{k}");
+        }
+        assert!(r["interacting"]["actuator_pos_err_script_quirk"].is_f64());
+        assert!(r.get("red").is_none());
+        let p = &r["per_position"][20];
+        assert_eq!(p["x0"].as_f64().map(|x| (x * 1000.0).round()), Some(350.0));
+        assert!(p["block_pos_err"]["std"].is_f64() && p["block_ori_err"]["mean"].is_f64());
+        assert_eq!(r["per_position"].as_array().map(Vec::len), Some(21));
+        let gate = &r["nodes"]["maps"]["gate"];
+        assert_eq!(gate["update_calls"]["mean"], 447.0);
+        assert!(gate["nodes"]["std"].is_f64());
+        // Position i of fold f errs by 0.01 (i + f): the per-position std
+        // over the two folds is 0.005 everywhere.
+        assert!((r["block_pos_err"]["std"].as_f64().unwrap() - 0.005).abs() < 1e-12);
+        assert_eq!(v["run"]["messages"], 400);
+        assert_eq!(v["run"]["too_slow"], 4);
+        assert_eq!(v["run"]["reset_errors"], 4);
+        assert!((v["run"]["budget_seconds"].as_f64().unwrap() - 0.02).abs() < 1e-12);
+        // And back.
+        let back: PushReport = serde_json::from_value(v).unwrap();
+        assert_eq!(back, report);
+    }
+
+    #[test]
+    fn saved_reports_are_read_back_by_kind() {
+        let report = push_report("random", &[1, 3]);
+        let text = serde_json::to_string(&report).unwrap();
+        assert_eq!(
+            AnyReport::from_json(&text).unwrap(),
+            AnyReport::Push(report)
+        );
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "juggling"}"#),
+            Err(ReadError::UnknownExperiment(e)) if e == "juggling"
+        ));
+        assert!(matches!(
+            AnyReport::from_json("{}"),
+            Err(ReadError::NoExperiment)
+        ));
+        assert!(matches!(
+            AnyReport::from_json(r#"{"experiment": "move-to-target"}"#),
+            Err(ReadError::Json(_))
+        ));
+    }
+
+    #[test]
+    fn two_object_json_adds_the_red_block() {
+        let v = serde_json::to_value(push_report("two-objects", &[6])).unwrap();
+        let r = &v["results"][0];
+        assert!((r["red"]["block_ori_err"]["mean"].as_f64().unwrap() - 0.04).abs() < 1e-12);
+        assert_eq!(r["red"]["per_position"].as_array().map(Vec::len), Some(21));
+    }
+
+    #[test]
+    fn move_to_target_json_has_the_documented_shape() {
+        let report = mtt_report();
+        let v = serde_json::to_value(&report).unwrap();
+        assert_eq!(v["experiment"], "move-to-target");
+        assert_eq!(v["model"], "interaction");
+        let t = &v["targets"][0];
+        assert_eq!(t["target"], serde_json::json!([0.6, 0.7, -2.1]));
+        let r = &t["runs"][0];
+        assert_eq!(r["reached"], false);
+        assert_eq!(r["steps"], 3000);
+        assert_eq!(r["pos_err"], 0.5);
+        assert_eq!(r["ori_err"], 0.1);
+        assert_eq!(t["summary"]["reached"], 0);
+    }
+}
