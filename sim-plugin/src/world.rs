@@ -224,6 +224,7 @@ pub struct World {
     /// step.
     touching: Vec<(u32, u32)>,
     /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
+    #[cfg(feature = "testing")]
     blow_up: Option<usize>,
 }
 
@@ -281,6 +282,7 @@ impl World {
             publish_every: STEPS_PER_SECOND / scene.publish_rate_hz,
             ghosts: Vec::new(),
             touching: Vec::new(),
+            #[cfg(feature = "testing")]
             blow_up: None,
         };
         // The same routine as every Reset, so that a fresh world and a reset
@@ -397,7 +399,7 @@ impl World {
     /// a diverging simulation would, to exercise the divergence reset of
     /// [`World::step`]. (Driving ODE itself there is no option: values large
     /// enough to overflow make it abort the process, hence the scene limits.)
-    #[doc(hidden)]
+    #[cfg(feature = "testing")]
     pub fn provoke_blow_up(&mut self, name: &str) -> Result<(), CommandError> {
         let i = self
             .scene
@@ -472,6 +474,7 @@ impl World {
             surfaces.get(a, b)
         })?;
         self.step_count += 1;
+        #[cfg(feature = "testing")]
         if let Some(i) = self.blow_up.take() {
             if let Ok(mut body) = self.ode.body_mut(self.bodies[i].handle) {
                 body.poison_for_test();
