@@ -3,6 +3,7 @@
 use ode::{
     BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
 };
+use pushlearn::wire::orientation::normalise;
 use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, ShapeSpec, ACTUATOR, GHOST_MARKER};
@@ -111,6 +112,12 @@ pub struct BodyState {
 
 impl BodyState {
     /// Rotation about +z in (−π, π], from the orientation quaternion.
+    ///
+    /// Not the wire's [`orientation::yaw`](pushlearn::wire::orientation::yaw):
+    /// that one normalises first and uses another, equal only up to
+    /// rounding, form of the formula; this one is the calibration sweep's
+    /// (`docs/results.md` §2), whose published numbers it
+    /// must keep reproducing bit for bit.
     pub fn yaw(&self) -> f64 {
         let [x, y, z, w] = self.orientation;
         (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
@@ -613,17 +620,6 @@ fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
     } else {
         v
     }
-}
-
-/// Unit quaternion, or `None` for a zero one.
-fn normalise(q: [f64; 4]) -> Option<[f64; 4]> {
-    let largest = q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    if largest == 0.0 {
-        return None;
-    }
-    let scaled = q.map(|x| x / largest);
-    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
-    Some(scaled.map(|x| x / norm))
 }
 
 #[cfg(test)]
