@@ -1,10 +1,10 @@
 //! The learner's journal as recovery reads it after a crash
-//! (`pushlearn::learn::state::read_records`): damage is detected, never a
+//! (`pushlearn_cli::learn::state::read_records`): damage is detected, never a
 //! crash or an unbounded allocation.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use pushlearn::learn::state::read_records;
+use pushlearn_cli::learn::state::read_records;
 
 fuzz_target!(|bytes: &[u8]| {
     let read = read_records(bytes);

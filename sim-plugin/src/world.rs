@@ -3,6 +3,7 @@
 use ode::{
     BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
 };
+use pushlearn::wire::orientation::normalise;
 use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, ShapeSpec, ACTUATOR, GHOST_MARKER};
@@ -111,6 +112,12 @@ pub struct BodyState {
 
 impl BodyState {
     /// Rotation about +z in (−π, π], from the orientation quaternion.
+    ///
+    /// Not the wire's [`orientation::yaw`](pushlearn::wire::orientation::yaw):
+    /// that one normalises first and uses another, equal only up to
+    /// rounding, form of the formula; this one is the calibration sweep's
+    /// (`docs/results.md` §2), whose published numbers it
+    /// must keep reproducing bit for bit.
     pub fn yaw(&self) -> f64 {
         let [x, y, z, w] = self.orientation;
         (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
@@ -224,6 +231,7 @@ pub struct World {
     /// step.
     touching: Vec<(u32, u32)>,
     /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
+    #[cfg(feature = "testing")]
     blow_up: Option<usize>,
 }
 
@@ -281,6 +289,7 @@ impl World {
             publish_every: STEPS_PER_SECOND / scene.publish_rate_hz,
             ghosts: Vec::new(),
             touching: Vec::new(),
+            #[cfg(feature = "testing")]
             blow_up: None,
         };
         // The same routine as every Reset, so that a fresh world and a reset
@@ -397,7 +406,7 @@ impl World {
     /// a diverging simulation would, to exercise the divergence reset of
     /// [`World::step`]. (Driving ODE itself there is no option: values large
     /// enough to overflow make it abort the process, hence the scene limits.)
-    #[doc(hidden)]
+    #[cfg(feature = "testing")]
     pub fn provoke_blow_up(&mut self, name: &str) -> Result<(), CommandError> {
         let i = self
             .scene
@@ -472,6 +481,7 @@ impl World {
             surfaces.get(a, b)
         })?;
         self.step_count += 1;
+        #[cfg(feature = "testing")]
         if let Some(i) = self.blow_up.take() {
             if let Ok(mut body) = self.ode.body_mut(self.bodies[i].handle) {
                 body.poison_for_test();
@@ -610,17 +620,6 @@ fn clamp_norm(v: [f64; 3], max: f64) -> [f64; 3] {
     } else {
         v
     }
-}
-
-/// Unit quaternion, or `None` for a zero one.
-fn normalise(q: [f64; 4]) -> Option<[f64; 4]> {
-    let largest = q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-    if largest == 0.0 {
-        return None;
-    }
-    let scaled = q.map(|x| x / largest);
-    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
-    Some(scaled.map(|x| x / norm))
 }
 
 #[cfg(test)]

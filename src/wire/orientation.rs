@@ -1,5 +1,6 @@
-//! Planar orientations on the wire: a yaw about the world z axis as the
-//! quaternion `[x, y, z, w]` the protocol carries, and back.
+//! Orientations on the wire: a yaw about the world z axis as the quaternion
+//! `[x, y, z, w]` the protocol carries, and back; and the normalisation the
+//! world applies to the quaternions it is sent.
 //!
 //! The learner crate has its own spec-exact copy of these formulas
 //! (`learner::features::{quaternion_to_yaw, yaw_to_quaternion}`,
@@ -14,6 +15,25 @@
 pub fn from_yaw(yaw: f64) -> [f64; 4] {
     let half = yaw / 2.0;
     [0.0, 0.0, half.sin(), half.cos()]
+}
+
+/// The unit quaternion of `q` (`[x, y, z, w]`, finite), or `None` for the
+/// zero quaternion: how the world normalises a SetPose orientation.
+///
+/// Dividing by the largest component first keeps every finite quaternion
+/// from under- or overflowing. [`yaw`] normalises differently (pre-scaling
+/// only on overflow, as the learner's spec does), and the two may differ in
+/// the last bit: this one feeds the physics, so its arithmetic is fixed by
+/// the reference results (`docs/results/`), and [`yaw`]'s by the learner's.
+#[must_use]
+pub fn normalise(q: [f64; 4]) -> Option<[f64; 4]> {
+    let largest = q.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    if largest == 0.0 {
+        return None;
+    }
+    let scaled = q.map(|x| x / largest);
+    let norm = scaled.iter().map(|x| x * x).sum::<f64>().sqrt();
+    Some(scaled.map(|x| x / norm))
 }
 
 /// The yaw of an orientation quaternion `[x, y, z, w]`, in `[-π, π]`:
@@ -72,6 +92,19 @@ mod tests {
             let learners = learner::features::yaw_to_quaternion(theta).map(f64::to_bits);
             prop_assert_eq!(ours, learners);
         }
+    }
+
+    #[test]
+    fn normalise_gives_unit_quaternions_at_any_scale() {
+        assert_eq!(normalise([0.0; 4]), None);
+        assert_eq!(normalise([0.0, 0.0, 0.0, -0.0]), None);
+        // Powers of two: the scaled components are exact, so the result is too.
+        for scale in [f64::MIN_POSITIVE, 0.5, 1.0, 2.0, 2f64.powi(1000)] {
+            let q = normalise([0.0, 0.0, 3.0 * scale, 4.0 * scale]).unwrap();
+            assert_eq!(q, [0.0, 0.0, 0.6, 0.8], "scale {scale}");
+        }
+        let q = normalise([1e308, -1e308, 1e308, 1e308]).unwrap();
+        assert_eq!(q, [0.5, -0.5, 0.5, 0.5]);
     }
 
     #[test]

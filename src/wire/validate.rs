@@ -173,8 +173,10 @@ fn validate_model(index: usize, model: &pb::ModelState) -> Result<(), InvalidCom
     for (axis, value) in [("x", x), ("y", y), ("z", z), ("w", w)] {
         check_finite(value, || at(&format!("orientation.{axis}")))?;
     }
-    // The world normalises the quaternion; that needs a length whose square
-    // neither underflows to zero nor overflows.
+    // The protocol's rule (docs/protocol.md): a length whose square neither
+    // underflows to zero nor overflows. The world's `orientation::normalise`
+    // would cope with more (it refuses only zero); the wire's rule is the
+    // published one and stays.
     let norm_squared = x * x + y * y + z * z + w * w;
     if norm_squared < f64::MIN_POSITIVE || norm_squared.is_infinite() {
         let problem = if norm_squared.is_infinite() {

@@ -395,58 +395,8 @@ impl CurveSummary {
 mod tests {
     use super::*;
     use crate::features::{parse_frame, ActuatorYaw};
-    use crate::model::ModelStats;
-    use crate::types::{Observation, Target, TargetError, ACTUATOR_NAME, BLUE_ID, BLUE_NAME};
-    use serde::{Deserialize, Serialize};
-
-    /// A model that records the calls the stepper makes and predicts "the
-    /// actuator moves by `action · 0.01`", so chains are visible.
-    #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-    struct Probe {
-        calls: Vec<String>,
-        training: bool,
-    }
-
-    impl Model for Probe {
-        type World = Poses;
-        fn parse(&self, frame: &Frame) -> Result<Poses, ParseError> {
-            parse_frame(frame, ActuatorYaw::ForceZero)
-        }
-        fn poses(world: &Poses) -> Poses {
-            world.clone()
-        }
-        fn reset_objects(&mut self, world: &Poses) {
-            self.calls.push(format!("reset y={:.3}", world.actuator.y));
-        }
-        fn update(&mut self, world: &Poses, action: Action) {
-            self.calls
-                .push(format!("update y={:.3} a={}", world.actuator.y, action.vy));
-        }
-        fn predict(&self, world: &Poses, action: Action) -> Poses {
-            let mut next = world.clone();
-            next.actuator.x += action.vx * 0.01;
-            next.actuator.y += action.vy * 0.01;
-            next
-        }
-        fn set_training(&mut self, on: bool) {
-            self.training = on;
-        }
-        fn is_training(&self) -> bool {
-            self.training
-        }
-        fn set_target(&mut self, _: Option<Target>) -> Result<(), TargetError> {
-            Ok(())
-        }
-        fn has_target(&self) -> bool {
-            false
-        }
-        fn act(&mut self, _: &mut dyn rand::Rng) -> Action {
-            Action::ZERO
-        }
-        fn stats(&self) -> ModelStats {
-            ModelStats::default()
-        }
-    }
+    use crate::testing::Probe;
+    use crate::types::{Observation, ACTUATOR_NAME, BLUE_ID, BLUE_NAME};
 
     /// A run in which the actuator moves 5 mm per message and the block
     /// stays put.

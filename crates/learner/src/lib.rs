@@ -17,7 +17,9 @@
 //! * [`planning`]: the model-independent parts of Move to Target
 //!   (`docs/spec/planning.md` §1, §4, §5);
 //! * [`tree`]: the decision trees of the thesis draft's AC selector;
-//! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2).
+//! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2);
+//! * `testing` (feature `testing`): the [`Model`] test double of every
+//!   crate's tests.
 
 pub mod aim;
 pub mod aitm;
@@ -29,6 +31,8 @@ pub mod interaction;
 pub mod keypoints;
 pub mod model;
 pub mod planning;
+#[cfg(any(test, feature = "testing"))]
+pub mod testing;
 pub mod tree;
 pub mod types;
 

@@ -217,101 +217,8 @@ impl ModelStats {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::features::{
-        changed_features, episode_difference, interaction_states, parse_frame, poses_from_states,
-        ActuatorYaw, InteractionState, PairKey, EPS_NOISE_100HZ,
-    };
+    use crate::testing::Probe;
     use crate::types::{Observation, BLUE_ID};
-    use rand::RngExt;
-
-    /// A deliberately tiny model that exercises the trait's calling pattern:
-    /// it remembers the last interaction states, counts transitions whose
-    /// changed-feature set is non-empty, predicts "nothing changes" and
-    /// explores at random.
-    #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-    struct Tally {
-        current: BTreeMap<PairKey, InteractionState>,
-        changed: u64,
-        training: bool,
-        target: Option<Target>,
-    }
-
-    #[derive(Clone, Debug)]
-    struct TallyWorld {
-        poses: Poses,
-        states: BTreeMap<PairKey, InteractionState>,
-    }
-
-    impl Model for Tally {
-        type World = TallyWorld;
-
-        fn parse(&self, frame: &Frame) -> Result<TallyWorld, ParseError> {
-            let poses = parse_frame(frame, ActuatorYaw::Keep)?;
-            let states = interaction_states(&poses);
-            Ok(TallyWorld { poses, states })
-        }
-
-        fn poses(world: &TallyWorld) -> Poses {
-            world.poses.clone()
-        }
-
-        fn reset_objects(&mut self, world: &TallyWorld) {
-            self.current = world.states.clone();
-        }
-
-        fn update(&mut self, world: &TallyWorld, _action: Action) {
-            for (k, new) in &world.states {
-                if let (Some(old), true) = (self.current.get(k), self.training) {
-                    if !changed_features(&episode_difference(old, new), EPS_NOISE_100HZ).is_empty()
-                    {
-                        self.changed += 1;
-                    }
-                }
-                self.current.insert(*k, *new);
-            }
-        }
-
-        fn predict(&self, world: &TallyWorld, _action: Action) -> TallyWorld {
-            let poses = poses_from_states(&world.states).unwrap_or_else(|| world.poses.clone());
-            TallyWorld {
-                states: interaction_states(&poses),
-                poses,
-            }
-        }
-
-        fn set_training(&mut self, on: bool) {
-            self.training = on;
-        }
-
-        fn is_training(&self) -> bool {
-            self.training
-        }
-
-        fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
-            if let Some(t) = &target {
-                t.check()?;
-            }
-            self.target = target;
-            Ok(())
-        }
-
-        fn has_target(&self) -> bool {
-            self.target.is_some()
-        }
-
-        fn act(&mut self, rng: &mut dyn Rng) -> Action {
-            if self.target.is_none() {
-                return Action::ZERO;
-            }
-            Action::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5)
-        }
-
-        fn stats(&self) -> ModelStats {
-            let mut s = ModelStats::default();
-            s.extra.insert("changed".into(), self.changed as f64);
-            s
-        }
-    }
 
     fn frame(actuator_y: f64) -> Frame {
         let obs = |name: &str, id, x, y| Observation {
@@ -362,15 +269,17 @@ mod tests {
             last = Some(a);
         }
         let ws = model.parse(&frame(0.02)).unwrap();
-        let p = model.predict(&ws, Action::new(0.0, 0.5));
+        // A zero action: the probe's prediction is then the parsed world.
+        let p = model.predict(&ws, Action::ZERO);
         (model, M::poses(&p))
     }
 
     #[test]
     fn the_trait_supports_the_drivers_calling_pattern() {
-        let (mut model, predicted) = drive(Tally::default());
-        // Steps 1–3 moved the actuator by 5 mm each: three changed episodes.
-        assert_eq!(model.stats().extra["changed"], 3.0);
+        let (mut model, predicted) = drive(Probe::default());
+        // Step 0 resynchronised, steps 1–3 were updates with training on.
+        assert_eq!(model.stats().maps["probe"].update_calls, 3);
+        assert_eq!(model.stats().maps["probe"].inserts, 1);
         assert!((predicted.actuator.y - 0.02).abs() < 1e-3);
         assert!(model.is_training());
 
@@ -390,13 +299,13 @@ mod tests {
         assert_ne!(a, Action::ZERO);
 
         let json = serde_json::to_string(&model).unwrap();
-        let back: Tally = serde_json::from_str(&json).unwrap();
-        assert_eq!(back.changed, 3);
+        let back: Probe = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.trained_updates, 3);
     }
 
     #[test]
     fn parse_errors_reach_the_driver() {
-        let model = Tally::default();
+        let model = Probe::default();
         let mut f = frame(0.0);
         f.objects.remove(0);
         assert_eq!(model.parse(&f).err(), Some(ParseError::NoActuator));

@@ -201,7 +201,7 @@ impl<'w> BodyMut<'w> {
     /// diverged simulation leaves behind, so that a caller's divergence
     /// handling can be tested. Never step the world before repairing the body
     /// (e.g. by resetting it): ODE does not guard against NaN.
-    #[doc(hidden)]
+    #[cfg(feature = "testing")]
     pub fn poison_for_test(&mut self) {
         // SAFETY: `raw` is a live body; ODE stores the values as given and
         // reads them only when stepping, which the caller must not do first.

@@ -70,6 +70,7 @@ pub(super) enum ToPhysics {
     Stop,
     /// Test fault injection ([`super::ServerHandle::provoke_blow_up`]);
     /// no client message becomes one.
+    #[cfg(feature = "testing")]
     BlowUp(String),
 }
 
@@ -229,6 +230,7 @@ impl Gate {
     }
 
     /// Hands the physics thread a test fault (never a client's command).
+    #[cfg(feature = "testing")]
     pub fn inject(&self, fault: ToPhysics) {
         let _ = self.lock().physics.send(fault);
     }

@@ -26,6 +26,7 @@ mod convert;
 mod gate;
 mod outbox;
 mod physics;
+#[cfg(feature = "testing")]
 pub mod untrusted;
 
 use std::net::SocketAddr;
@@ -386,7 +387,7 @@ impl ServerHandle {
     /// Fault injection for tests, reachable from no client message or flag:
     /// after its next step the world finds `body` with a non-finite state,
     /// as when the physics blows up (`docs/protocol.md` §6).
-    #[doc(hidden)]
+    #[cfg(feature = "testing")]
     pub fn provoke_blow_up(&self, body: &str) {
         self.shared
             .gate

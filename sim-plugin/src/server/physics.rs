@@ -234,6 +234,7 @@ impl Physics {
                 self.apply(accepted);
                 Flow::Continue
             }
+            #[cfg(feature = "testing")]
             ToPhysics::BlowUp(body) => {
                 self.blow_up(&body);
                 Flow::Continue
@@ -267,6 +268,7 @@ impl Physics {
             }
             let accepted = match message {
                 ToPhysics::Command(accepted) => accepted,
+                #[cfg(feature = "testing")]
                 ToPhysics::BlowUp(body) => {
                     self.blow_up(&body);
                     continue;
@@ -330,6 +332,7 @@ impl Physics {
         }
     }
 
+    #[cfg(feature = "testing")]
     fn blow_up(&mut self, body: &str) {
         if let Err(err) = self.world.provoke_blow_up(body) {
             tracing::error!("cannot provoke a blow-up: {err}");

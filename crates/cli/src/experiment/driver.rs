@@ -265,98 +265,16 @@ pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {
 
 #[cfg(test)]
 pub(crate) mod test_support {
-    //! A scripted world for driver tests: frames built from poses, a tiny
-    //! model whose predictions are visible, and a decoder for the commands.
+    //! A scripted world for driver tests: frames built from poses, the
+    //! learner's test model (its predictions are visible), and a decoder for
+    //! the commands.
 
-    use learner::features::{parse_frame, ActuatorYaw};
-    use learner::{
-        Action, Frame, Model, ModelStats, ObjectState, Observation, ParseError, Poses, Target,
-        TargetError,
-    };
-    use serde::{Deserialize, Serialize};
+    use learner::{Frame, ObjectState, Observation};
 
     use pushlearn::wire::pb::{client_message::Payload, sim_control};
 
-    /// Predicts "the actuator moves by action · 0.01, blocks stay", counts
-    /// calls, and walks towards its target's x in Move to Target.
-    #[derive(Clone, Debug, Default, Serialize, Deserialize)]
-    pub struct Probe {
-        pub resets: u64,
-        pub updates: u64,
-        pub trained_updates: u64,
-        pub training_off: bool,
-        pub target: Option<Target>,
-        pub current: Option<Poses>,
-        /// `act` reports the target reached after this many calls.
-        pub reach_after: Option<u64>,
-        pub acts: u64,
-    }
-
-    impl Model for Probe {
-        type World = Poses;
-        fn parse(&self, frame: &Frame) -> Result<Poses, ParseError> {
-            parse_frame(frame, ActuatorYaw::ForceZero)
-        }
-        fn poses(world: &Poses) -> Poses {
-            world.clone()
-        }
-        fn reset_objects(&mut self, world: &Poses) {
-            self.resets += 1;
-            self.current = Some(world.clone());
-        }
-        fn update(&mut self, world: &Poses, _action: Action) {
-            self.updates += 1;
-            if !self.training_off {
-                self.trained_updates += 1;
-            }
-            self.current = Some(world.clone());
-        }
-        fn predict(&self, world: &Poses, action: Action) -> Poses {
-            let mut next = world.clone();
-            next.actuator.x += action.vx * 0.01;
-            next.actuator.y += action.vy * 0.01;
-            next
-        }
-        fn set_training(&mut self, on: bool) {
-            self.training_off = !on;
-        }
-        fn is_training(&self) -> bool {
-            !self.training_off
-        }
-        fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
-            if let Some(t) = &target {
-                t.check()?;
-            }
-            self.target = target;
-            Ok(())
-        }
-        fn has_target(&self) -> bool {
-            self.target.is_some()
-        }
-        fn act(&mut self, rng: &mut dyn rand::Rng) -> Action {
-            use rand::RngExt;
-            self.acts += 1;
-            if self.reach_after.is_some_and(|n| self.acts >= n) {
-                self.target = None;
-            }
-            if self.target.is_none() {
-                return Action::ZERO;
-            }
-            Action::new(rng.random::<f64>() - 0.5, 0.0)
-        }
-        fn stats(&self) -> ModelStats {
-            let mut s = ModelStats::default();
-            s.maps.insert(
-                "probe".into(),
-                learner::MapStats {
-                    update_calls: self.trained_updates,
-                    inserts: self.resets,
-                    nodes: self.updates as usize,
-                },
-            );
-            s
-        }
-    }
+    /// The learner's test double, shared with its own tests.
+    pub use learner::testing::Probe;
 
     /// A frame with the actuator at (x, y) and the given blocks.
     pub fn frame(actuator: (f64, f64), blocks: &[(u32, ObjectState)]) -> Frame {

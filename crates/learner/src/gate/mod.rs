@@ -10,8 +10,9 @@
 //! * [`GateParams`] / [`GateConfig`]: rate-dependent thresholds, prediction
 //!   boost and the hard-coded variants of `docs/spec/gate-model.md` §5.
 
-mod model;
-mod params;
+mod algorithm;
+mod errors;
+mod hyperparams;
 mod planner;
 mod world;
 
@@ -21,9 +22,8 @@ mod tests;
 pub use crate::planning::{
     APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
-pub use model::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
-pub use params::{
-    flags, GateConfig, GateError, GateParams, VelocityFeatures, FLAG_PREDICTION_BOOST,
-};
+pub use algorithm::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
+pub use errors::GateError;
+pub use hyperparams::{flags, GateConfig, GateParams, VelocityFeatures, FLAG_PREDICTION_BOOST};
 pub use planner::{PASS_MAX, PASS_MIN};
 pub use world::GateWorld;

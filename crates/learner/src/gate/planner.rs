@@ -4,7 +4,7 @@
 use nalgebra::Vector2;
 use rand::Rng;
 
-use super::model::GateModel;
+use super::algorithm::GateModel;
 use crate::features::{global_point, global_vec, local_change, relative_features};
 use crate::planning::{
     circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,

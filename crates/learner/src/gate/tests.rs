@@ -7,7 +7,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use nalgebra::Vector2;
 use rand::RngExt;
 
-use super::model::hard_coded_gate;
+use super::algorithm::hard_coded_gate;
 use super::*;
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig, QueryMode};

@@ -17,17 +17,17 @@
 //! | parameters (100 Hz / 10 Hz) | [`InteractionParams`], [`InteractionConfig`] |
 //! | the draft's selectors (draft §3.2.2, §4.2.3) | [`AcSelector`], [`Selector`], [`SelectorKind`] |
 
+mod algorithm;
 mod errors;
-mod model;
-mod params;
+mod hyperparams;
 mod planner;
 mod selector;
 
 #[cfg(test)]
 mod tests;
 
+pub use algorithm::{AbstractCollection, InteractionModel, InteractionWorld};
 pub use errors::InteractionError;
-pub use model::{AbstractCollection, InteractionModel, InteractionWorld};
-pub use params::{InteractionConfig, InteractionParams};
+pub use hyperparams::{InteractionConfig, InteractionParams};
 pub use planner::circle_interaction;
 pub use selector::{AcSelector, NearestSelector, References, Selector, SelectorKind, TreeSelector};

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector2;
 
-use super::model::InteractionModel;
+use super::algorithm::InteractionModel;
 use crate::features::{
     apply_homogeneous, dist, episode_difference, global_vec, InteractionState, PairKey,
     INTERACTION_DIM, TARGET_FEATURES,

@@ -602,7 +602,7 @@ fn ac_summary_definitions() {
         nodes,
     };
     let mut extra = BTreeMap::new();
-    super::model::ac_summary(&[ms(10, 3), ms(5, 8), ms(20, 2)], &mut extra);
+    super::algorithm::ac_summary(&[ms(10, 3), ms(5, 8), ms(20, 2)], &mut extra);
     assert_eq!(extra[stat_keys::AC_LARGEST_ID], 1.0);
     assert_eq!(extra[stat_keys::AC_LARGEST_UPDATES], 5.0);
     assert_eq!(extra[stat_keys::AC_LARGEST_NODES], 8.0);
@@ -610,7 +610,7 @@ fn ac_summary_definitions() {
     // m: 10 > 0 → 3; 5 > 3 → 8; 20 > 8 → 2.
     assert_eq!(extra[stat_keys::AC_SCRIPT_NODES], 2.0);
     let mut extra = BTreeMap::new();
-    super::model::ac_summary(&[ms(1, 4), ms(9, 4)], &mut extra);
+    super::algorithm::ac_summary(&[ms(1, 4), ms(9, 4)], &mut extra);
     assert_eq!(extra[stat_keys::AC_LARGEST_ID], 0.0);
 }
 

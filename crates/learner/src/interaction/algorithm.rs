@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::errors::InteractionError;
-use super::params::InteractionConfig;
+use super::hyperparams::InteractionConfig;
 use super::selector::{AcSelector, Selector};
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, MapStats};

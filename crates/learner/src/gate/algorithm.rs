@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::params::{GateConfig, GateError, VelocityFeatures};
+use super::errors::GateError;
+use super::hyperparams::{GateConfig, VelocityFeatures};
 use super::world::{GateWorld, Record, SharedBlock};
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig};
