@@ -1,10 +1,18 @@
 //! Per-message work times in bounded memory: a log-linear histogram (16
 //! buckets per power of two, so a reported percentile is at most 1/16 above
-//! the true value), mergeable across jobs, with the exact maximum.
+//! the true value), mergeable across jobs, with the exact maximum; and the
+//! budget those times are held to.
 
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
+
+/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz)
+/// (`docs/spec/experiments.md` §6).
+#[must_use]
+pub fn budget(publish_rate_hz: u32) -> Duration {
+    Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
+}
 
 /// Sub-buckets per power of two.
 const SUB: u64 = 16;
@@ -135,6 +143,12 @@ impl std::fmt::Display for LatencySummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_budget_is_two_intervals() {
+        assert_eq!(budget(100), Duration::from_millis(20));
+        assert_eq!(budget(10), Duration::from_millis(200));
+    }
 
     #[test]
     fn buckets_cover_their_values_within_a_sixteenth() {

@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
-use crate::experiment::link::budget;
+use crate::latency::budget;
 use crate::learn::{WorkSummary, WorkTimes};
 use pushlearn::client::{seq_base_from_clock, ClientError, ClientOptions, SimClient};
 use pushlearn::wire::pb::client_message::Payload;

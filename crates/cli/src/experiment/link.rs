@@ -21,7 +21,7 @@ use super::driver::{Driver, Task};
 use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
 use super::ExperimentError;
 use crate::frame::frame_from_state;
-use crate::latency::Latencies;
+use crate::latency::{budget, Latencies};
 use pushlearn::client::{ClientOptions, SimClient};
 use pushlearn::wire::pb::client_message::Payload;
 use pushlearn::wire::TimingMode;
@@ -92,12 +92,6 @@ impl std::ops::AddAssign for Timing {
         self.max_seconds = self.max_seconds.max(other.max_seconds);
         self.histogram += other.histogram;
     }
-}
-
-/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz).
-#[must_use]
-pub fn budget(publish_rate_hz: u32) -> Duration {
-    Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
 }
 
 /// One connection to a world, with its own single-threaded runtime so that a
@@ -308,12 +302,6 @@ async fn resync_world(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn the_budget_is_two_intervals() {
-        assert_eq!(budget(100), Duration::from_millis(20));
-        assert_eq!(budget(10), Duration::from_millis(200));
-    }
 
     #[test]
     fn timing_counts_only_messages_over_budget() {

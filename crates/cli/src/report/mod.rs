@@ -15,10 +15,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::experiment::constant_feedback::FeedbackRun;
 use crate::experiment::driver::Counters;
-use crate::experiment::link::{budget, Timing};
+use crate::experiment::link::Timing;
 use crate::experiment::move_to_target::{MttRun, TargetSummary};
 use crate::experiment::nodes::NodeSummary;
 use crate::experiment::push_task::CurveEntry;
+use crate::latency::budget;
 
 /// How an experiment's run went: message counts, the timing requirement of
 /// `docs/spec/experiments.md` §6, start-position corrections.
