@@ -2,13 +2,13 @@
 //! crash-safe snapshots plus an append-only, checksummed journal of every
 //! world state handled since (`docs/reliability.md` has the whole design).
 //!
-//! * `DIR/snapshot`: the whole [`Learner`] after `S` journal records, written
+//! * `DIR/snapshot`: the whole [`Learner`](super::Learner) after `S` journal records, written
 //!   to `snapshot.tmp`, fsynced, atomically renamed over the old one and the
 //!   directory fsynced; a checksum over its contents is verified on load.
 //! * `DIR/log-S` (20 digits): the journal segment of the records `S+1, S+2,
 //!   …` — each world state the learner handled (its bodies' poses, bit for
 //!   bit) or a re-synchronisation. Replaying them through
-//!   [`Learner::on_state`] repeats exactly what the live learner did, since
+//!   [`Learner::on_state`](super::Learner::on_state) repeats exactly what the live learner did, since
 //!   the learner is deterministic given its state and its input.
 //!
 //! The hot path only encodes a record and hands it to a writer thread; the
@@ -24,9 +24,9 @@
 //! everything after it — it is never loaded. Then a fresh snapshot is written
 //! and a new segment started, so that every start begins from a clean state.
 //!
-//! The parts: [`record`] (the journal's record codec), [`snapshot`],
-//! [`segment`] (the journal's files), [`recovery`] and [`durable`] (the
-//! daemon's side: the group-commit writer).
+//! The parts: `record` (the journal's record codec), `snapshot`, `segment`
+//! (the journal's files), `recovery` and `durable` (the daemon's side: the
+//! group-commit writer).
 
 use std::io;
 use std::path::{Path, PathBuf};

@@ -27,9 +27,10 @@ pub(super) fn crc32(parts: &[&[u8]]) -> u32 {
 /// One journal record's content.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Entry {
-    /// A world state handed to [`Learner::on_state`].
+    /// A world state handed to
+    /// [`Learner::on_state`](crate::learn::Learner::on_state).
     State(Frame),
-    /// [`Learner::resync`]: the connection to the world was lost or the
+    /// [`Learner::resync`](crate::learn::Learner::resync): the connection to the world was lost or the
     /// daemon restarted.
     Resync,
 }
