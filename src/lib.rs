@@ -3,10 +3,12 @@
 //! * [`wire`]: the protobuf schema (`proto/pushlearn.proto`), framing,
 //!   connections and command validation, used by the world daemon and every
 //!   client alike;
-//! * [`client`]: an async client for the world daemon.
+//! * [`client`]: an async client for the world daemon;
+//! * [`duration`]: the `SECONDS` of every binary's command line.
 //!
 //! The application (learner daemon, experiments, reports, viewer, `ctl`) is
 //! the `pushlearn-cli` crate in `crates/cli`; the world is `sim-plugin`.
 
 pub mod client;
+pub mod duration;
 pub mod wire;

@@ -6,6 +6,8 @@
 //! Skipping (`ground_plane`, `*wall*`, `*Shadow`) and rounding are the
 //! models' parsing (`docs/spec/features.md` §1), so this conversion keeps everything.
 
+use std::collections::BTreeMap;
+
 use learner::{Frame, Observation};
 
 use pushlearn::wire::pb;
@@ -35,6 +37,37 @@ fn observation(model: &pb::ModelState) -> Observation {
         id: model.id,
         position,
         orientation,
+    }
+}
+
+/// The z to give a SetPose of each body (or of its ghost): the z of its start
+/// pose in the world's Hello — the actuator's clamp height and the blocks'
+/// resting height (`docs/spec/protocol.md` §6). Read from the world rather
+/// than copied, so that a scene with other sizes gets its own.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StartHeights(BTreeMap<u32, f64>);
+
+impl StartHeights {
+    /// The bodies of `hello` by id (a body without a position is left out).
+    #[must_use]
+    pub fn from_hello(hello: &pb::Hello) -> Self {
+        hello
+            .bodies
+            .iter()
+            .filter_map(|body| Some((body.id, body.pose.as_ref()?.position.as_ref()?.z)))
+            .collect()
+    }
+
+    /// `None` for a body the world does not have.
+    #[must_use]
+    pub fn z(&self, id: u32) -> Option<f64> {
+        self.0.get(&id).copied()
+    }
+}
+
+impl FromIterator<(u32, f64)> for StartHeights {
+    fn from_iter<I: IntoIterator<Item = (u32, f64)>>(iter: I) -> Self {
+        Self(iter.into_iter().collect())
     }
 }
 
@@ -111,5 +144,25 @@ mod tests {
         assert!(frame_from_state(&pb::WorldState::default())
             .objects
             .is_empty());
+    }
+
+    #[test]
+    fn start_heights_are_the_z_of_the_hello_start_poses() {
+        let hello = pb::Hello {
+            bodies: vec![
+                body("actuator", 8, [0.0, 0.0, 0.03], 0.0),
+                body("blockA", 15, [0.0, 0.25, 0.05], 0.0),
+                pb::ModelState {
+                    name: "blockB".into(),
+                    id: 27,
+                    ..Default::default()
+                },
+            ],
+            ..Default::default()
+        };
+        let heights = StartHeights::from_hello(&hello);
+        assert_eq!(heights.z(8), Some(0.03));
+        assert_eq!(heights.z(15), Some(0.05));
+        assert_eq!(heights.z(27), None);
     }
 }

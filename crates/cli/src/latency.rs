@@ -1,21 +1,23 @@
 //! Per-message work times in bounded memory: a log-linear histogram (16
 //! buckets per power of two, so a reported percentile is at most 1/16 above
-//! the true value), mergeable across jobs, with the exact maximum.
+//! the true value), mergeable across jobs, with the exact maximum; and the
+//! budget those times are held to.
 
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-/// Sub-buckets per power of two.
-const SUB: u64 = 16;
-/// Exact buckets for 0‥15 ns, then 16 per octave up to 2⁴¹ ns (≈ 37 min).
-const BUCKETS: usize = 16 + 37 * 16;
-
-/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz).
+/// The original's per-message budget: 2/f seconds (0.02 s at 100 Hz)
+/// (`docs/spec/experiments.md` §6).
 #[must_use]
 pub fn budget(publish_rate_hz: u32) -> Duration {
     Duration::from_secs_f64(2.0 / f64::from(publish_rate_hz.max(1)))
 }
+
+/// Sub-buckets per power of two.
+const SUB: u64 = 16;
+/// Exact buckets for 0‥15 ns, then 16 per octave up to 2⁴¹ ns (≈ 37 min).
+const BUCKETS: usize = 16 + 37 * 16;
 
 /// A histogram of durations.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -119,11 +119,8 @@ struct ServeArgs {
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
-    text.parse::<f64>()
-        .ok()
-        .and_then(|s| Duration::try_from_secs_f64(s).ok())
-        .filter(|d| !d.is_zero())
-        .ok_or_else(|| format!("expected a positive number of seconds, found '{text}'"))
+    pushlearn::duration::parse_positive_seconds(text)
+        .map_err(|_| format!("expected a positive number of seconds, found '{text}'"))
 }
 
 #[derive(Debug, Args)]

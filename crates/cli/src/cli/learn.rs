@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use learner::{Action, Model, ObjectState};
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
+use pushlearn::duration;
 use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
 use pushlearn_cli::learn::state::{Durable, Opened, Settings, DEFAULT_SNAPSHOT_EVERY};
 use pushlearn_cli::learn::{Learner, OnState, Policy, ServeOptions, Stop, WorkSummary};
@@ -91,10 +92,7 @@ pub struct LearnArgs {
 }
 
 fn parse_seconds_or_zero(text: &str) -> Result<Duration, String> {
-    text.parse::<f64>()
-        .ok()
-        .and_then(|s| Duration::try_from_secs_f64(s).ok())
-        .ok_or_else(|| format!("'{text}' is not a number of seconds"))
+    duration::parse_seconds(text).map_err(|_| format!("'{text}' is not a number of seconds"))
 }
 
 fn parse_action(text: &str) -> Result<Action, String> {
@@ -103,10 +101,8 @@ fn parse_action(text: &str) -> Result<Action, String> {
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
-    parse_seconds_or_zero(text)
-        .ok()
-        .filter(|d| !d.is_zero())
-        .ok_or_else(|| format!("'{text}' is not a positive number of seconds"))
+    duration::parse_positive_seconds(text)
+        .map_err(|_| format!("'{text}' is not a positive number of seconds"))
 }
 
 /// Runs `pushlearn learn`.

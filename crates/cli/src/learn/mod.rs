@@ -16,10 +16,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::experiment::driver::{ACTUATOR_Z, BLOCK_Z};
-use crate::frame::frame_from_state;
-use crate::latency::budget;
-use crate::latency::{Latencies, LatencySummary};
+use crate::frame::{frame_from_state, StartHeights};
+use crate::latency::{budget, Latencies, LatencySummary};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};
 use pushlearn::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
@@ -50,11 +48,16 @@ pub enum LearnError {
 /// What [`serve`] hands each world state to: a [`Learner`], or one that
 /// also journals what it learns ([`state::Durable`]).
 pub trait OnState {
-    /// Handles one world state; returns the commands to send.
+    /// Handles one world state; returns the commands to send, ghosts at
+    /// `heights` (the world's, [`StartHeights::from_hello`]).
     ///
     /// # Errors
     /// The model refuses its target, or the learner's memory cannot be kept.
-    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError>;
+    fn on_state(
+        &mut self,
+        frame: &Frame,
+        heights: &StartHeights,
+    ) -> Result<Vec<Payload>, LearnError>;
 
     /// [`Learner::resync`].
     ///
@@ -64,8 +67,12 @@ pub trait OnState {
 }
 
 impl<M: Model> OnState for Learner<M> {
-    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError> {
-        Ok(Learner::on_state(self, frame)?)
+    fn on_state(
+        &mut self,
+        frame: &Frame,
+        heights: &StartHeights,
+    ) -> Result<Vec<Payload>, LearnError> {
+        Ok(Learner::on_state(self, frame, heights)?)
     }
 
     fn resync(&mut self) -> Result<(), LearnError> {
@@ -110,12 +117,17 @@ impl<M: Model> Learner<M> {
     }
 
     /// Handles one world state; returns the commands to send (Move, then
-    /// the shadows). A state the model cannot parse sends nothing.
+    /// the shadows, at `heights`; a body without one gets no ghost). A state
+    /// the model cannot parse sends nothing.
     ///
     /// # Errors
     /// The model refuses the target (set on the first state, once the model
     /// knows the block).
-    pub fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, TargetError> {
+    pub fn on_state(
+        &mut self,
+        frame: &Frame,
+        heights: &StartHeights,
+    ) -> Result<Vec<Payload>, TargetError> {
         let world = match self.model.parse(frame) {
             Ok(world) => world,
             Err(err) => {
@@ -151,7 +163,7 @@ impl<M: Model> Learner<M> {
                 Policy::Target(pose) => Some(pose),
                 Policy::Fixed(_) => None,
             };
-            commands.push(shadows(&predicted, target));
+            commands.push(shadows(&predicted, target, heights));
         }
         Ok(commands)
     }
@@ -190,14 +202,14 @@ impl<M: Model> Learner<M> {
 /// The predicted poses, and the blue block's target if there is one, as one
 /// SetPose of the ghost bodies (`docs/spec/world.md` §3). The target is sent with every
 /// prediction rather than once, because a Reset clears the ghosts.
-fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
+fn shadows(
+    predicted: &learner::Poses,
+    target: Option<ObjectState>,
+    heights: &StartHeights,
+) -> Payload {
     let ghost = |id, s: ObjectState, suffix: &str| {
         let name = object_name(id)?;
-        let z = if id == learner::ACTUATOR_ID {
-            ACTUATOR_Z
-        } else {
-            BLOCK_Z
-        };
+        let z = heights.z(id)?;
         Some((
             format!("{name}{GHOST_MARKER}{suffix}"),
             pb::Pose::from_position_yaw([s.x, s.y, z], s.theta),
@@ -210,16 +222,19 @@ fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
     Payload::set_poses(poses)
 }
 
-/// Per-message work times and the too-slow count.
+/// Per-message work times and the too-slow count, in bounded memory: the
+/// daemon runs for days.
 #[derive(Clone, Debug, Default)]
 pub struct WorkTimes {
-    micros: Vec<u64>,
+    work: Latencies,
     too_slow: u64,
     /// The model's share (parse, update, act, predict): see [`crate::latency`].
     model: Latencies,
 }
 
-/// A summary of [`WorkTimes`].
+/// A summary of [`WorkTimes`]. The percentiles are nearest-rank ones from a
+/// histogram ([`crate::latency`]): at most 1/16 above the true value; the
+/// maximum is exact.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct WorkSummary {
     pub messages: u64,
@@ -242,39 +257,34 @@ impl WorkTimes {
 
     /// Records one message's work.
     pub fn record(&mut self, took: Duration, budget: Duration) {
-        self.micros
-            .push(u64::try_from(took.as_micros()).unwrap_or(u64::MAX));
+        self.work.record(took);
         if took > budget {
             self.too_slow += 1;
         }
     }
 
-    /// Count, too-slow count and fraction, and nearest-rank percentiles.
+    /// Messages recorded.
+    #[must_use]
+    pub fn messages(&self) -> u64 {
+        self.work.count()
+    }
+
+    /// Count, too-slow count and fraction, and percentiles.
     #[must_use]
     pub fn summary(&self) -> WorkSummary {
-        let mut sorted = self.micros.clone();
-        sorted.sort_unstable();
-        let n = sorted.len();
-        let rank = |p: f64| -> f64 {
-            if n == 0 {
-                return 0.0;
-            }
-            // Nearest rank: the smallest value with at least p of the data
-            // at or below it.
-            let k = ((p * n as f64).ceil() as usize).clamp(1, n);
-            sorted[k - 1] as f64 / 1e3
-        };
+        let n = self.work.count();
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
         WorkSummary {
-            messages: n as u64,
+            messages: n,
             too_slow: self.too_slow,
             too_slow_fraction: if n == 0 {
                 0.0
             } else {
                 self.too_slow as f64 / n as f64
             },
-            p50_ms: rank(0.5),
-            p99_ms: rank(0.99),
-            max_ms: sorted.last().map_or(0.0, |&m| m as f64 / 1e3),
+            p50_ms: ms(self.work.quantile(0.5)),
+            p99_ms: ms(self.work.quantile(0.99)),
+            max_ms: ms(self.work.max()),
             model: self.model.summary(),
         }
     }
@@ -284,7 +294,8 @@ impl std::fmt::Display for WorkSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} messages, {} ({:.4} %) over budget; work per message p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms; model alone {}",
+            "{} messages, {} ({:.4} %) over budget; work per message p50 {:.3} ms, p99 {:.3} ms \
+             (each at most 1/16 high), max {:.3} ms; model alone {}",
             self.messages,
             self.too_slow,
             100.0 * self.too_slow_fraction,
@@ -325,6 +336,7 @@ pub async fn serve(
 ) -> Result<(Stop, WorkSummary), LearnError> {
     let lockstep = client.hello().timing() == Ok(TimingMode::Lockstep);
     let budget = budget(client.hello().publish_rate);
+    let heights = StartHeights::from_hello(client.hello());
     // A world can be quiet for long (paused, or waiting for another client).
     client.set_timeout(None);
     let mut times = WorkTimes::default();
@@ -332,10 +344,7 @@ pub async fn serve(
     let interrupt = tokio::signal::ctrl_c();
     tokio::pin!(interrupt);
     let stop = loop {
-        if options
-            .max_messages
-            .is_some_and(|n| times.micros.len() as u64 >= n)
-        {
+        if options.max_messages.is_some_and(|n| times.messages() >= n) {
             break Stop::MessageLimit;
         }
         let next = async {
@@ -353,7 +362,7 @@ pub async fn serve(
         let received = Instant::now();
         let frame = frame_from_state(&state);
         let modelled = Instant::now();
-        let commands = learner.on_state(&frame)?;
+        let commands = learner.on_state(&frame, &heights)?;
         times.record_model(modelled.elapsed());
         for command in commands {
             client.send(command).await?;
@@ -379,6 +388,15 @@ mod tests {
     use super::*;
     use crate::experiment::driver::test_support::{blue_home, describe, frame, Probe};
 
+    /// The shipped scenes' (`docs/spec/world.md` §3).
+    pub(crate) fn heights() -> StartHeights {
+        StartHeights::from_iter([
+            (learner::ACTUATOR_ID, 0.03),
+            (BLUE_ID, 0.05),
+            (learner::RED_ID, 0.05),
+        ])
+    }
+
     #[test]
     fn a_fixed_action_learns_from_every_state_and_sends_shadows() {
         let mut l = Learner::new(
@@ -387,7 +405,10 @@ mod tests {
             true,
             1,
         );
-        let first = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        let first = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
         // Shadows predict the actuator 5 mm ahead (the probe's model).
         assert_eq!(
             first,
@@ -396,13 +417,15 @@ mod tests {
                 "pose(actuatorShadow,0,0.005);pose(blockAShadow,0,0.25)"
             ]
         );
-        l.on_state(&frame((0.0, 0.005), &blue_home())).unwrap();
-        l.on_state(&frame((0.0, 0.01), &blue_home())).unwrap();
+        l.on_state(&frame((0.0, 0.005), &blue_home()), &heights())
+            .unwrap();
+        l.on_state(&frame((0.0, 0.01), &blue_home()), &heights())
+            .unwrap();
         assert_eq!(l.model().resets, 1);
         assert_eq!(l.model().updates, 2);
         let mut broken = frame((0.0, 0.0), &blue_home());
         broken.objects.remove(0);
-        assert!(l.on_state(&broken).unwrap().is_empty());
+        assert!(l.on_state(&broken, &heights()).unwrap().is_empty());
         assert_eq!(l.parse_errors, 1);
         assert_eq!(l.model().updates, 2);
     }
@@ -415,15 +438,22 @@ mod tests {
         };
         let goal = ObjectState::new(0.6, 0.7, -2.1);
         let mut l = Learner::new(probe, Policy::Target(goal), false, 1);
-        let a = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        let a = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
         assert_eq!(a.len(), 1);
         assert_eq!(
             l.model().target.map(|t| (t.id, t.pose)),
             Some((BLUE_ID, goal))
         );
         assert!(!l.reached());
-        l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap();
-        let stop = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+            .unwrap();
+        let stop = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
         assert_eq!(stop, ["move(0,0)"]);
         assert!(l.reached());
     }
@@ -432,7 +462,10 @@ mod tests {
     fn shadows_of_a_target_policy_mark_the_target() {
         let goal = ObjectState::new(0.6, 0.7, -2.1);
         let mut l = Learner::new(Probe::default(), Policy::Target(goal), true, 1);
-        let commands = describe(&l.on_state(&frame((0.0, 0.0), &blue_home())).unwrap());
+        let commands = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
         assert_eq!(commands.len(), 2, "{commands:?}");
         assert!(
             commands[1].ends_with(";pose(blockAShadowTarget,0.6,0.7)"),
@@ -449,13 +482,13 @@ mod tests {
             1,
         );
         assert!(matches!(
-            l.on_state(&frame((0.0, 0.0), &blue_home())),
+            l.on_state(&frame((0.0, 0.0), &blue_home()), &heights()),
             Err(TargetError::NonFinite { .. })
         ));
     }
 
     #[test]
-    fn work_times_give_nearest_rank_percentiles() {
+    fn work_times_give_nearest_rank_percentiles_at_most_a_sixteenth_high() {
         let mut t = WorkTimes::default();
         let budget = Duration::from_millis(20);
         for ms in 1..=100 {
@@ -466,8 +499,9 @@ mod tests {
         // 0.25 ms … 25 ms: those above 20 ms are 20.25 … 25 (20 of them).
         assert_eq!(s.too_slow, 20);
         assert!((s.too_slow_fraction - 0.2).abs() < 1e-12);
-        assert_eq!(s.p50_ms, 12.5);
-        assert_eq!(s.p99_ms, 24.75);
+        // The nearest ranks are 12.5 ms and 24.75 ms.
+        assert!((12.5..=12.5 * 17.0 / 16.0).contains(&s.p50_ms), "{s:?}");
+        assert!((24.75..=24.75 * 17.0 / 16.0).contains(&s.p99_ms), "{s:?}");
         assert_eq!(s.max_ms, 25.0);
         assert_eq!(WorkTimes::default().summary(), WorkSummary::default());
     }

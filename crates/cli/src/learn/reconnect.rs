@@ -8,6 +8,7 @@
 use std::time::{Duration, Instant};
 
 use super::{serve, LearnError, OnState, ServeOptions, Stop, WorkSummary};
+use crate::frame::StartHeights;
 use learner::Frame;
 use pushlearn::client::{seq_base_from_clock, ClientError, ClientOptions, SimClient};
 use pushlearn::wire::pb::client_message::Payload;
@@ -74,9 +75,13 @@ struct Counting<'a, H> {
 }
 
 impl<H: OnState> OnState for Counting<'_, H> {
-    fn on_state(&mut self, frame: &Frame) -> Result<Vec<Payload>, LearnError> {
+    fn on_state(
+        &mut self,
+        frame: &Frame,
+        heights: &StartHeights,
+    ) -> Result<Vec<Payload>, LearnError> {
         self.states += 1;
-        self.inner.on_state(frame)
+        self.inner.on_state(frame, heights)
     }
 
     fn resync(&mut self) -> Result<(), LearnError> {

@@ -14,6 +14,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use pushlearn::client::{seq_base_from_clock, ClientError, ClientOptions, SimClient, DEFAULT_ADDR};
+use pushlearn::duration::{self, SecondsError};
 use pushlearn::wire::pb::client_message::Payload;
 
 use output::Output;
@@ -167,13 +168,12 @@ impl Action {
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
-    let seconds: f64 = text
-        .parse()
-        .map_err(|_| format!("'{text}' is not a number of seconds"))?;
-    Duration::try_from_secs_f64(seconds)
-        .ok()
-        .filter(|d| !d.is_zero())
-        .ok_or_else(|| format!("the timeout must be a positive number of seconds, not '{text}'"))
+    duration::parse_positive_seconds(text).map_err(|err| match err {
+        SecondsError::NotANumber => format!("'{text}' is not a number of seconds"),
+        SecondsError::OutOfRange | SecondsError::Zero => {
+            format!("the timeout must be a positive number of seconds, not '{text}'")
+        }
+    })
 }
 
 /// Runs `pushlearn ctl`.

@@ -1,0 +1,393 @@
+//! The daemon's side: a learner whose every input is journalled before it
+//! acts on it, with a writer thread that group-commits the records and
+//! writes the snapshots.
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{mpsc, Arc, Mutex, PoisonError};
+use std::thread::JoinHandle;
+
+use learner::{Frame, Model};
+
+use super::record::encode_record;
+use super::recovery::{cut_tail, recover, Recovery};
+use super::segment::{open_segment, segments};
+use super::snapshot::write_snapshot;
+use super::{io_error, Settings, StateError};
+use crate::frame::StartHeights;
+use crate::learn::{LearnError, Learner, OnState};
+use pushlearn::wire::pb::client_message::Payload;
+
+enum ToWriter<M: Model> {
+    Records {
+        last: u64,
+        bytes: Vec<u8>,
+    },
+    Snapshot {
+        records: u64,
+        learner: Box<Learner<M>>,
+    },
+    Close,
+}
+
+#[derive(Debug, Default)]
+struct WriterShared {
+    acknowledged: AtomicU64,
+    failure: Mutex<Option<String>>,
+}
+
+/// A learner whose every input is journalled, with snapshots, in a state
+/// directory; see the module docs.
+pub struct Durable<M: Model + 'static> {
+    learner: Learner<M>,
+    records: u64,
+    since_snapshot: u64,
+    snapshot_every: u64,
+    tx: Option<mpsc::Sender<ToWriter<M>>>,
+    shared: Arc<WriterShared>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl<M: Model + 'static> std::fmt::Debug for Durable<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Durable")
+            .field("records", &self.records)
+            .field("acknowledged", &self.acknowledged())
+            .finish_non_exhaustive()
+    }
+}
+
+/// How [`Durable::open`] found the directory.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Opened {
+    /// No memory yet: a fresh learner.
+    Fresh,
+    /// An earlier learner, recovered.
+    Resumed(Recovery),
+}
+
+impl<M: Model + 'static> Durable<M> {
+    /// Opens (creating if need be) the memory in `dir`: recovers the stored
+    /// learner, or starts `fresh()` if there is none; cuts a damaged journal
+    /// tail; writes a snapshot of the result, starts a new journal segment
+    /// and, for a resumed learner, journals a re-synchronisation (the world
+    /// has moved on while the daemon was down). Snapshots follow every
+    /// `snapshot_every` records.
+    ///
+    /// # Errors
+    /// See [`recover`]; I/O errors writing the directory.
+    pub fn open(
+        dir: &Path,
+        settings: &Settings,
+        fresh: impl FnOnce() -> Learner<M>,
+        snapshot_every: u64,
+    ) -> Result<(Self, Opened), StateError> {
+        fs::create_dir_all(dir).map_err(io_error(dir))?;
+        let (learner, opened) = match recover::<M>(dir, settings)? {
+            None => (fresh(), Opened::Fresh),
+            Some((learner, recovery)) => {
+                if let Some(cut) = &recovery.cut {
+                    tracing::warn!("damaged journal tail: {cut}");
+                    cut_tail(cut)?;
+                }
+                (learner, Opened::Resumed(recovery))
+            }
+        };
+        let records = match &opened {
+            Opened::Fresh => 0,
+            Opened::Resumed(recovery) => recovery.records(),
+        };
+        write_snapshot(dir, records, settings, &learner)?;
+        for (_, old) in segments(dir)? {
+            fs::remove_file(&old).map_err(io_error(&old))?;
+        }
+        let (segment, segment_path) = open_segment(dir, records)?;
+        let shared = Arc::new(WriterShared::default());
+        shared.acknowledged.store(records, Ordering::Relaxed);
+        let (tx, rx) = mpsc::channel();
+        let thread = {
+            let shared = shared.clone();
+            let writer_dir = dir.to_path_buf();
+            let settings = settings.clone();
+            std::thread::Builder::new()
+                .name("journal".into())
+                .spawn(move || {
+                    let mut writer = Writer {
+                        dir: writer_dir,
+                        settings,
+                        segment,
+                        segment_path,
+                        shared: &shared,
+                    };
+                    if let Err(err) = writer.run(&rx) {
+                        tracing::error!("the journal stopped: {err}");
+                        *shared
+                            .failure
+                            .lock()
+                            .unwrap_or_else(PoisonError::into_inner) = Some(err.to_string());
+                    }
+                })
+                .map_err(io_error(dir))?
+        };
+        let mut durable = Durable {
+            learner,
+            records,
+            since_snapshot: 0,
+            snapshot_every: snapshot_every.max(1),
+            tx: Some(tx),
+            shared,
+            thread: Some(thread),
+        };
+        if matches!(opened, Opened::Resumed(_)) {
+            durable.resync_journalled()?;
+        }
+        Ok((durable, opened))
+    }
+
+    /// The learner.
+    #[must_use]
+    pub fn learner(&self) -> &Learner<M> {
+        &self.learner
+    }
+
+    /// Records journalled so far (world states and re-synchronisations).
+    #[must_use]
+    pub fn records(&self) -> u64 {
+        self.records
+    }
+
+    /// Records durably on disk: a restart recovers at least these.
+    #[must_use]
+    pub fn acknowledged(&self) -> u64 {
+        self.shared.acknowledged.load(Ordering::Acquire)
+    }
+
+    fn check(&self) -> Result<(), StateError> {
+        let failure = self
+            .shared
+            .failure
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        match &*failure {
+            Some(message) => Err(StateError::Writer(message.clone())),
+            None => Ok(()),
+        }
+    }
+
+    fn send(&self, message: ToWriter<M>) -> Result<(), StateError> {
+        self.check()?;
+        let sent = self.tx.as_ref().is_some_and(|tx| tx.send(message).is_ok());
+        if sent {
+            Ok(())
+        } else {
+            // The thread ended: its failure says why, if it recorded one.
+            self.check()?;
+            Err(StateError::Writer("the journal thread has ended".into()))
+        }
+    }
+
+    fn append(&mut self, frame: Option<&Frame>) -> Result<(), StateError> {
+        self.records += 1;
+        let mut bytes = Vec::with_capacity(256);
+        encode_record(self.records, frame, &mut bytes);
+        self.send(ToWriter::Records {
+            last: self.records,
+            bytes,
+        })
+    }
+
+    /// Called once the learner has acted on the latest record: a snapshot
+    /// must hold the learner *after* the records it covers.
+    fn maybe_snapshot(&mut self) -> Result<(), StateError> {
+        self.since_snapshot += 1;
+        if self.since_snapshot >= self.snapshot_every {
+            self.since_snapshot = 0;
+            self.send(ToWriter::Snapshot {
+                records: self.records,
+                learner: Box::new(self.learner.clone()),
+            })?;
+        }
+        Ok(())
+    }
+
+    fn resync_journalled(&mut self) -> Result<(), StateError> {
+        self.append(None)?;
+        self.learner.resync();
+        self.maybe_snapshot()
+    }
+
+    /// Writes a final snapshot, waits until everything is on disk and stops
+    /// the journal. Returns the records stored.
+    ///
+    /// # Errors
+    /// The journal failed at some point.
+    pub fn close(mut self) -> Result<u64, StateError> {
+        self.send(ToWriter::Snapshot {
+            records: self.records,
+            learner: Box::new(self.learner.clone()),
+        })?;
+        self.finish();
+        self.check()?;
+        Ok(self.acknowledged())
+    }
+
+    fn finish(&mut self) {
+        if let Some(tx) = self.tx.take() {
+            let _ = tx.send(ToWriter::Close);
+        }
+        if let Some(thread) = self.thread.take() {
+            if thread.join().is_err() {
+                tracing::error!("the journal thread panicked");
+            }
+        }
+    }
+}
+
+impl<M: Model + 'static> Drop for Durable<M> {
+    /// Whatever stops the daemon, what was handed to the journal is written.
+    fn drop(&mut self) {
+        self.finish();
+    }
+}
+
+impl<M: Model + 'static> OnState for Durable<M> {
+    fn on_state(
+        &mut self,
+        frame: &Frame,
+        heights: &StartHeights,
+    ) -> Result<Vec<Payload>, LearnError> {
+        // Write-ahead: journalled before the learner acts on it, so that the
+        // replay repeats even a state the learner refuses.
+        self.append(Some(frame))?;
+        let commands = self.learner.on_state(frame, heights);
+        self.maybe_snapshot()?;
+        Ok(commands?)
+    }
+
+    fn resync(&mut self) -> Result<(), LearnError> {
+        Ok(self.resync_journalled()?)
+    }
+}
+
+/// The journal thread.
+struct Writer<'a> {
+    dir: PathBuf,
+    settings: Settings,
+    segment: File,
+    segment_path: PathBuf,
+    shared: &'a WriterShared,
+}
+
+impl Writer<'_> {
+    /// Group commit: takes everything queued, appends it with one write and
+    /// one fsync, then acknowledges it.
+    fn run<M: Model>(&mut self, rx: &mpsc::Receiver<ToWriter<M>>) -> Result<(), StateError> {
+        let mut batch = Vec::new();
+        let mut last = self.shared.acknowledged.load(Ordering::Relaxed);
+        while let Ok(first) = rx.recv() {
+            let mut next = Some(first);
+            while let Some(message) = next.take().or_else(|| rx.try_recv().ok()) {
+                match message {
+                    ToWriter::Records { last: l, bytes } => {
+                        batch.extend_from_slice(&bytes);
+                        last = l;
+                    }
+                    ToWriter::Snapshot { records, learner } => {
+                        self.commit(&mut batch, last)?;
+                        self.snapshot(records, &learner)?;
+                    }
+                    ToWriter::Close => return self.commit(&mut batch, last),
+                }
+            }
+            self.commit(&mut batch, last)?;
+        }
+        self.commit(&mut batch, last)
+    }
+
+    fn commit(&mut self, batch: &mut Vec<u8>, last: u64) -> Result<(), StateError> {
+        if batch.is_empty() {
+            return Ok(());
+        }
+        let path = &self.segment_path;
+        self.segment.write_all(batch).map_err(io_error(path))?;
+        self.segment.sync_data().map_err(io_error(path))?;
+        batch.clear();
+        self.shared.acknowledged.store(last, Ordering::Release);
+        tracing::trace!(acknowledged = last, "journal on disk");
+        Ok(())
+    }
+
+    /// Starts the segment after `records`, writes the snapshot of them, and
+    /// removes the segments it covers. A crash anywhere in between leaves a
+    /// directory that recovers to the same learner.
+    fn snapshot<M: Model>(&mut self, records: u64, learner: &Learner<M>) -> Result<(), StateError> {
+        let old = segments(&self.dir)?;
+        (self.segment, self.segment_path) = open_segment(&self.dir, records)?;
+        write_snapshot(&self.dir, records, &self.settings, learner)?;
+        for (start, path) in old {
+            if start < records {
+                fs::remove_file(&path).map_err(io_error(&path))?;
+            }
+        }
+        tracing::debug!(records, "snapshot written");
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use learner::GateModel;
+
+    use super::*;
+    use crate::learn::state::testing::{
+        assert_same, fingerprint, frames, fresh, heights, predictions, settings, TempDir,
+    };
+
+    #[test]
+    fn a_restart_resumes_a_bit_identical_learner_across_snapshots() {
+        let dir = TempDir::new("resume");
+        let all = frames(130);
+        let mut reference = fresh();
+        {
+            let (mut d, opened) = Durable::open(&dir.0, &settings(), fresh, 25).unwrap();
+            assert_eq!(opened, Opened::Fresh);
+            for f in &all[..90] {
+                let live = OnState::on_state(&mut d, f, &heights()).unwrap();
+                assert_eq!(live, reference.on_state(f, &heights()).unwrap());
+            }
+            assert_eq!(d.records(), 90);
+            // Dropped without close(): what was journalled is written, but
+            // no final snapshot (a crash after the last fsync).
+        }
+        let (recovered, recovery) = recover::<GateModel>(&dir.0, &settings()).unwrap().unwrap();
+        assert_eq!(recovery.snapshot_records, 75);
+        assert_eq!(recovery.replayed, 15);
+        assert_eq!(recovery.cut, None);
+        assert_same(&fingerprint(&recovered), &fingerprint(&reference));
+        assert_eq!(
+            predictions(&recovered, &all[100]),
+            predictions(&reference, &all[100])
+        );
+
+        // Resuming journals a re-synchronisation: the next state must not
+        // train across the gap.
+        let (mut d, opened) = Durable::open(&dir.0, &settings(), fresh, 25).unwrap();
+        assert!(matches!(opened, Opened::Resumed(r) if r.records() == 90));
+        reference.resync();
+        for f in &all[90..] {
+            assert_eq!(
+                OnState::on_state(&mut d, f, &heights()).unwrap(),
+                reference.on_state(f, &heights()).unwrap()
+            );
+        }
+        assert_eq!(d.close().unwrap(), 91 + 40);
+        let (recovered, recovery) = recover::<GateModel>(&dir.0, &settings()).unwrap().unwrap();
+        // close() wrote a final snapshot: nothing left to replay.
+        assert_eq!((recovery.snapshot_records, recovery.replayed), (131, 0));
+        assert_same(&fingerprint(&recovered), &fingerprint(&reference));
+        // Only the current segment is left.
+        assert_eq!(segments(&dir.0).unwrap().len(), 1);
+    }
+}

@@ -1,0 +1,136 @@
+//! The learner daemon's persistent memory (`pushlearn learn --state DIR`):
+//! crash-safe snapshots plus an append-only, checksummed journal of every
+//! world state handled since (`docs/reliability.md` has the whole design).
+//!
+//! * `DIR/snapshot`: the whole [`Learner`](super::Learner) after `S` journal records, written
+//!   to `snapshot.tmp`, fsynced, atomically renamed over the old one and the
+//!   directory fsynced; a checksum over its contents is verified on load.
+//! * `DIR/log-S` (20 digits): the journal segment of the records `S+1, S+2,
+//!   …` — each world state the learner handled (its bodies' poses, bit for
+//!   bit) or a re-synchronisation. Replaying them through
+//!   [`Learner::on_state`](super::Learner::on_state) repeats exactly what the live learner did, since
+//!   the learner is deterministic given its state and its input.
+//!
+//! The hot path only encodes a record and hands it to a writer thread; the
+//! thread appends whatever has queued up and fsyncs it (group commit). A
+//! record is **acknowledged** once that fsync has returned
+//! ([`Durable::acknowledged`]). Snapshots are taken from a clone of the
+//! learner on the same thread, so serialising a large model never holds up a
+//! message.
+//!
+//! Recovery loads the snapshot and replays the records that follow it; the
+//! first record that is cut off, fails its checksum or is out of sequence
+//! ends the replay, is reported and is cut off the file together with
+//! everything after it — it is never loaded. Then a fresh snapshot is written
+//! and a new segment started, so that every start begins from a clean state.
+//!
+//! The parts: `record` (the journal's record codec), `snapshot`, `segment`
+//! (the journal's files), `recovery` and `durable` (the daemon's side: the
+//! group-commit writer).
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::Policy;
+
+mod durable;
+mod record;
+mod recovery;
+mod segment;
+mod snapshot;
+#[cfg(test)]
+mod testing;
+
+pub use durable::{Durable, Opened};
+pub use record::{decode_entry, read_records, Entry, SegmentRead};
+pub use recovery::{recover, Cut, Recovery};
+pub use snapshot::SNAPSHOT_FILE;
+
+/// Records between two snapshots by default: 5 minutes at 100 Hz. Recovery
+/// replays at most this many records; a snapshot clones the learner once.
+pub const DEFAULT_SNAPSHOT_EVERY: u64 = 30_000;
+
+/// Why the memory cannot be loaded or kept.
+#[derive(Debug, thiserror::Error)]
+pub enum StateError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: io::Error },
+    #[error(
+        "{} is damaged ({reason}); it is never loaded silently: move the directory \
+         away to start afresh",
+        path.display()
+    )]
+    CorruptSnapshot { path: PathBuf, reason: String },
+    #[error(
+        "{} holds the memory of a different learner ({differences}); run with the same \
+         settings or give another --state directory",
+        dir.display()
+    )]
+    Mismatch { dir: PathBuf, differences: String },
+    #[error("cannot keep the learner's memory: {0}")]
+    Writer(String),
+}
+
+fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StateError + '_ {
+    move |source| StateError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// What the stored learner was started with. A learner resumes only with
+/// the same settings: its model, thresholds (set from the publish rate),
+/// policy and generator all shape what it learns and does.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// `gate` or `interaction`.
+    pub model: String,
+    /// The world's publish rate the model was configured for.
+    pub publish_rate_hz: u32,
+    pub policy: Policy,
+    pub shadows: bool,
+    /// The generator's seed (the generator itself is stored with its
+    /// position, so a resumed learner continues its sequence).
+    pub seed: u64,
+    /// The model's options (configuration bits, η, selector) as given on
+    /// the command line: the stored model was built with them, so resuming
+    /// under others would silently ignore the new ones.
+    #[serde(default)]
+    pub model_options: String,
+}
+
+impl Settings {
+    fn differences(&self, stored: &Settings) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut differ = |what: &str, stored: String, now: String| {
+            if stored != now {
+                out.push(format!("{what}: stored {stored}, now {now}"));
+            }
+        };
+        differ("model", stored.model.clone(), self.model.clone());
+        differ(
+            "publish rate",
+            stored.publish_rate_hz.to_string(),
+            self.publish_rate_hz.to_string(),
+        );
+        differ(
+            "policy",
+            format!("{:?}", stored.policy),
+            format!("{:?}", self.policy),
+        );
+        differ(
+            "shadows",
+            stored.shadows.to_string(),
+            self.shadows.to_string(),
+        );
+        differ("seed", stored.seed.to_string(), self.seed.to_string());
+        differ(
+            "model options",
+            stored.model_options.clone(),
+            self.model_options.clone(),
+        );
+        out
+    }
+}

@@ -1,0 +1,148 @@
+//! The snapshot: the whole learner after a number of journal records,
+//! written crash-safely and verified by a checksum on load.
+
+use std::fs::{self, File};
+use std::io::Write;
+use std::path::Path;
+
+use learner::Model;
+use serde::{Deserialize, Serialize};
+
+use super::record::{crc32, Cursor};
+use super::segment::sync_dir;
+use super::{io_error, Settings, StateError};
+use crate::learn::Learner;
+
+/// The snapshot's file name in the state directory.
+pub const SNAPSHOT_FILE: &str = "snapshot";
+const SNAPSHOT_TMP: &str = "snapshot.tmp";
+const SNAPSHOT_MAGIC: &[u8; 8] = b"PLSNAP01";
+const FORMAT_VERSION: u32 = 1;
+
+#[derive(Serialize, Deserialize)]
+struct SnapshotHeader {
+    version: u32,
+    records: u64,
+    settings: Settings,
+}
+
+/// `magic | payload length u64 | CRC-32 u32 | payload`, payload =
+/// `header length u32 | header JSON | learner JSON` (JSON with exact float
+/// round trips, so the restored learner is bit-identical).
+fn encode_snapshot<M: Model>(
+    records: u64,
+    settings: &Settings,
+    learner: &Learner<M>,
+) -> Result<Vec<u8>, serde_json::Error> {
+    let header = serde_json::to_vec(&SnapshotHeader {
+        version: FORMAT_VERSION,
+        records,
+        settings: settings.clone(),
+    })?;
+    let mut payload = Vec::new();
+    payload.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    payload.extend_from_slice(&header);
+    serde_json::to_writer(&mut payload, learner)?;
+    let mut out = Vec::with_capacity(payload.len() + 20);
+    out.extend_from_slice(SNAPSHOT_MAGIC);
+    out.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+    out.extend_from_slice(&crc32(&[&payload]).to_le_bytes());
+    out.extend_from_slice(&payload);
+    Ok(out)
+}
+
+pub(super) fn decode_snapshot<M: Model>(
+    bytes: &[u8],
+    path: &Path,
+    dir: &Path,
+    expected: &Settings,
+) -> Result<(u64, Learner<M>), StateError> {
+    let corrupt = |reason: &str| StateError::CorruptSnapshot {
+        path: path.to_path_buf(),
+        reason: reason.to_owned(),
+    };
+    let mut c = Cursor { bytes };
+    if c.take(8) != Some(SNAPSHOT_MAGIC.as_slice()) {
+        return Err(corrupt("not a pushlearn snapshot"));
+    }
+    let len = c
+        .array::<8>()
+        .map(u64::from_le_bytes)
+        .ok_or_else(|| corrupt("cut off"))?;
+    let crc = c.u32().ok_or_else(|| corrupt("cut off"))?;
+    if c.bytes.len() as u64 != len {
+        return Err(corrupt(&format!(
+            "{} bytes of contents instead of {len}",
+            c.bytes.len()
+        )));
+    }
+    if crc32(&[c.bytes]) != crc {
+        return Err(corrupt("checksum mismatch"));
+    }
+    let header_len = c.u32().ok_or_else(|| corrupt("cut off"))? as usize;
+    let header = c.take(header_len).ok_or_else(|| corrupt("cut off"))?;
+    let header: SnapshotHeader =
+        serde_json::from_slice(header).map_err(|err| corrupt(&err.to_string()))?;
+    if header.version != FORMAT_VERSION {
+        return Err(corrupt(&format!(
+            "format version {} (this build reads {FORMAT_VERSION})",
+            header.version
+        )));
+    }
+    let differences = expected.differences(&header.settings);
+    if !differences.is_empty() {
+        return Err(StateError::Mismatch {
+            dir: dir.to_path_buf(),
+            differences: differences.join("; "),
+        });
+    }
+    let learner = serde_json::from_slice(c.bytes).map_err(|err| corrupt(&err.to_string()))?;
+    Ok((header.records, learner))
+}
+
+/// Writes the snapshot crash-safely: temporary file, fsync, atomic rename,
+/// fsync of the directory (so that the rename itself is durable).
+pub(super) fn write_snapshot<M: Model>(
+    dir: &Path,
+    records: u64,
+    settings: &Settings,
+    learner: &Learner<M>,
+) -> Result<(), StateError> {
+    let bytes = encode_snapshot(records, settings, learner)
+        .map_err(|err| StateError::Writer(format!("cannot serialise the learner: {err}")))?;
+    let tmp = dir.join(SNAPSHOT_TMP);
+    let mut file = File::create(&tmp).map_err(io_error(&tmp))?;
+    file.write_all(&bytes).map_err(io_error(&tmp))?;
+    file.sync_all().map_err(io_error(&tmp))?;
+    drop(file);
+    let path = dir.join(SNAPSHOT_FILE);
+    fs::rename(&tmp, &path).map_err(io_error(&path))?;
+    sync_dir(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::learn::state::testing::{fingerprint, fresh, settings};
+
+    #[test]
+    fn a_snapshot_is_magic_length_checksum_then_header_and_learner() {
+        let bytes = encode_snapshot(42, &settings(), &fresh()).unwrap();
+        assert_eq!(&bytes[..8], b"PLSNAP01");
+        let payload = &bytes[20..];
+        assert_eq!(bytes[8..16], (payload.len() as u64).to_le_bytes());
+        assert_eq!(bytes[16..20], crc32(&[payload]).to_le_bytes());
+        let header_len = u32::from_le_bytes(payload[..4].try_into().unwrap()) as usize;
+        let header = std::str::from_utf8(&payload[4..4 + header_len]).unwrap();
+        assert_eq!(
+            header,
+            r#"{"version":1,"records":42,"settings":{"model":"gate","publish_rate_hz":100,"policy":{"Target":{"x":0.1,"y":0.5,"theta":0.3}},"shadows":true,"seed":7,"model_options":"eta 0"}}"#
+        );
+        let path = Path::new("snapshot");
+        let (records, back) =
+            decode_snapshot::<learner::GateModel>(&bytes, path, Path::new("."), &settings())
+                .unwrap();
+        assert_eq!(records, 42);
+        assert_eq!(fingerprint(&back), fingerprint(&fresh()));
+    }
+}
