@@ -22,7 +22,7 @@ use crate::frame::frame_from_state;
 use crate::latency::{Latencies, LatencySummary};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};
-use pushlearn::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
+use pushlearn::wire::{Ghost, TimingMode};
 
 pub mod reconnect;
 pub mod state;
@@ -191,7 +191,7 @@ impl<M: Model> Learner<M> {
 /// SetPose of the ghost bodies (`docs/spec/world.md` §3). The target is sent with every
 /// prediction rather than once, because a Reset clears the ghosts.
 fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
-    let ghost = |id, s: ObjectState, suffix: &str| {
+    let ghost = |id, s: ObjectState, kind: fn(&'static str) -> Ghost| {
         let name = object_name(id)?;
         let z = if id == learner::ACTUATOR_ID {
             ACTUATOR_Z
@@ -199,14 +199,14 @@ fn shadows(predicted: &learner::Poses, target: Option<ObjectState>) -> Payload {
             BLOCK_Z
         };
         Some((
-            format!("{name}{GHOST_MARKER}{suffix}"),
+            kind(name).to_string(),
             pb::Pose::from_position_yaw([s.x, s.y, z], s.theta),
         ))
     };
     let poses = predicted
         .objects()
-        .filter_map(|(id, s)| ghost(id, s, ""))
-        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, TARGET_GHOST_SUFFIX)));
+        .filter_map(|(id, s)| ghost(id, s, Ghost::predicted))
+        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, Ghost::target)));
     Payload::set_poses(poses)
 }
 
