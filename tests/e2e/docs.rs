@@ -7,7 +7,10 @@ use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::{ClientMessage, ServerMessage};
 
 fn read(relative: &str) -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
+    // The tests belong to crates/cli; `relative` is from the workspace root.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../..")
+        .join(relative);
     std::fs::read_to_string(&path)
         .unwrap_or_else(|err| panic!("cannot read {}: {err}", path.display()))
 }
@@ -43,6 +46,7 @@ fn hex_examples_match_the_encoder() {
             "Error answering seq 7",
             encode_frame(&ServerMessage::error(
                 7,
+                pushlearn::wire::pb::error::Kind::InvalidCommand,
                 "advance: the world is paused; unpause it first",
             )),
         ),

@@ -10,8 +10,9 @@ use crate::daemon::{self, Daemon};
 use crate::process::{run, text};
 
 fn example_dir() -> PathBuf {
+    // The tests belong to crates/cli; the example lives at the workspace root.
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("examples")
+        .join("../../examples")
         .join("python")
 }
 

@@ -108,6 +108,7 @@ pub(super) fn hello(scene: &Scene, publish_rate: u32, timing: TimingMode) -> pb:
         step_size: scene.physics.step_size,
         publish_rate,
         timing_mode: timing.as_str().into(),
+        timing_kind: pb::hello::TimingKind::from(timing).into(),
         bodies: scene
             .bodies
             .iter()

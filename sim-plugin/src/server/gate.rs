@@ -97,7 +97,13 @@ pub(super) enum Refusal {
 impl Refusal {
     /// The `Error` answering command `seq`.
     pub fn reply(&self, seq: u64) -> pb::ServerMessage {
-        pb::ServerMessage::error(seq, self.to_string())
+        let kind = match self {
+            Refusal::Invalid(_) => pb::error::Kind::InvalidCommand,
+            Refusal::World { .. } => pb::error::Kind::RefusedByWorld,
+            Refusal::Busy => pb::error::Kind::Busy,
+            Refusal::Stopping => pb::error::Kind::ShuttingDown,
+        };
+        pb::ServerMessage::error(seq, kind, self.to_string())
     }
 
     /// The refusal of an empty message, which clients send on purpose as a

@@ -318,6 +318,7 @@ mod tests {
             step_size: 0.001,
             publish_rate: 100,
             timing_mode: "lockstep".into(),
+            timing_kind: pb::hello::TimingKind::Lockstep.into(),
             bodies: vec![
                 model("actuator", 8, 0.0, 0.0, 0.0),
                 model("blockA", 15, 0.0, 0.25, 0.0),
