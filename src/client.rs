@@ -77,13 +77,18 @@ pub enum ClientError {
     Refused {
         /// The refused command's seq.
         seq: u64,
-        /// The world's explanation.
+        /// Why, for programs (`Unspecified` from a world older than the field).
+        kind: pb::error::Kind,
+        /// The world's explanation, for people.
         message: String,
     },
     /// The world sent an `Error` not tied to a command (`seq = 0`).
     #[error("the world reported an error: {message}")]
     World {
-        /// The world's explanation.
+        /// What happened, for programs (`Unspecified` from a world older
+        /// than the field).
+        kind: pb::error::Kind,
+        /// The world's explanation, for people.
         message: String,
     },
     /// The command failed local validation and was not sent.
@@ -114,12 +119,15 @@ impl From<InvalidCommand> for ClientError {
 }
 
 fn world_error(error: pb::Error) -> ClientError {
+    let kind = error.kind();
     match error.seq {
         0 => ClientError::World {
+            kind,
             message: error.message,
         },
         seq => ClientError::Refused {
             seq,
+            kind,
             message: error.message,
         },
     }

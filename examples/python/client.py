@@ -77,7 +77,9 @@ class Connection:
             if kind == "world_state":
                 return message.world_state
             if kind == "error":
-                raise WorldError(f"command {message.error.seq}: {message.error.message}")
+                error = message.error
+                what = pb.Error.Kind.Name(error.kind)
+                raise WorldError(f"command {error.seq} ({what}): {error.message}")
             if kind == "hello":
                 raise ConnectionError("a second Hello on the same connection")
             # kind is None: a payload added by a newer world; skip it.
@@ -101,7 +103,12 @@ def main():
         if hello.WhichOneof("payload") != "hello":
             raise ConnectionError("the world did not start with Hello")
         hello = hello.hello
-        lockstep = hello.timing_mode == "lockstep"
+        # timing_kind is unspecified from worlds older than the field; they
+        # say it only in the string.
+        if hello.timing_kind != pb.Hello.TIMING_KIND_UNSPECIFIED:
+            lockstep = hello.timing_kind == pb.Hello.TIMING_KIND_LOCKSTEP
+        else:
+            lockstep = hello.timing_mode == "lockstep"
         print(f"scene {hello.scene}, {hello.timing_mode} mode, {hello.publish_rate} Hz, "
               f"bodies: {', '.join(b.name for b in hello.bodies)}")
 

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use pushlearn::wire::{BodyName, GHOST_MARKER};
 use serde::{Deserialize, Serialize};
 
 /// Ids the learners key their tables by (`docs/spec/features.md`): these names must
@@ -13,9 +14,6 @@ pub const KNOWN_IDS: [(&str, u32); 3] = [("actuator", 8), ("blockA", 15), ("bloc
 
 /// Name of the body the actuator commands drive.
 pub const ACTUATOR: &str = "actuator";
-
-/// Substring that marks a non-physical ghost pose (`docs/spec/protocol.md` §3).
-pub use pushlearn::wire::GHOST_MARKER;
 
 const BUILTINS: [(&str, &str); 2] = [
     ("one_block", include_str!("../scenes/one_block.toml")),
@@ -386,7 +384,10 @@ impl Scene {
 
     fn validate_body(&self, i: usize, b: &BodySpec) -> Result<(), SceneError> {
         let field = |f: &str| format!("body[{i}].{f}");
-        if b.name.is_empty() || b.name == "ground_plane" || b.name.contains(GHOST_MARKER) {
+        if b.name.is_empty()
+            || b.name == "ground_plane"
+            || BodyName::parse(&b.name).ghost().is_some()
+        {
             return Err(invalid(
                 field("name"),
                 format!(

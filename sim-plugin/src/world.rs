@@ -6,7 +6,9 @@ use ode::{
 use pushlearn::wire::orientation::normalise;
 use serde::{Deserialize, Serialize};
 
-use crate::scene::{Scene, ShapeSpec, ACTUATOR, GHOST_MARKER};
+use pushlearn::wire::{BodyName, Ghost};
+
+use crate::scene::{Scene, ShapeSpec, ACTUATOR};
 
 /// Steps per simulated second; publish rates must divide it.
 const STEPS_PER_SECOND: u32 = 1000;
@@ -44,10 +46,9 @@ pub enum Command {
     /// Every body to its start pose at rest, step counter and time to 0.
     /// The stored actuator command is kept (`docs/spec/world.md` §6).
     Reset,
-    /// Sets a body's pose (velocities untouched), or stores a ghost pose for
-    /// names containing `Shadow`.
+    /// Sets a body's pose (velocities untouched), or stores a ghost pose.
     SetPose {
-        name: String,
+        name: BodyName,
         position: [f64; 3],
         /// `[x, y, z, w]`, normalised on application.
         orientation: [f64; 4],
@@ -373,16 +374,17 @@ impl World {
     /// `name`, `position` and `orientation` passed [`check_command`].
     fn set_pose(
         &mut self,
-        name: String,
+        name: BodyName,
         position: [f64; 3],
         orientation: [f64; 4],
     ) -> Result<(), CommandError> {
         let Some(unit) = normalise(orientation) else {
-            return Err(CommandError::ZeroQuaternion(name));
+            return Err(CommandError::ZeroQuaternion(name.to_string()));
         };
-        if name.contains(GHOST_MARKER) {
-            return self.set_ghost(name, position, unit);
-        }
+        let name = match name {
+            BodyName::Ghost(ghost) => return self.set_ghost(&ghost, position, unit),
+            BodyName::Body(name) => name,
+        };
         let Some(i) = self.scene.body_index(&name) else {
             return Err(CommandError::UnknownBody(name));
         };
@@ -418,17 +420,17 @@ impl World {
 
     fn set_ghost(
         &mut self,
-        name: String,
+        ghost: &Ghost,
         position: [f64; 3],
         orientation: [f64; 4],
     ) -> Result<(), CommandError> {
-        let id = name
-            .split(GHOST_MARKER)
-            .next()
-            .and_then(|base| self.bodies.iter().find(|b| b.name == base))
+        let id = self
+            .bodies
+            .iter()
+            .find(|b| b.name == ghost.of)
             .map_or(0, |b| b.id);
         let state = BodyState {
-            name,
+            name: ghost.to_string(),
             id,
             is_static: true,
             position,
@@ -583,10 +585,12 @@ pub fn check_command(scene: &Scene, cmd: &Command) -> Result<(), CommandError> {
                 });
             }
             if normalise(*orientation).is_none() {
-                return Err(CommandError::ZeroQuaternion(name.clone()));
+                return Err(CommandError::ZeroQuaternion(name.to_string()));
             }
-            if !name.contains(GHOST_MARKER) && scene.body_index(name).is_none() {
-                return Err(CommandError::UnknownBody(name.clone()));
+            if let BodyName::Body(name) = name {
+                if scene.body_index(name).is_none() {
+                    return Err(CommandError::UnknownBody(name.clone()));
+                }
             }
             Ok(())
         }

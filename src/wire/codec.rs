@@ -71,9 +71,9 @@ impl WireError {
     /// could be identified.
     pub fn error_reply(&self) -> Option<pb::ServerMessage> {
         match self {
-            WireError::FrameTooLarge { .. } | WireError::Decode(_) => {
-                Some(pb::ServerMessage::error(0, self.to_string()))
-            }
+            WireError::FrameTooLarge { .. } | WireError::Decode(_) => Some(
+                pb::ServerMessage::error(0, pb::error::Kind::MalformedFrame, self.to_string()),
+            ),
             WireError::Truncated { .. } | WireError::Io(_) => None,
         }
     }
@@ -256,7 +256,8 @@ mod tests {
     fn server_message_of_size(size: usize) -> ServerMessage {
         let mut text_len = size;
         loop {
-            let message = ServerMessage::error(7, "x".repeat(text_len));
+            let message =
+                ServerMessage::error(7, pb::error::Kind::Unspecified, "x".repeat(text_len));
             let len = message.encoded_len();
             if len == size {
                 return message;

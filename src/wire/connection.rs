@@ -156,10 +156,13 @@ mod tests {
             Some(ClientMessage::move_(2, 0.0, 0.5))
         );
 
-        world.write(&ServerMessage::error(2, "no")).await.unwrap();
+        world
+            .write(&ServerMessage::error(2, pb::error::Kind::Unspecified, "no"))
+            .await
+            .unwrap();
         assert_eq!(
             client.read().await.unwrap(),
-            Some(ServerMessage::error(2, "no"))
+            Some(ServerMessage::error(2, pb::error::Kind::Unspecified, "no"))
         );
 
         client.close().await.unwrap();

@@ -195,11 +195,12 @@ impl pb::ClientMessage {
 
 impl pb::ServerMessage {
     /// An `Error` answering command `seq` (0: not about one command).
-    pub fn error(seq: u64, message: impl Into<String>) -> Self {
+    pub fn error(seq: u64, kind: pb::error::Kind, message: impl Into<String>) -> Self {
         Self {
             payload: Some(server_message::Payload::Error(pb::Error {
                 message: message.into(),
                 seq,
+                kind: kind.into(),
             })),
         }
     }
@@ -252,6 +253,15 @@ impl TimingMode {
     }
 }
 
+impl From<TimingMode> for pb::hello::TimingKind {
+    fn from(mode: TimingMode) -> Self {
+        match mode {
+            TimingMode::Realtime => Self::Realtime,
+            TimingMode::Lockstep => Self::Lockstep,
+        }
+    }
+}
+
 impl fmt::Display for TimingMode {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())
@@ -276,9 +286,14 @@ impl FromStr for TimingMode {
 }
 
 impl pb::Hello {
-    /// The world's timing mode.
+    /// The world's timing mode: `timing_kind`, or for a world that leaves it
+    /// unspecified (one older than the field) the `timing_mode` string.
     pub fn timing(&self) -> Result<TimingMode, UnknownTimingMode> {
-        self.timing_mode.parse()
+        match self.timing_kind() {
+            pb::hello::TimingKind::Realtime => Ok(TimingMode::Realtime),
+            pb::hello::TimingKind::Lockstep => Ok(TimingMode::Lockstep),
+            pb::hello::TimingKind::Unspecified => self.timing_mode.parse(),
+        }
     }
 }
 
@@ -382,6 +397,43 @@ mod tests {
             Payload::set_pose("blockA", [0.0; 3], 0.0).kind(),
             "set_pose"
         );
+    }
+
+    #[test]
+    fn a_hello_from_an_older_world_is_read_by_its_string() {
+        use prost::Message;
+        // Field 4 (timing_mode) = "lockstep", no field 7: what a world
+        // older than `timing_kind` sends.
+        let old = [&[0x22, 8][..], b"lockstep"].concat();
+        let hello = pb::Hello::decode(&old[..]).unwrap();
+        assert_eq!(hello.timing_kind(), pb::hello::TimingKind::Unspecified);
+        assert_eq!(hello.timing(), Ok(TimingMode::Lockstep));
+        let mut new = hello.clone();
+        new.set_timing_kind(pb::hello::TimingKind::Realtime);
+        // The enum wins over the string when both are there.
+        assert_eq!(new.timing(), Ok(TimingMode::Realtime));
+        let unknown = pb::Hello::decode(&[0x22, 1, b'x', 0x38, 9][..]).unwrap();
+        assert_eq!(unknown.timing(), Err(UnknownTimingMode("x".into())));
+    }
+
+    #[test]
+    fn an_error_from_an_older_world_decodes_to_its_message_and_seq() {
+        use prost::Message;
+        // message = "no", seq = 5, no kind (field 3).
+        let old = [0x0a, 2, b'n', b'o', 0x10, 5];
+        let error = pb::Error::decode(&old[..]).unwrap();
+        assert_eq!(error.message, "no");
+        assert_eq!(error.seq, 5);
+        assert_eq!(error.kind(), pb::error::Kind::Unspecified);
+        // A kind from a newer world than this reader reads as unspecified.
+        let newer = pb::Error::decode(&[0x18, 99][..]).unwrap();
+        assert_eq!(newer.kind(), pb::error::Kind::Unspecified);
+        // And the new field is only appended: an older reader skips it.
+        let sent = pb::ServerMessage::error(5, pb::error::Kind::Busy, "no");
+        let Some(server_message::Payload::Error(e)) = sent.payload else {
+            panic!("not an error: {sent:?}")
+        };
+        assert_eq!(e.encode_to_vec(), [&old[..], &[0x18, 3]].concat());
     }
 
     #[test]

@@ -11,8 +11,10 @@
 //! * [`validate()`]: the state-independent checks a world runs on every
 //!   command on arrival (a client runs them before sending);
 //! * [`message`]: constructors such as [`pb::ClientMessage::move_`];
-//! * [`orientation`]: a planar yaw as the wire's quaternion, and back.
+//! * [`orientation`]: a planar yaw as the wire's quaternion, and back;
+//! * [`BodyName`]: a body's or a ghost's name, parsed.
 
+pub mod body_name;
 pub mod codec;
 pub mod connection;
 pub mod message;
@@ -20,6 +22,7 @@ pub mod orientation;
 pub mod pb;
 pub mod validate;
 
+pub use body_name::{BodyName, Ghost, GhostKind, GHOST_MARKER, TARGET_GHOST_SUFFIX};
 pub use codec::{
     decode_stream, encode_frame, FrameDecoder, FrameEncoder, WireError, LENGTH_PREFIX_SIZE,
     MAX_FRAME_SIZE,
@@ -27,13 +30,3 @@ pub use codec::{
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
 pub use validate::{validate, InvalidCommand};
-
-/// Substring that marks a non-physical ghost pose (`docs/spec/protocol.md` §3): the
-/// world never simulates such a body and learners skip it.
-pub const GHOST_MARKER: &str = "Shadow";
-
-/// Suffix after [`GHOST_MARKER`] of the ghost that marks a Move-to-Target
-/// goal: `blockAShadowTarget` is the target pose of `blockA`, and the world
-/// gives it blockA's id (docs/protocol.md §3, docs/viewer.md). A ghost
-/// without suffix (`blockAShadow`) is a predicted pose.
-pub const TARGET_GHOST_SUFFIX: &str = "Target";

@@ -3,7 +3,7 @@
 //!
 //! [`validate`] holds the checks that need nothing but the message; a world
 //! runs it on every `ClientMessage` as it arrives and answers a failure with
-//! `ServerMessage::error(seq, err.to_string())`. Checks that depend on the
+//! [`InvalidCommand::reply`]. Checks that depend on the
 //! world (body names, timing mode, pause state) are the world's, but their
 //! wording lives here too ([`InvalidCommand::UnknownBody`], ...) so that every
 //! refusal reads the same.
@@ -92,7 +92,7 @@ pub enum InvalidCommand {
 impl InvalidCommand {
     /// The `Error` answering command `seq`.
     pub fn reply(&self, seq: u64) -> pb::ServerMessage {
-        pb::ServerMessage::error(seq, self.to_string())
+        pb::ServerMessage::error(seq, pb::error::Kind::InvalidCommand, self.to_string())
     }
 }
 

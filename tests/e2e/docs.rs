@@ -41,6 +41,7 @@ fn hex_examples_match_the_encoder() {
             "Error answering seq 7",
             encode_frame(&ServerMessage::error(
                 7,
+                pushlearn::wire::pb::error::Kind::InvalidCommand,
                 "advance: the world is paused; unpause it first",
             )),
         ),

@@ -173,6 +173,7 @@ pub(super) async fn turn_away(stream: TcpStream, peer: SocketAddr, max_clients: 
     let (_reader, mut writer) = ServerConnection::new(stream).split();
     let refusal = pb::ServerMessage::error(
         0,
+        pb::error::Kind::TooManyClients,
         format!("too many clients: this world serves at most {max_clients} at once"),
     );
     let told = tokio::time::timeout(TURN_AWAY_LIMIT, async {

@@ -3,10 +3,10 @@
 use pushlearn::wire::pb::{
     self, actuator_command::Command as Actuator, client_message::Payload, sim_control::Action,
 };
-use pushlearn::wire::{InvalidCommand, TimingMode};
+use pushlearn::wire::{BodyName, InvalidCommand, TimingMode};
 
 use super::gate::{Op, Refusal};
-use crate::scene::{BodySpec, Scene, ShapeSpec, GHOST_MARKER};
+use crate::scene::{BodySpec, Scene, ShapeSpec};
 use crate::world::{check_command, ActuatorMode, BodyState, Command, Snapshot};
 
 /// `ModelState.scale`: the original always sent (1, 1, 1).
@@ -55,20 +55,22 @@ pub(super) fn operation(message: &pb::ClientMessage, scene: &Scene) -> Result<Op
 }
 
 fn set_pose(model: &pb::ModelState, scene: &Scene) -> Result<Command, Refusal> {
-    let name = &model.name;
+    let name = BodyName::parse(&model.name);
     // Named in the wire's words (which list the scene's bodies) rather than
     // the world's, so every refusal of an unknown body reads the same.
-    if !name.contains(GHOST_MARKER) && scene.body_index(name).is_none() {
-        return Err(InvalidCommand::UnknownBody {
-            name: name.clone(),
-            known: scene.bodies.iter().map(|b| b.name.clone()).collect(),
+    if let BodyName::Body(body) = &name {
+        if scene.body_index(body).is_none() {
+            return Err(InvalidCommand::UnknownBody {
+                name: body.clone(),
+                known: scene.bodies.iter().map(|b| b.name.clone()).collect(),
+            }
+            .into());
         }
-        .into());
     }
     let pose = model.pose.unwrap_or_default();
     let q = pose.orientation.unwrap_or_default();
     Ok(Command::SetPose {
-        name: name.clone(),
+        name,
         position: vector(pose.position),
         orientation: [q.x, q.y, q.z, q.w],
     })
@@ -106,6 +108,7 @@ pub(super) fn hello(scene: &Scene, publish_rate: u32, timing: TimingMode) -> pb:
         step_size: scene.physics.step_size,
         publish_rate,
         timing_mode: timing.as_str().into(),
+        timing_kind: pb::hello::TimingKind::from(timing).into(),
         bodies: scene
             .bodies
             .iter()

@@ -21,10 +21,10 @@ use std::sync::mpsc::Sender;
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use pushlearn::wire::pb;
-use pushlearn::wire::{validate, InvalidCommand};
+use pushlearn::wire::{validate, BodyName, Ghost, InvalidCommand};
 
 use super::{convert, Config, Timing, MAX_QUEUED_COMMANDS};
-use crate::scene::{Scene, GHOST_MARKER};
+use crate::scene::Scene;
 use crate::world::{Command, CommandError, MAX_GHOSTS};
 
 /// Identifies a connection for answers the physics thread sends it.
@@ -98,7 +98,13 @@ pub(super) enum Refusal {
 impl Refusal {
     /// The `Error` answering command `seq`.
     pub fn reply(&self, seq: u64) -> pb::ServerMessage {
-        pb::ServerMessage::error(seq, self.to_string())
+        let kind = match self {
+            Refusal::Invalid(_) => pb::error::Kind::InvalidCommand,
+            Refusal::World { .. } => pb::error::Kind::RefusedByWorld,
+            Refusal::Busy => pb::error::Kind::Busy,
+            Refusal::Stopping => pb::error::Kind::ShuttingDown,
+        };
+        pb::ServerMessage::error(seq, kind, self.to_string())
     }
 
     /// The refusal of an empty message, which clients send on purpose as a
@@ -112,7 +118,7 @@ impl Refusal {
 #[derive(Debug)]
 struct Mirror {
     paused: bool,
-    ghosts: HashSet<String>,
+    ghosts: HashSet<Ghost>,
     physics: Sender<ToPhysics>,
 }
 
@@ -208,13 +214,13 @@ impl Gate {
             Op::LatencySeed(_) => Ok(()),
             Op::World(commands) => {
                 let mut new_ghosts = HashSet::new();
-                for name in commands.iter().filter_map(ghost_name) {
-                    if !mirror.ghosts.contains(name)
-                        && new_ghosts.insert(name)
+                for ghost in commands.iter().filter_map(ghost) {
+                    if !mirror.ghosts.contains(ghost)
+                        && new_ghosts.insert(ghost)
                         && mirror.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
                     {
                         return Err(Refusal::World {
-                            command: format!("set_pose: body '{name}'"),
+                            command: format!("set_pose: body '{ghost}'"),
                             error: CommandError::TooManyGhosts,
                         });
                     }
@@ -250,17 +256,20 @@ fn note(mirror: &mut Mirror, op: &Op) {
             Command::Pause => mirror.paused = true,
             Command::Unpause => mirror.paused = false,
             Command::Reset => mirror.ghosts.clear(),
-            Command::SetPose { name, .. } if name.contains(GHOST_MARKER) => {
-                mirror.ghosts.insert(name.clone());
+            Command::SetPose {
+                name: BodyName::Ghost(ghost),
+                ..
+            } => {
+                mirror.ghosts.insert(ghost.clone());
             }
             Command::Actuator { .. } | Command::SetPose { .. } | Command::SetPublishRate(_) => {}
         }
     }
 }
 
-fn ghost_name(command: &Command) -> Option<&str> {
+fn ghost(command: &Command) -> Option<&Ghost> {
     match command {
-        Command::SetPose { name, .. } if name.contains(GHOST_MARKER) => Some(name),
+        Command::SetPose { name, .. } => name.ghost(),
         _ => None,
     }
 }

@@ -275,7 +275,11 @@ mod tests {
         let out = outbox(3, Duration::from_secs(60));
         let now = Instant::now();
         assert_eq!(
-            out.push_reply(pb::ServerMessage::error(1, "x")),
+            out.push_reply(pb::ServerMessage::error(
+                1,
+                pb::error::Kind::Unspecified,
+                "x"
+            )),
             Pushed::Queued
         );
         assert_eq!(out.push_state(&state(10), now), Pushed::Queued);
@@ -316,7 +320,11 @@ mod tests {
         );
         assert!(out.disconnect.is_cancelled() && out.was_too_slow());
         assert_eq!(
-            out.push_reply(pb::ServerMessage::error(1, "x")),
+            out.push_reply(pb::ServerMessage::error(
+                1,
+                pb::error::Kind::Unspecified,
+                "x"
+            )),
             Pushed::Closed
         );
     }
@@ -326,12 +334,20 @@ mod tests {
         let out = outbox(2, Duration::from_secs(60));
         for seq in 1..=4 {
             assert_eq!(
-                out.push_reply(pb::ServerMessage::error(seq, "x")),
+                out.push_reply(pb::ServerMessage::error(
+                    seq,
+                    pb::error::Kind::Unspecified,
+                    "x"
+                )),
                 Pushed::Queued
             );
         }
         assert_eq!(
-            out.push_reply(pb::ServerMessage::error(5, "x")),
+            out.push_reply(pb::ServerMessage::error(
+                5,
+                pb::error::Kind::Unspecified,
+                "x"
+            )),
             Pushed::TooSlow
         );
     }

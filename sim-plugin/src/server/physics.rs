@@ -353,8 +353,14 @@ impl Physics {
                     // The gate ran the same checks on arrival, so this is a
                     // bug; the client still learns that nothing happened.
                     tracing::error!(client, seq, "an accepted command was refused: {err}");
-                    self.shared
-                        .reply_to(client, pb::ServerMessage::error(seq, err.to_string()));
+                    self.shared.reply_to(
+                        client,
+                        pb::ServerMessage::error(
+                            seq,
+                            pb::error::Kind::RefusedByWorld,
+                            err.to_string(),
+                        ),
+                    );
                     return;
                 }
                 if rate {
@@ -383,8 +389,11 @@ impl Physics {
             Err(err @ StepError::Diverged { .. }) => {
                 // The world has reset itself and logged it; tell everyone
                 // and carry on.
-                self.shared
-                    .broadcast_reply(&pb::ServerMessage::error(0, err.to_string()));
+                self.shared.broadcast_reply(&pb::ServerMessage::error(
+                    0,
+                    pb::error::Kind::PhysicsBlewUp,
+                    err.to_string(),
+                ));
                 Ok(false)
             }
             Err(err) => Err(err),

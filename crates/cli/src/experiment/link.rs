@@ -68,11 +68,11 @@ impl WorldLink {
             .build()
             .map_err(ExperimentError::Runtime)?;
         let client = runtime.block_on(SimClient::connect_with(addr, ClientOptions::default()))?;
-        let mode = client.hello().timing_mode.clone();
-        if mode != pacing.timing_mode().as_str() {
+        let found = client.hello().timing();
+        if found != Ok(pacing.timing_mode()) {
             return Err(ExperimentError::WrongMode {
                 addr: addr.to_owned(),
-                found: mode,
+                found: found.map_or_else(|unknown| unknown.0, |mode| mode.to_string()),
                 wanted: pacing.timing_mode().as_str(),
             });
         }

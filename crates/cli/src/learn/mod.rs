@@ -20,7 +20,7 @@ use crate::frame::{frame_from_state, StartHeights};
 use crate::latency::{budget, Latencies, LatencySummary};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};
-use pushlearn::wire::{TimingMode, GHOST_MARKER, TARGET_GHOST_SUFFIX};
+use pushlearn::wire::{Ghost, TimingMode};
 
 pub mod reconnect;
 pub mod state;
@@ -207,18 +207,18 @@ fn shadows(
     target: Option<ObjectState>,
     heights: &StartHeights,
 ) -> Payload {
-    let ghost = |id, s: ObjectState, suffix: &str| {
+    let ghost = |id, s: ObjectState, kind: fn(&'static str) -> Ghost| {
         let name = object_name(id)?;
         let z = heights.z(id)?;
         Some((
-            format!("{name}{GHOST_MARKER}{suffix}"),
+            kind(name).to_string(),
             pb::Pose::from_position_yaw([s.x, s.y, z], s.theta),
         ))
     };
     let poses = predicted
         .objects()
-        .filter_map(|(id, s)| ghost(id, s, ""))
-        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, TARGET_GHOST_SUFFIX)));
+        .filter_map(|(id, s)| ghost(id, s, Ghost::predicted))
+        .chain(target.and_then(|pose| ghost(learner::BLUE_ID, pose, Ghost::target)));
     Payload::set_poses(poses)
 }
 

@@ -130,7 +130,7 @@ pub async fn serve_resilient(
             Err(err) => err,
         };
         match err {
-            LearnError::Client(ClientError::World { message }) => {
+            LearnError::Client(ClientError::World { message, .. }) => {
                 // A blow-up: the world has reset itself.
                 world_errors += 1;
                 tracing::warn!("the world reported: {message}; re-synchronising the model");

@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 use tokio_tungstenite::tungstenite::Utf8Bytes;
 
 use pushlearn::wire::pb::{self, shape::Geometry};
-use pushlearn::wire::{GHOST_MARKER, TARGET_GHOST_SUFFIX};
+use pushlearn::wire::{BodyName, GhostKind};
 
 /// What a page may ask of the world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -176,7 +176,7 @@ impl Outgoing {
                     name: model.name.clone(),
                     id: model.id,
                     kind,
-                    of: of.to_owned(),
+                    of,
                     x,
                     y,
                     yaw,
@@ -227,11 +227,13 @@ impl Outgoing {
 /// A model name's kind and the scene body it is drawn as: `blockA` is a
 /// body, `blockAShadow` its prediction, `blockAShadowTarget` its target; a
 /// ghost with another suffix is shown as a prediction.
-fn classify(name: &str) -> (Kind, &str) {
-    match name.split_once(GHOST_MARKER) {
-        None => (Kind::Body, name),
-        Some((of, TARGET_GHOST_SUFFIX)) => (Kind::Target, of),
-        Some((of, _)) => (Kind::Shadow, of),
+fn classify(name: &str) -> (Kind, String) {
+    match BodyName::parse(name) {
+        BodyName::Body(name) => (Kind::Body, name),
+        BodyName::Ghost(ghost) => match ghost.kind {
+            GhostKind::Target => (Kind::Target, ghost.of),
+            GhostKind::Predicted | GhostKind::Other(_) => (Kind::Shadow, ghost.of),
+        },
     }
 }
 
@@ -264,10 +266,16 @@ mod tests {
 
     #[test]
     fn ghosts_are_told_apart_by_name() {
-        assert_eq!(classify("blockA"), (Kind::Body, "blockA"));
-        assert_eq!(classify("actuatorShadow"), (Kind::Shadow, "actuator"));
-        assert_eq!(classify("blockAShadowTarget"), (Kind::Target, "blockA"));
-        assert_eq!(classify("blockBShadowOld"), (Kind::Shadow, "blockB"));
+        assert_eq!(classify("blockA"), (Kind::Body, "blockA".into()));
+        assert_eq!(
+            classify("actuatorShadow"),
+            (Kind::Shadow, "actuator".into())
+        );
+        assert_eq!(
+            classify("blockAShadowTarget"),
+            (Kind::Target, "blockA".into())
+        );
+        assert_eq!(classify("blockBShadowOld"), (Kind::Shadow, "blockB".into()));
     }
 
     #[test]
@@ -310,6 +318,7 @@ mod tests {
             step_size: 0.001,
             publish_rate: 100,
             timing_mode: "lockstep".into(),
+            timing_kind: pb::hello::TimingKind::Lockstep.into(),
             bodies: vec![
                 model("actuator", 8, 0.0, 0.0, 0.0),
                 model("blockA", 15, 0.0, 0.25, 0.0),

@@ -258,7 +258,7 @@ async fn pump(
                     // An error not about this command (the physics blew up)
                     // arrived first: the connection is fine, the command's
                     // fate unknown; the barrier's late answer is skipped.
-                    Err(ClientError::World { message }) => {
+                    Err(ClientError::World { message, .. }) => {
                         hub.event(&Outgoing::refused(
                             control,
                             "not confirmed: the world reported an error first".into(),

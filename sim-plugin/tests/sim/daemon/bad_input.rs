@@ -236,8 +236,9 @@ async fn a_physics_blow_up_resets_the_world_and_every_client_is_told() {
         })
         .await;
         assert!(
-            matches!(&error, pushlearn::client::ClientError::World { message }
-                if message.starts_with("physics blew up at step") && message.contains("blockA")),
+            matches!(&error, pushlearn::client::ClientError::World { kind, message }
+                if *kind == pushlearn::wire::pb::error::Kind::PhysicsBlewUp
+                    && message.starts_with("physics blew up at step") && message.contains("blockA")),
             "{error}"
         );
         // The world went on from its start, every value finite.

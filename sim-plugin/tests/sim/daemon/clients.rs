@@ -75,10 +75,13 @@ async fn clients_beyond_max_clients_are_told_and_closed_until_one_leaves() {
     let first = connect(&server).await;
     let _second = connect(&server).await;
     match SimClient::connect(server.local_addr()).await {
-        Err(ClientError::World { message }) => assert!(
-            message.contains("too many clients: this world serves at most 2"),
-            "{message}"
-        ),
+        Err(ClientError::World { kind, message }) => {
+            assert_eq!(kind, pb::error::Kind::TooManyClients, "{message}");
+            assert!(
+                message.contains("too many clients: this world serves at most 2"),
+                "{message}"
+            );
+        }
         other => panic!("expected to be turned away, got {other:?}"),
     }
     assert_eq!(server.stats().refused_connections, 1);

@@ -1,7 +1,7 @@
 //! Every command's effect, seen by a client over the socket.
 
 use pushlearn::client::{ClientError, ClientOptions, SimClient};
-use pushlearn::wire::pb::client_message::Payload;
+use pushlearn::wire::pb::{self, client_message::Payload};
 use pushlearn::wire::TimingMode;
 use sim_plugin::server::Config;
 use sim_plugin::{ActuatorMode, Command, World};
@@ -298,9 +298,11 @@ async fn a_refusal_answers_its_own_command_only() {
     match client.next_state().await {
         Err(ClientError::Refused {
             seq: refused,
+            kind,
             message,
         }) => {
             assert_eq!(refused, seq);
+            assert_eq!(kind, pb::error::Kind::InvalidCommand, "{message}");
             assert!(message.contains("unknown body 'nobody'"), "{message}");
         }
         other => panic!("expected a refusal, got {other:?}"),
