@@ -63,8 +63,8 @@ pub struct NodeSummary {
     pub acs: Option<AcSummary>,
 }
 
-/// The interaction-model columns of one fold; zeros for a fold of another
-/// model.
+/// # ACs of one fold; 0 for a fold of another model, as for the columns
+/// below.
 fn ac_count(stats: &ModelStats) -> f64 {
     stats
         .as_interaction()
