@@ -123,11 +123,11 @@ fn percentiles(data: &Data) {
             }
         }
         let stats = model.stats();
-        let nodes = |k: &str| stats.maps.get(k).map_or(0, |m| m.nodes);
+        let nodes = |name| stats.map(&name).map_or(0, |m| m.nodes);
         println!(
             "after {n} runs: gate {} nodes, predictor {} nodes",
-            nodes(learner::stat_keys::GATE),
-            nodes(&format!("{}15", learner::stat_keys::PREDICTOR_PREFIX))
+            nodes(learner::MapName::Gate),
+            nodes(learner::MapName::Predictor(15))
         );
         summary(&format!("  update per message  (N = {n})"), update);
         summary(&format!("  predict per message (N = {n})"), predict);

@@ -13,7 +13,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion, Throughput};
 use learner::eval::{random_training_start, train_on_run, PUSH_ACTION};
-use learner::{stat_keys, Frame, InteractionModel, InteractionWorld, Model};
+use learner::{Frame, InteractionModel, InteractionWorld, Model};
 use sim_plugin::{Command, Scene, World};
 
 #[path = "../tests/support/push_frames.rs"]
@@ -63,11 +63,12 @@ fn bench(c: &mut Criterion) {
             train_on_run(&mut model, run, PUSH_ACTION).expect("frames parse");
         }
         let stats = model.stats();
+        let stats = stats.as_interaction().expect("interaction statistics");
         eprintln!(
             "after {n} runs: {} ACs, ACS {} nodes, largest AC {} nodes",
-            stats.extra[stat_keys::AC_COUNT],
-            stats.maps[stat_keys::ACS].nodes,
-            stats.extra[stat_keys::AC_LARGEST_NODES],
+            stats.collections.len(),
+            stats.acs.nodes,
+            stats.largest().map_or(0, |ac| ac.map.nodes),
         );
         // One held-out run of training updates per iteration, each on a
         // fresh copy of the trained model so that every iteration does the

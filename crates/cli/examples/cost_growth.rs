@@ -109,7 +109,7 @@ impl<M: Model> Learner<M> {
         CostPoint {
             model: self.name.to_owned(),
             runs,
-            nodes: self.model.stats().maps.values().map(|m| m.nodes).sum(),
+            nodes: self.model.stats().maps().iter().map(|(_, m)| m.nodes).sum(),
             p50_us: us(0.5),
             p99_us: us(0.99),
         }

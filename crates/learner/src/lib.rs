@@ -11,6 +11,7 @@
 //! * [`gate`]: the object-state model with gating function
 //!   (`docs/spec/gate-model.md`) and its planner (`docs/spec/planning.md` §2);
 //! * [`model`]: the [`Model`] trait both learners implement;
+//! * [`stats`]: their statistics, typed per model;
 //! * [`eval`]: the push-task protocol on the learner's side and its metrics;
 //! * [`interaction`]: the pairwise interaction-state model
 //!   (`docs/spec/interaction-model.md`);
@@ -31,6 +32,7 @@ pub mod interaction;
 pub mod keypoints;
 pub mod model;
 pub mod planning;
+pub mod stats;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod tree;
@@ -40,7 +42,10 @@ pub use aitm::MapStats;
 pub use features::ParseError;
 pub use gate::{GateConfig, GateModel, GateParams, GateWorld};
 pub use interaction::{InteractionConfig, InteractionModel, InteractionParams, InteractionWorld};
-pub use model::{stat_keys, Model, ModelStats};
+pub use model::Model;
+pub use stats::{
+    AcStats, GateStats, InteractionStats, LargestAc, MapName, ModelStats, ScriptAc, StatsError,
+};
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,
     TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, RED_ID, RED_NAME,

@@ -2,15 +2,14 @@
 //! implemented by the gate model (`docs/spec/gate-model.md`) and the interaction model
 //! (`docs/spec/interaction-model.md`).
 
-use std::collections::BTreeMap;
 use std::fmt::Debug;
 
-use crate::aitm::MapStats;
 use rand::Rng;
 use serde::de::DeserializeOwned;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::features::ParseError;
+pub use crate::stats::ModelStats;
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 
 /// A learner of forward and inverse models, driven one world-state message at
@@ -136,8 +135,7 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     /// `rand::RngExt`; nothing else may draw from it.
     fn act(&mut self, rng: &mut dyn Rng) -> Action;
 
-    /// Node statistics of every map (`docs/spec/experiments.md` §7.5); key names in
-    /// [`stat_keys`].
+    /// Node statistics of every map (`docs/spec/experiments.md` §7.5).
     fn stats(&self) -> ModelStats;
 
     /// Selector diagnostics for the real transition `old` → `new` under
@@ -152,65 +150,6 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
         _action: Action,
     ) -> Vec<(Option<usize>, Option<usize>)> {
         Vec::new()
-    }
-}
-
-/// A model's statistics (`docs/spec/gate-model.md` §7, `docs/spec/interaction-model.md` §6).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ModelStats {
-    /// Counters per map, keyed as in [`stat_keys`].
-    pub maps: BTreeMap<String, MapStats>,
-    /// Scalar statistics (e.g. [`stat_keys::AC_COUNT`]).
-    pub extra: BTreeMap<String, f64>,
-    /// Descriptive values (e.g. an AC's changed-feature list "2,3,5" under
-    /// its map key).
-    pub labels: BTreeMap<String, String>,
-}
-
-/// Key names of [`ModelStats`], shared by the models and the driver.
-pub mod stat_keys {
-    /// Gate model: the actuator forward model.
-    pub const ACTUATOR: &str = "actuator";
-    /// Gate model: the gate classifier.
-    pub const GATE: &str = "gate";
-    /// Gate model: a block's predictor AITM is `"predictor/{id}"`.
-    pub const PREDICTOR_PREFIX: &str = "predictor/";
-    /// Interaction model: the Abstract Collection Selector.
-    pub const ACS: &str = "acs";
-    /// Interaction model: AC number k's forward model is `"ac/{k}"`; its
-    /// changed-feature list is in `labels` under the same key.
-    pub const AC_PREFIX: &str = "ac/";
-    /// Interaction model: number of Abstract Collections.
-    pub const AC_COUNT: &str = "ac_count";
-    /// Interaction model: id of the AC with the most nodes (the thesis's
-    /// "AC" columns, `docs/spec/experiments.md` §7.5; ties to the lower id).
-    pub const AC_LARGEST_ID: &str = "ac_largest_id";
-    /// Interaction model: update count of the AC with the most nodes.
-    pub const AC_LARGEST_UPDATES: &str = "ac_largest_updates";
-    /// Interaction model: node count of the AC with the most nodes.
-    pub const AC_LARGEST_NODES: &str = "ac_largest_nodes";
-    /// Interaction model, original analysis script's quirk (§7.5): the
-    /// maximum update count over all ACs.
-    pub const AC_SCRIPT_UPDATES: &str = "ac_script_updates";
-    /// Interaction model, original analysis script's quirk (§7.5): the node
-    /// count of the last AC, in id order, whose update count exceeded the
-    /// running value.
-    pub const AC_SCRIPT_NODES: &str = "ac_script_nodes";
-}
-
-impl ModelStats {
-    /// The maps named `"{prefix}{n}"` with a numeric `n`, in ascending `n`
-    /// (not string) order — e.g. the ACs in id order, which the original's
-    /// node-count analysis scanned (`docs/spec/experiments.md` §7.5).
-    #[must_use]
-    pub fn indexed(&self, prefix: &str) -> Vec<(u64, &MapStats)> {
-        let mut out: Vec<(u64, &MapStats)> = self
-            .maps
-            .iter()
-            .filter_map(|(k, v)| Some((k.strip_prefix(prefix)?.parse().ok()?, v)))
-            .collect();
-        out.sort_by_key(|&(n, _)| n);
-        out
     }
 }
 
@@ -278,8 +217,9 @@ mod tests {
     fn the_trait_supports_the_drivers_calling_pattern() {
         let (mut model, predicted) = drive(Probe::default());
         // Step 0 resynchronised, steps 1–3 were updates with training on.
-        assert_eq!(model.stats().maps["probe"].update_calls, 3);
-        assert_eq!(model.stats().maps["probe"].inserts, 1);
+        let probe = Probe::map(&model.stats()).unwrap();
+        assert_eq!(probe.update_calls, 3);
+        assert_eq!(probe.inserts, 1);
         assert!((predicted.actuator.y - 0.02).abs() < 1e-3);
         assert!(model.is_training());
 
@@ -309,29 +249,5 @@ mod tests {
         let mut f = frame(0.0);
         f.objects.remove(0);
         assert_eq!(model.parse(&f).err(), Some(ParseError::NoActuator));
-    }
-
-    #[test]
-    fn indexed_maps_sort_numerically() {
-        let mut s = ModelStats::default();
-        for k in [10, 2, 0] {
-            s.maps.insert(
-                format!("{}{k}", stat_keys::AC_PREFIX),
-                MapStats {
-                    update_calls: k,
-                    inserts: 1,
-                    nodes: 1,
-                },
-            );
-        }
-        s.maps.insert(stat_keys::ACS.into(), MapStats::default());
-        s.maps.insert("ac/x".into(), MapStats::default());
-        let ids: Vec<u64> = s
-            .indexed(stat_keys::AC_PREFIX)
-            .iter()
-            .map(|(n, _)| *n)
-            .collect();
-        assert_eq!(ids, vec![0, 2, 10]);
-        assert_eq!(s.indexed(stat_keys::AC_PREFIX)[2].1.update_calls, 10);
     }
 }

@@ -6,11 +6,14 @@
 //! Behind the `testing` feature (and `cfg(test)`): never part of a shipped
 //! build.
 
+use std::collections::BTreeMap;
+
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 
 use crate::features::{parse_frame, ActuatorYaw, ParseError};
 use crate::model::{Model, ModelStats};
+use crate::stats::MapName;
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 use crate::MapStats;
 
@@ -38,6 +41,17 @@ pub struct Probe {
     /// `act` reports the target reached after this many calls.
     pub reach_after: Option<u64>,
     pub acts: u64,
+}
+
+impl Probe {
+    /// The name of the probe's one map.
+    pub const MAP: &str = "probe";
+
+    /// The probe's map in statistics it reported.
+    #[must_use]
+    pub fn map(stats: &ModelStats) -> Option<MapStats> {
+        stats.map(&MapName::Other(Self::MAP.to_owned()))
+    }
 }
 
 impl Model for Probe {
@@ -105,18 +119,16 @@ impl Model for Probe {
         Action::new(rng.random::<f64>() - 0.5, 0.0)
     }
 
-    /// One map, `probe`: update calls = trained updates, inserts = resets,
+    /// One map, [`Probe::MAP`]: update calls = trained updates, inserts = resets,
     /// nodes = all updates.
     fn stats(&self) -> ModelStats {
-        let mut s = ModelStats::default();
-        s.maps.insert(
-            "probe".into(),
+        ModelStats::Other(BTreeMap::from([(
+            Self::MAP.to_owned(),
             MapStats {
                 update_calls: self.trained_updates,
                 inserts: self.resets,
                 nodes: self.updates as usize,
             },
-        );
-        s
+        )]))
     }
 }

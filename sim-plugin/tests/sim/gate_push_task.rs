@@ -13,7 +13,7 @@
 use learner::eval::{
     self, CurveSummary, PositionErrors, MESSAGES_PER_RUN, PUSH_ACTION, TEST_POSITION_COUNT,
 };
-use learner::{stat_keys, Frame, GateModel, Model, ObjectState, BLUE_ID};
+use learner::{Frame, GateModel, Model, ObjectState, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_plugin::{Command, Scene, World};
@@ -57,21 +57,14 @@ fn gate_model_push_task_after_ten_random_training_runs() {
             assert_eq!(handled, MESSAGES_PER_RUN);
         }
         let stats = model.stats();
-        let map = |key: &str| stats.maps[key];
+        let stats = stats.as_gate().expect("gate statistics");
         // 149 updates per training run (docs/spec/experiments.md §8); the actuator
         // model sees one input only and keeps its first two nodes
         // (docs/spec/gate-model.md §8, docs/spec/reference-results.md §4.2).
-        assert_eq!(
-            map(stat_keys::GATE).update_calls,
-            149 * TRAINING_RUNS as u64
-        );
-        assert_eq!(map(stat_keys::ACTUATOR).nodes, 2);
-        let predictor = map(&format!("{}{BLUE_ID}", stat_keys::PREDICTOR_PREFIX));
-        node_counts.push((
-            map(stat_keys::GATE).nodes,
-            predictor.update_calls,
-            predictor.nodes,
-        ));
+        assert_eq!(stats.gate.update_calls, 149 * TRAINING_RUNS as u64);
+        assert_eq!(stats.actuator.nodes, 2);
+        let predictor = stats.predictors[&BLUE_ID];
+        node_counts.push((stats.gate.nodes, predictor.update_calls, predictor.nodes));
         model.set_training(false);
         for (i, frames) in tests.iter().enumerate() {
             assert_start(&model, frames, starts[i]);

@@ -10,7 +10,7 @@
 
 use learner::eval::{random_training_start, PUSH_ACTION};
 use learner::eval::{test_on_run, test_positions, train_on_run, CurveSummary, PositionErrors};
-use learner::{stat_keys, Frame, InteractionModel, Model, BLUE_ID};
+use learner::{Frame, InteractionModel, Model, BLUE_ID};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use sim_plugin::{Command, Scene, World};
@@ -56,9 +56,10 @@ fn push_task_after_ten_random_training_runs() {
             assert_eq!(processed, 150, "a training run processes 150 messages");
         }
         let stats = model.stats();
-        let acs = stats.maps[stat_keys::ACS];
+        let stats = stats.as_interaction().expect("interaction statistics");
+        let acs = stats.acs;
         folds.push(FoldResult {
-            ac_count: stats.extra[stat_keys::AC_COUNT],
+            ac_count: stats.collections.len() as f64,
             acs_nodes: acs.nodes,
             acs_updates: acs.update_calls,
         });

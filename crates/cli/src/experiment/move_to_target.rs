@@ -308,7 +308,9 @@ mod tests {
         assert_eq!(model.acts, 40);
         // Training: 8 runs × 149 updates; the test run trains too.
         assert_eq!(
-            task.nodes_after_training.unwrap().maps["probe"].update_calls,
+            Probe::map(&task.nodes_after_training.unwrap())
+                .unwrap()
+                .update_calls,
             8 * 149
         );
         assert_eq!(model.trained_updates, 8 * 149 + 39);

@@ -5,7 +5,7 @@
 use std::io::{self, Write};
 
 use learner::eval::MeanStd;
-use learner::{stat_keys, BLUE_ID};
+use learner::{MapName, BLUE_ID};
 
 use super::reference::{self, Ms};
 use crate::models::ModelKind;
@@ -228,7 +228,7 @@ fn two_objects(out: &mut impl Write, entry: &CurveEntry) -> io::Result<()> {
 
 fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::Result<()> {
     writeln!(out)?;
-    let get = |n: &NodeSummary, key: &str, f: fn(&MapSummary) -> MeanStd| n.map(key).map(f);
+    let get = |n: &NodeSummary, name: &MapName, f: fn(&MapSummary) -> MeanStd| n.map(name).map(f);
     match model {
         ModelKind::Gate => {
             writeln!(
@@ -245,7 +245,7 @@ fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::
                 "gate nodes",
                 "actuator nodes"
             )?;
-            let predictor = format!("{}{BLUE_ID}", stat_keys::PREDICTOR_PREFIX);
+            let predictor = MapName::Predictor(BLUE_ID);
             for e in results {
                 let r = reference::GATE_NODES
                     .iter()
@@ -263,14 +263,14 @@ fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::
                         r.map(|r| r.object_nodes)
                     ),
                     count_cell(
-                        get(&e.nodes, stat_keys::GATE, |m| m.update_calls),
+                        get(&e.nodes, &MapName::Gate, |m| m.update_calls),
                         r.map(|r| Ms(r.gate_updates, 0.0))
                     ),
                     count_cell(
-                        get(&e.nodes, stat_keys::GATE, |m| m.nodes),
+                        get(&e.nodes, &MapName::Gate, |m| m.nodes),
                         r.map(|r| r.gate_nodes)
                     ),
-                    get(&e.nodes, stat_keys::ACTUATOR, |m| m.nodes)
+                    get(&e.nodes, &MapName::Actuator, |m| m.nodes)
                         .map_or_else(|| "–".to_owned(), count),
                 )?;
             }
@@ -311,11 +311,11 @@ fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::
                     count_cell(acs.map(|a| a.script_quirk.nodes), r.map(|r| r.ac_nodes)),
                     count_cell(acs.map(|a| a.count), r.map(|r| r.ac_count)),
                     count_cell(
-                        get(&e.nodes, stat_keys::ACS, |m| m.update_calls),
+                        get(&e.nodes, &MapName::Acs, |m| m.update_calls),
                         r.map(|r| Ms(r.acs_updates, 0.0))
                     ),
                     count_cell(
-                        get(&e.nodes, stat_keys::ACS, |m| m.nodes),
+                        get(&e.nodes, &MapName::Acs, |m| m.nodes),
                         r.map(|r| r.acs_nodes)
                     ),
                 )?;

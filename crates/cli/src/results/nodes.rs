@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 
 use learner::eval::MeanStd;
-use learner::{stat_keys, MapStats, ModelStats};
+use learner::{InteractionStats, MapName, MapStats, ModelStats};
 use serde::{Deserialize, Serialize};
 
 /// One map's counters over folds.
@@ -63,60 +63,60 @@ pub struct NodeSummary {
     pub acs: Option<AcSummary>,
 }
 
+/// # ACs of one fold; 0 for a fold of another model, as for the columns
+/// below.
 fn ac_count(stats: &ModelStats) -> f64 {
     stats
-        .extra
-        .get(stat_keys::AC_COUNT)
-        .copied()
-        .unwrap_or_else(|| stats.indexed(stat_keys::AC_PREFIX).len() as f64)
+        .as_interaction()
+        .map_or(0.0, |i| i.collections.len() as f64)
 }
 
 /// (update calls, nodes) of the AC with the most nodes; zeros without ACs.
 fn largest_ac(stats: &ModelStats) -> (f64, f64) {
-    let mut best: Option<&MapStats> = None;
-    for (_, ac) in stats.indexed(stat_keys::AC_PREFIX) {
-        if best.is_none_or(|b| ac.nodes > b.nodes) {
-            best = Some(ac);
-        }
-    }
-    best.map_or((0.0, 0.0), |b| (b.update_calls as f64, b.nodes as f64))
+    stats
+        .as_interaction()
+        .and_then(InteractionStats::largest)
+        .map_or((0.0, 0.0), |b| {
+            (b.map.update_calls as f64, b.map.nodes as f64)
+        })
 }
 
 /// The original script's (max update calls, scanned node value).
 fn quirky_ac(stats: &ModelStats) -> (f64, f64) {
-    let acs = stats.indexed(stat_keys::AC_PREFIX);
-    let max_updates = acs.iter().map(|(_, a)| a.update_calls).max().unwrap_or(0);
-    let mut m: u64 = 0;
-    for (_, ac) in &acs {
-        if ac.update_calls > m {
-            m = ac.nodes as u64;
-        }
-    }
-    (max_updates as f64, m as f64)
+    let q = stats
+        .as_interaction()
+        .map(InteractionStats::script_quirk)
+        .unwrap_or_default();
+    (q.update_calls as f64, q.nodes as f64)
 }
 
 impl NodeSummary {
     /// Summarises one statistics record per fold, in fold order.
     #[must_use]
     pub fn of(folds: &[&ModelStats]) -> Self {
-        let keys: std::collections::BTreeSet<&String> = folds
+        let per_fold: Vec<BTreeMap<String, MapStats>> = folds
             .iter()
-            .flat_map(|s| s.maps.keys())
-            .filter(|k| !k.starts_with(stat_keys::AC_PREFIX))
+            .map(|s| {
+                s.maps()
+                    .into_iter()
+                    .filter(|(name, _)| !matches!(name, MapName::Ac(_)))
+                    .map(|(name, m)| (name.to_string(), m))
+                    .collect()
+            })
             .collect();
+        let keys: std::collections::BTreeSet<&String> =
+            per_fold.iter().flat_map(BTreeMap::keys).collect();
         let maps = keys
             .into_iter()
             .map(|k| {
-                let per_fold: Vec<MapStats> = folds
+                let counts: Vec<MapStats> = per_fold
                     .iter()
-                    .map(|s| s.maps.get(k).copied().unwrap_or_default())
+                    .map(|maps| maps.get(k).copied().unwrap_or_default())
                     .collect();
-                (k.clone(), MapSummary::of(&per_fold))
+                (k.clone(), MapSummary::of(&counts))
             })
             .collect();
-        let has_acs = folds.iter().any(|s| {
-            s.extra.contains_key(stat_keys::AC_COUNT) || !s.indexed(stat_keys::AC_PREFIX).is_empty()
-        });
+        let has_acs = folds.iter().any(|s| s.as_interaction().is_some());
         let acs = has_acs.then(|| {
             let over = |f: &dyn Fn(&ModelStats) -> f64, folds: &[&ModelStats]| {
                 MeanStd::of(&folds.iter().map(|s| f(s)).collect::<Vec<_>>())
@@ -141,16 +141,17 @@ impl NodeSummary {
         Self { maps, acs }
     }
 
-    /// Mean ± std of one counter of one map, if the map exists.
+    /// Mean ± std of one map's counters, if the map exists.
     #[must_use]
-    pub fn map(&self, key: &str) -> Option<&MapSummary> {
-        self.maps.get(key)
+    pub fn map(&self, name: &MapName) -> Option<&MapSummary> {
+        self.maps.get(&name.to_string())
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use learner::{AcStats, GateStats};
 
     fn map(update_calls: u64, nodes: usize) -> MapStats {
         MapStats {
@@ -160,26 +161,33 @@ mod tests {
         }
     }
 
-    fn stats(maps: &[(&str, MapStats)], ac_count: Option<f64>) -> ModelStats {
-        let mut s = ModelStats::default();
-        for (k, m) in maps {
-            s.maps.insert((*k).into(), *m);
-        }
-        if let Some(n) = ac_count {
-            s.extra.insert(stat_keys::AC_COUNT.into(), n);
-        }
-        s
+    fn gate(gate: MapStats, predictors: &[(u32, MapStats)]) -> ModelStats {
+        ModelStats::Gate(GateStats {
+            gate,
+            predictors: predictors.iter().copied().collect(),
+            ..GateStats::default()
+        })
+    }
+
+    fn interaction(acs: MapStats, collections: &[MapStats]) -> ModelStats {
+        ModelStats::Interaction(InteractionStats {
+            acs,
+            collections: collections
+                .iter()
+                .map(|&map| AcStats {
+                    changed: Vec::new(),
+                    map,
+                })
+                .collect(),
+        })
     }
 
     #[test]
     fn maps_are_averaged_with_population_std_and_missing_maps_count_zero() {
-        let a = stats(
-            &[("gate", map(149, 3)), ("predictor/15", map(90, 20))],
-            None,
-        );
-        let b = stats(&[("gate", map(149, 5))], None);
+        let a = gate(map(149, 3), &[(15, map(90, 20))]);
+        let b = gate(map(149, 5), &[]);
         let s = NodeSummary::of(&[&a, &b]);
-        let gate = s.map("gate").unwrap();
+        let gate = s.map(&MapName::Gate).unwrap();
         assert_eq!(
             gate.update_calls,
             MeanStd {
@@ -194,7 +202,7 @@ mod tests {
                 std: 1.0
             }
         );
-        assert_eq!(s.map("predictor/15").unwrap().nodes.mean, 10.0);
+        assert_eq!(s.map(&MapName::Predictor(15)).unwrap().nodes.mean, 10.0);
         assert!(s.acs.is_none());
     }
 
@@ -203,21 +211,12 @@ mod tests {
         // AC 0: many updates, few nodes; AC 1: the most nodes; AC 2: more
         // updates than AC 1 has nodes... the scan's comparison of update
         // counts with node counts picks AC 2's nodes.
-        let fold = |bump: usize| {
-            stats(
-                &[
-                    ("acs", map(149, 40)),
-                    ("ac/0", map(60, 5 + bump)),
-                    ("ac/1", map(30, 18)),
-                    ("ac/2", map(10, 2)),
-                ],
-                Some(3.0),
-            )
-        };
+        let fold =
+            |bump: usize| interaction(map(149, 40), &[map(60, 5 + bump), map(30, 18), map(10, 2)]);
         let (a, b, c) = (fold(0), fold(2), fold(100));
         let s = NodeSummary::of(&[&a, &b, &c]);
         assert!(!s.maps.keys().any(|k| k.starts_with("ac/")));
-        assert_eq!(s.map("acs").unwrap().nodes.mean, 40.0);
+        assert_eq!(s.map(&MapName::Acs).unwrap().nodes.mean, 40.0);
         let acs = s.acs.unwrap();
         assert_eq!(acs.count.mean, 3.0);
         // Largest AC: AC 1 (18 nodes) in folds a and b, AC 0 (105) in c.
@@ -232,7 +231,7 @@ mod tests {
 
     #[test]
     fn one_fold_keeps_its_quirk_values() {
-        let a = stats(&[("ac/0", map(12, 4))], None);
+        let a = interaction(MapStats::default(), &[map(12, 4)]);
         let acs = NodeSummary::of(&[&a]).acs.unwrap();
         assert_eq!(acs.count.mean, 1.0);
         assert_eq!(acs.script_quirk.folds, 1);

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use learner::eval::{test_positions, two_object_test_positions, BlockError, RunErrors};
-use learner::{MapStats, ModelStats, ObjectState, BLUE_ID, RED_ID};
+use learner::{GateStats, MapStats, ModelStats, ObjectState, BLUE_ID, RED_ID};
 
 use super::move_to_target::{MttRun, TargetSummary};
 use super::push_task::{summarise, PushJobResult};
@@ -29,15 +29,14 @@ pub(crate) fn job(n_train: usize, fold: usize, two_blocks: bool) -> PushJobResul
             }
         })
         .collect();
-    let mut nodes = ModelStats::default();
-    nodes.maps.insert(
-        "gate".into(),
-        MapStats {
+    let nodes = ModelStats::Gate(GateStats {
+        gate: MapStats {
             update_calls: 149 * n_train as u64,
             inserts: 4,
             nodes: 4,
         },
-    );
+        ..GateStats::default()
+    });
     PushJobResult {
         n_train,
         fold,

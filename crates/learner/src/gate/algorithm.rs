@@ -16,7 +16,8 @@ use crate::features::{
     parse_frame, r3, r3_vec, relative_features, ActuatorYaw, ParseError, LOCAL_CHANGE_DIM,
     RELATIVE_FEATURES_DIM,
 };
-use crate::model::{stat_keys, Model, ModelStats};
+use crate::model::Model;
+use crate::stats::{GateStats, ModelStats};
 use crate::types::{Action, Frame, ObjectState, Poses, Target, TargetError, TrackedObject};
 
 /// ε_change (`docs/spec/gate-model.md` §2, `docs/spec/README.md` §6): a block "changed" when its
@@ -416,26 +417,18 @@ impl Model for GateModel {
     }
 
     fn stats(&self) -> ModelStats {
-        let mut s = ModelStats::default();
-        s.maps
-            .insert(stat_keys::ACTUATOR.into(), self.actuator_model.stats());
-        s.maps.insert(stat_keys::GATE.into(), self.gate.stats());
-        for (id, p) in &self.predictors {
-            s.maps.insert(
-                format!("{}{id}", stat_keys::PREDICTOR_PREFIX),
-                p.forward.stats(),
-            );
-        }
         let params = self.config.params();
-        for (hard, key) in [
-            (params.hard_coded_actuator, stat_keys::ACTUATOR),
-            (params.hard_coded_gate, stat_keys::GATE),
-        ] {
-            if hard {
-                s.labels.insert(key.into(), HARD_CODED_LABEL.into());
-            }
-        }
-        s
+        ModelStats::Gate(GateStats {
+            actuator: self.actuator_model.stats(),
+            gate: self.gate.stats(),
+            predictors: self
+                .predictors
+                .iter()
+                .map(|(&id, p)| (id, p.forward.stats()))
+                .collect(),
+            hard_coded_actuator: params.hard_coded_actuator,
+            hard_coded_gate: params.hard_coded_gate,
+        })
     }
 }
 

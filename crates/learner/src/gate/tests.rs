@@ -12,8 +12,9 @@ use super::*;
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig, QueryMode};
 use crate::features::{local_change, r3, relative_features};
-use crate::model::{stat_keys, Model};
+use crate::model::Model;
 use crate::planning::{circle, exploration};
+use crate::stats::GateStats;
 use crate::types::{
     Action, Frame, ObjectState, Observation, Poses, Target, TargetError, TrackedObject,
     ACTUATOR_ID, BLUE_ID, RED_ID,
@@ -541,12 +542,14 @@ fn hard_coded_variants_replace_and_do_not_train_their_maps() {
     };
     let mut m = GateModel::new(params.check().unwrap());
     train(&mut m, &[0.0]);
-    let s = m.stats();
-    assert_eq!(s.maps[stat_keys::ACTUATOR].update_calls, 0);
-    assert_eq!(s.maps[stat_keys::GATE].update_calls, 0);
-    assert!(s.maps[&format!("{}15", stat_keys::PREDICTOR_PREFIX)].update_calls > 0);
-    assert_eq!(s.labels[stat_keys::ACTUATOR], HARD_CODED_LABEL);
-    assert_eq!(s.labels[stat_keys::GATE], HARD_CODED_LABEL);
+    let s = gate_stats(&m);
+    assert_eq!(s.actuator.update_calls, 0);
+    assert_eq!(s.gate.update_calls, 0);
+    assert!(s.predictors[&15].update_calls > 0);
+    assert!(s.hard_coded_actuator && s.hard_coded_gate);
+    let labels = &serde_json::to_value(m.stats()).unwrap()["labels"];
+    assert_eq!(labels["actuator"], HARD_CODED_LABEL);
+    assert_eq!(labels["gate"], HARD_CODED_LABEL);
 
     // Actuator: r3(s + 0.01·a).
     let w = world((0.1, 0.1234), &blue(0.0, 0.25, 0.0));
@@ -565,21 +568,30 @@ fn hard_coded_variants_replace_and_do_not_train_their_maps() {
 fn stats_count_updates_inserts_and_nodes_per_map() {
     let mut m = GateModel::default();
     train(&mut m, &[0.0, 0.1]);
-    let s = m.stats();
+    let s = gate_stats(&m);
     // 149 updates per run, one known block.
-    assert_eq!(s.maps[stat_keys::ACTUATOR].update_calls, 298);
-    assert_eq!(s.maps[stat_keys::GATE].update_calls, 298);
+    assert_eq!(s.actuator.update_calls, 298);
+    assert_eq!(s.gate.update_calls, 298);
     // The actuator model sees one input only: its first two nodes (§8).
-    assert_eq!(s.maps[stat_keys::ACTUATOR].nodes, 2);
-    let key = format!("{}15", stat_keys::PREDICTOR_PREFIX);
-    let changed = s.maps[&key].update_calls;
+    assert_eq!(s.actuator.nodes, 2);
+    let changed = s.predictors[&15].update_calls;
     assert!(changed > 100 && changed < 298, "{changed}");
     assert_eq!(
-        s.maps[&key].nodes,
+        s.predictors[&15].nodes,
         m.predictor(BLUE_ID).unwrap().forward().len()
     );
-    assert!(s.labels.is_empty());
-    assert_eq!(s.maps.len(), 3);
+    assert!(!s.hard_coded_actuator && !s.hard_coded_gate);
+    assert_eq!(s.predictors.len(), 1);
+    let wire = serde_json::to_value(m.stats()).unwrap();
+    assert!(wire["labels"].as_object().unwrap().is_empty());
+    assert_eq!(wire["maps"].as_object().unwrap().len(), 3);
+}
+
+fn gate_stats(m: &GateModel) -> GateStats {
+    m.stats()
+        .as_gate()
+        .cloned()
+        .expect("the gate model reports GateStats")
 }
 
 #[test]

@@ -9,13 +9,14 @@ use super::errors::InteractionError;
 use super::hyperparams::InteractionConfig;
 use super::selector::{AcSelector, Selector};
 use crate::aim::InverseModel;
-use crate::aitm::{Aitm, MapStats};
+use crate::aitm::Aitm;
 use crate::features::{
     changed_features, episode_difference, interaction_states, parse_frame, poses_from_states,
     target_interaction_state, ActuatorYaw, InteractionState, PairKey, ParseError, Shape,
     INTERACTION_DIM, INTERACTION_INPUT_DIM,
 };
-use crate::model::{stat_keys, Model, ModelStats};
+use crate::model::Model;
+use crate::stats::{AcStats, InteractionStats, ModelStats};
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 
 /// The interaction model's world state (`docs/spec/interaction-model.md` §2): the
@@ -71,8 +72,7 @@ impl AbstractCollection {
     /// `S_k` written as the AC index key, e.g. "2,3,5" ("" for the empty set).
     #[must_use]
     pub fn label(&self) -> String {
-        let parts: Vec<String> = self.features.iter().map(ToString::to_string).collect();
-        parts.join(",")
+        crate::stats::changed_label(&self.features)
     }
 }
 
@@ -293,33 +293,6 @@ impl InteractionModel {
     }
 }
 
-/// "AC with the most nodes" (`docs/spec/experiments.md` §7.5, the thesis's
-/// definition; ties go to the lower id *(decision)*) and the original
-/// analysis script's two quirky AC columns, added to `extra`.
-pub(super) fn ac_summary(acs: &[MapStats], extra: &mut BTreeMap<String, f64>) {
-    let Some((largest, stats)) = acs.iter().enumerate().rev().max_by_key(|(_, s)| s.nodes) else {
-        return;
-    };
-    extra.insert(stat_keys::AC_LARGEST_ID.into(), largest as f64);
-    extra.insert(
-        stat_keys::AC_LARGEST_UPDATES.into(),
-        stats.update_calls as f64,
-    );
-    extra.insert(stat_keys::AC_LARGEST_NODES.into(), stats.nodes as f64);
-    // The script: "AC Updates" = the maximum update count; "AC Nodes" = a
-    // running value m over the ACs in id order, set to an AC's *node* count
-    // whenever its *update* count exceeds m.
-    let max_updates = acs.iter().map(|s| s.update_calls).max().unwrap_or(0);
-    let mut m = 0.0;
-    for s in acs {
-        if s.update_calls as f64 > m {
-            m = s.nodes as f64;
-        }
-    }
-    extra.insert(stat_keys::AC_SCRIPT_UPDATES.into(), max_updates as f64);
-    extra.insert(stat_keys::AC_SCRIPT_NODES.into(), m);
-}
-
 impl Model for InteractionModel {
     type World = InteractionWorld;
 
@@ -402,25 +375,20 @@ impl Model for InteractionModel {
         self.get_action(rng)
     }
 
-    /// §6 and `docs/spec/experiments.md` §7.5: the ACS and every AC (`ac/{k}`, with its
-    /// changed-feature list under the same key in `labels`), the number of
-    /// ACs, the AC with the most nodes and the original script's AC columns.
+    /// §6 and `docs/spec/experiments.md` §7.5: the ACS and every AC with its
+    /// changed-feature set; the AC columns are derived from these.
     fn stats(&self) -> ModelStats {
-        let mut stats = ModelStats::default();
-        stats
-            .maps
-            .insert(stat_keys::ACS.into(), self.selector.stats());
-        for (k, ac) in self.acs.iter().enumerate() {
-            let key = format!("{}{k}", stat_keys::AC_PREFIX);
-            stats.maps.insert(key.clone(), ac.forward.stats());
-            stats.labels.insert(key, ac.label());
-        }
-        stats
-            .extra
-            .insert(stat_keys::AC_COUNT.into(), self.acs.len() as f64);
-        let per_ac: Vec<MapStats> = self.acs.iter().map(|ac| ac.forward.stats()).collect();
-        ac_summary(&per_ac, &mut stats.extra);
-        stats
+        ModelStats::Interaction(InteractionStats {
+            acs: self.selector.stats(),
+            collections: self
+                .acs
+                .iter()
+                .map(|ac| AcStats {
+                    changed: ac.features.clone(),
+                    map: ac.forward.stats(),
+                })
+                .collect(),
+        })
     }
 
     fn selection(

@@ -12,7 +12,7 @@
 //! |---|---|
 //! | §1 state, §3 update, §4 reset, §5 prediction | [`InteractionModel`] through [`crate::Model`] |
 //! | §2 world state | [`InteractionWorld`] |
-//! | §6 node statistics | [`crate::Model::stats`], keys in [`crate::stat_keys`] |
+//! | §6 node statistics | [`crate::Model::stats`], [`crate::InteractionStats`] |
 //! | `docs/spec/planning.md` §3, §4 | [`crate::Model::act`], [`circle_interaction`] |
 //! | parameters (100 Hz / 10 Hz) | [`InteractionParams`], [`InteractionConfig`] |
 //! | the draft's selectors (draft §3.2.2, §4.2.3) | [`AcSelector`], [`Selector`], [`SelectorKind`] |

@@ -10,8 +10,9 @@ use super::*;
 use crate::features::{
     apply_homogeneous, episode_difference, global_vec, InteractionState, PairKey,
 };
-use crate::model::{stat_keys, Model};
+use crate::model::Model;
 use crate::planning::exploration;
+use crate::stats::InteractionStats;
 use crate::types::{
     Action, Frame, ObjectState, Observation, Poses, Target, TargetError, ACTUATOR_ID, BLUE_ID,
     RED_ID,
@@ -260,7 +261,11 @@ fn the_empty_set_ac_has_zero_dimensional_outputs() {
     // Its prediction adds nothing.
     let s = rest.states[&KEY];
     assert_eq!(m.predict_state(&s, Action::new(0.2, 0.0)), s);
-    assert_eq!(m.stats().labels["ac/0"], "");
+    assert!(interaction_stats(&m).collections[0].changed.is_empty());
+    assert_eq!(
+        serde_json::to_value(m.stats()).unwrap()["labels"]["ac/0"],
+        ""
+    );
 }
 
 #[test]
@@ -569,49 +574,47 @@ fn statistics_cover_every_map_and_both_ac_column_definitions() {
             Action::new(0.0, 0.1 * f64::from(i % 2)),
         );
     }
-    let s = m.stats();
-    assert_eq!(s.extra[stat_keys::AC_COUNT], 2.0);
-    assert_eq!(s.maps[stat_keys::ACS], aitm_of(&m).stats());
-    assert_eq!(s.maps[stat_keys::ACS].update_calls, 7);
-    assert_eq!(s.labels["ac/0"], "6");
-    assert_eq!(s.labels["ac/1"], "5");
-    let ac0 = s.maps["ac/0"];
-    let ac1 = s.maps["ac/1"];
+    let s = interaction_stats(&m);
+    assert_eq!(s.collections.len(), 2);
+    assert_eq!(s.acs, aitm_of(&m).stats());
+    assert_eq!(s.acs.update_calls, 7);
+    assert_eq!(s.collections[0].changed, [6]);
+    assert_eq!(s.collections[1].changed, [5]);
+    let ac0 = s.collections[0].map;
+    let ac1 = s.collections[1].map;
     assert_eq!((ac0.update_calls, ac0.nodes), (3, 3));
     assert_eq!((ac1.update_calls, ac1.nodes), (4, 2));
-    assert_eq!(s.extra[stat_keys::AC_LARGEST_ID], 0.0);
-    assert_eq!(s.extra[stat_keys::AC_LARGEST_UPDATES], 3.0);
-    assert_eq!(s.extra[stat_keys::AC_LARGEST_NODES], 3.0);
+    let largest = s.largest().unwrap();
+    assert_eq!(largest.id, 0);
+    assert_eq!(largest.map.update_calls, 3);
+    assert_eq!(largest.map.nodes, 3);
     // Script: max updates = 4 (AC 1); running m: AC 0 (3 > 0) → 3 nodes,
     // AC 1 (4 > 3) → its node count.
-    assert_eq!(s.extra[stat_keys::AC_SCRIPT_UPDATES], 4.0);
-    assert_eq!(s.extra[stat_keys::AC_SCRIPT_NODES], 2.0);
+    assert_eq!(s.script_quirk().update_calls, 4);
+    assert_eq!(s.script_quirk().nodes, 2);
+    // The serialised form carries the same values under their old keys.
+    let wire = serde_json::to_value(m.stats()).unwrap();
+    assert_eq!(wire["labels"]["ac/0"], "6");
+    assert_eq!(wire["labels"]["ac/1"], "5");
+    assert_eq!(wire["extra"]["ac_count"], 2.0);
+    assert_eq!(wire["extra"]["ac_largest_id"], 0.0);
+    assert_eq!(wire["extra"]["ac_largest_updates"], 3.0);
+    assert_eq!(wire["extra"]["ac_largest_nodes"], 3.0);
+    assert_eq!(wire["extra"]["ac_script_updates"], 4.0);
+    assert_eq!(wire["extra"]["ac_script_nodes"], 2.0);
 
     let empty = InteractionModel::default().stats();
-    assert_eq!(empty.extra[stat_keys::AC_COUNT], 0.0);
-    assert!(!empty.extra.contains_key(stat_keys::AC_LARGEST_NODES));
-    assert_eq!(empty.maps.len(), 1);
+    let wire = serde_json::to_value(&empty).unwrap();
+    assert_eq!(wire["extra"]["ac_count"], 0.0);
+    assert!(wire["extra"].get("ac_largest_nodes").is_none());
+    assert_eq!(empty.maps().len(), 1);
 }
 
-#[test]
-fn ac_summary_definitions() {
-    use crate::aitm::MapStats;
-    let ms = |update_calls, nodes| MapStats {
-        update_calls,
-        inserts: nodes as u64,
-        nodes,
-    };
-    let mut extra = BTreeMap::new();
-    super::algorithm::ac_summary(&[ms(10, 3), ms(5, 8), ms(20, 2)], &mut extra);
-    assert_eq!(extra[stat_keys::AC_LARGEST_ID], 1.0);
-    assert_eq!(extra[stat_keys::AC_LARGEST_UPDATES], 5.0);
-    assert_eq!(extra[stat_keys::AC_LARGEST_NODES], 8.0);
-    assert_eq!(extra[stat_keys::AC_SCRIPT_UPDATES], 20.0);
-    // m: 10 > 0 → 3; 5 > 3 → 8; 20 > 8 → 2.
-    assert_eq!(extra[stat_keys::AC_SCRIPT_NODES], 2.0);
-    let mut extra = BTreeMap::new();
-    super::algorithm::ac_summary(&[ms(1, 4), ms(9, 4)], &mut extra);
-    assert_eq!(extra[stat_keys::AC_LARGEST_ID], 0.0);
+fn interaction_stats(m: &InteractionModel) -> InteractionStats {
+    m.stats()
+        .as_interaction()
+        .cloned()
+        .expect("the interaction model reports InteractionStats")
 }
 
 // -------------------------------------------------------------- planner (§7)
@@ -946,7 +949,11 @@ fn every_selector_is_trained_on_the_same_episodes_and_round_trips() {
         let want: Vec<&[usize]> = aitm.collections().iter().map(|ac| ac.features()).collect();
         assert_eq!(sets, want, "{kind}");
         let stats = m.stats();
-        assert_eq!(stats.maps[stat_keys::ACS].update_calls, 4 * 59, "{kind}");
+        assert_eq!(
+            stats.as_interaction().unwrap().acs.update_calls,
+            4 * 59,
+            "{kind}"
+        );
         // On the training inputs themselves the memory-based selectors
         // agree with the model's own assignment at every step.
         let run = push_run(0.07);

@@ -266,7 +266,7 @@ mod tests {
         // Two training runs from the fixed starts, in order.
         assert_eq!(task.training_starts, [-0.18, 0.18]);
         let nodes = task.nodes.as_ref().unwrap();
-        assert_eq!(nodes.maps["probe"].update_calls, 2 * 149);
+        assert_eq!(Probe::map(nodes).unwrap().update_calls, 2 * 149);
         // 21 test runs, each scored once; the probe's chain is exact.
         assert_eq!(task.errors.len(), 21);
         assert!(task
