@@ -34,7 +34,9 @@ pub struct Plan {
     /// Recorded runs to reuse, shared by the workers, and by experiments run
     /// one after the other with plans that hold the same cache (a clone of
     /// this plan with another `model`, say: both models' curves then
-    /// simulate each job once). Only used where [`Mode::reuses_runs`], where
+    /// simulate each job once). The cache does not know the world, so share
+    /// it only between experiments on the same scene and mode. Only used
+    /// where [`Mode::reuses_runs`], where
     /// a world's states are a function of the commands since a reset or
     /// latency seed (see [`super::replay`]); ignored in the other modes.
     pub runs: Option<Arc<RunCache>>,
