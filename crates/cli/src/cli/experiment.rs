@@ -80,11 +80,11 @@ struct WorldArgs {
     #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["workers", "sim_bin"])]
     connect: Option<String>,
 
-    /// In lockstep mode, simulate every run afresh instead of reusing the
-    /// states of an identical earlier run (same start, same commands since
-    /// the world's reset). Reuse gives bit-identical results, since a
-    /// lock-step world without latency is a function of those commands
-    /// (docs/performance.md); the other modes never reuse.
+    /// In the lock-step modes, simulate every run afresh instead of reusing
+    /// the states of an identical earlier run (same commands since the
+    /// world's reset, or with latency since the job's latency seed). Reuse
+    /// gives bit-identical results, since a lock-step world is a function of
+    /// those commands (docs/performance.md); realtime never reuses.
     #[arg(long)]
     no_reuse: bool,
 
@@ -220,7 +220,7 @@ impl WorldArgs {
             source,
             seed: self.seed,
             model: model.as_str().to_owned(),
-            runs: (self.mode == Mode::Lockstep && !self.no_reuse)
+            runs: (self.mode.reuses_runs() && !self.no_reuse)
                 .then(|| std::sync::Arc::new(RunCache::new())),
         })
     }

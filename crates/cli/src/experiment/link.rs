@@ -52,7 +52,7 @@ pub struct WorldLink {
     runtime: tokio::runtime::Runtime,
     client: SimClient,
     pacing: Pacing,
-    /// Set when recorded runs are reused (`lockstep` only; see
+    /// Set when recorded runs are reused (lock-step only; see
     /// [`super::replay`]), with the batch the last driver left unsent.
     replay: Option<(Cursor, Vec<Payload>)>,
 }
@@ -85,13 +85,14 @@ impl WorldLink {
     }
 
     /// Serves states from `cache` where it has them and records the others
-    /// there (see [`super::replay`]). Only for a lock-step world without
-    /// latency emulation: in any other mode the stream depends on more than
-    /// the commands, so nothing is reused there.
-    pub fn reuse_runs(&mut self, cache: Arc<RunCache>) {
+    /// there (see [`super::replay`]); `latency` tells whether the world
+    /// emulates command latency (its Hello does not say). Only for a
+    /// lock-step world: in realtime the stream depends on more than the
+    /// commands, so nothing is reused there.
+    pub fn reuse_runs(&mut self, cache: Arc<RunCache>, latency: bool) {
         if self.pacing == Pacing::Lockstep {
             let rate = self.client.hello().publish_rate;
-            self.replay = Some((Cursor::new(cache, rate), Vec::new()));
+            self.replay = Some((Cursor::new(cache, rate, latency), Vec::new()));
         }
     }
 
@@ -134,6 +135,8 @@ impl WorldLink {
         } = self;
         match replay {
             Some((cursor, pending)) => {
+                // After the last driver's commands, as on the socket: a latency
+                // seed must end the job's first batch to start a root there.
                 pending.extend(setup);
                 runtime.block_on(drive_replaying(client, cursor, pending, driver))
             }

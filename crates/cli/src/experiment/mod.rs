@@ -7,7 +7,7 @@
 //!   realtime;
 //! * [`workers`]: one world process per worker, jobs spread over workers
 //!   and gathered back in job order;
-//! * [`replay`]: recorded runs reused in `lockstep` mode;
+//! * [`replay`]: recorded runs reused in the lock-step modes;
 //! * [`run`]: whole experiments, from jobs to report documents;
 //! * [`seed`]: per-job seeds (§5).
 //!
@@ -70,6 +70,14 @@ impl Mode {
             Mode::Realtime => Pacing::Realtime,
             Mode::Lockstep | Mode::LockstepJitter => Pacing::Lockstep,
         }
+    }
+
+    /// Whether recorded runs can be reused (a [`replay::RunCache`]): in
+    /// lock-step a world's states are a function of the commands, in
+    /// realtime they are not.
+    #[must_use]
+    pub fn reuses_runs(self) -> bool {
+        self.pacing() == Pacing::Lockstep
     }
 
     /// Whether the world emulates command latency (and takes a latency seed).
@@ -166,5 +174,6 @@ mod tests {
         );
         assert_eq!(Mode::Lockstep.pacing(), Pacing::Lockstep);
         assert!(Mode::LockstepJitter.jitter() && !Mode::Lockstep.jitter());
+        assert!(Mode::LockstepJitter.reuses_runs() && !Mode::Realtime.reuses_runs());
     }
 }

@@ -1,4 +1,5 @@
-//! Reuse of simulated runs in `lockstep` mode.
+//! Reuse of simulated runs in lock-step mode, with or without latency
+//! emulation.
 //!
 //! In lock-step without latency emulation the world is a deterministic
 //! function of the commands it received since its last reset: `Reset`
@@ -11,8 +12,24 @@
 //! * the publish rate in force and the reset batch (a *root*), and
 //! * the command batch sent after each frame since.
 //!
+//! With latency emulation a reset does not restart the stream: the world's
+//! delay generator keeps drawing across resets, so a reset batch alone is no
+//! root. `SimControl.latency_seed` restarts the generator, and the driver
+//! sends one at the end of every job's first batch (`super::link`), before
+//! the reset of its start-up; from the seed on the world is again a function
+//! of the batches. A root is then a batch that holds a latency seed and a
+//! reset preceded by an actuator command, so that neither the bodies nor the
+//! generator remember anything from before it: the job's first batch when
+//! it also carries the previous job's closing reset, or else the seed
+//! joined to the start-up's reset batch that follows it (sending the two in
+//! one interval gives the same frame, since the reset wipes what the first
+//! batch did to the bodies; re-sending such a root reseeds a world brought
+//! back by replay). Everything after the root, resets included, is a path
+//! of batches.
+//!
 //! [`RunCache`] stores these streams as a tree (a trie over command batches,
-//! shared by all workers of an experiment). A link that follows a branch
+//! shared by all workers of an experiment, and by experiments given the
+//! same cache). A link that follows a branch
 //! already in the tree hands the stored frames to its driver without
 //! touching the socket; at the first batch the tree does not know, it brings
 //! its world to that point (the root batch and the branch's batches are sent
@@ -21,11 +38,14 @@
 //! [`ReplayError::Diverged`]), and from there simulates and records.
 //!
 //! In the push task the actuator's action during a run does not depend on
-//! the model, so a run is determined by its start: the 21 test runs are
+//! the model, so a run is determined by its start (and, with latency
+//! emulation, by its job's seed): without latency the 21 test runs are
 //! simulated once per experiment, and a training run once however many
-//! models replay it. Anything else that would make the stream depend on more
-//! than the batches — pausing, latency emulation — switches the link back to
-//! plain live operation for the rest of its life.
+//! models replay it; with latency, where every job has its own seed, a job
+//! is simulated once however many models run it. Anything else that would
+//! make the stream depend on more than the batches — pausing, or a latency
+//! seed sent to a world without latency emulation — switches the link back
+//! to plain live operation for the rest of its life.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -39,17 +59,18 @@ use pushlearn::wire::pb::sim_control::Action;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ReplayError {
     /// A world produced a different frame for the same commands since a
-    /// reset than the one recorded: the world is not deterministic, and the
+    /// root (a reset; with latency emulation a latency seed and a reset)
+    /// than the one recorded: the world is not deterministic, and the
     /// experiment must run without reuse (`--no-reuse`).
     #[error(
         "the world produced a different state for the same commands since its reset \
-         ({step} states after the reset): it is not deterministic; run with --no-reuse"
+         ({step} states after the reset batch): it is not deterministic; run with --no-reuse"
     )]
     Diverged { step: usize },
 }
 
-/// How a node was reached: a root (rate in force and the reset batch) or a
-/// batch sent after its parent's frame.
+/// How a node was reached: a root (rate in force and the reset batch, see
+/// the module docs) or a batch sent after its parent's frame.
 #[derive(Debug)]
 enum Edge {
     Root { rate: u32, batch: Vec<Payload> },
@@ -246,26 +267,56 @@ pub(crate) struct Cursor {
     /// The node whose frame the real world produced last, nothing sent since.
     real_at: Option<usize>,
     /// Set for good once a batch made the stream depend on more than the
-    /// batches since a reset.
+    /// batches since a root.
     live_only: bool,
+    /// The world emulates latency: roots need a latency seed.
+    latency: bool,
+    /// The latency seed the driver's last batch ended with, which the next
+    /// reset batch joins to make a root.
+    seed: Option<Payload>,
 }
 
 /// A batch that makes the following stream independent of what came before:
 /// it resets the world after setting the actuator command (the only body
 /// state a reset keeps), and neither pauses nor touches latency emulation.
 fn is_root(batch: &[Payload]) -> bool {
-    let reset = batch.iter().position(
-        |p| matches!(p, Payload::Control(c) if matches!(c.action, Some(Action::Reset(true)))),
-    );
+    let reset = batch.iter().position(is_reset);
     let actuator = batch.iter().position(|p| matches!(p, Payload::Actuator(_)));
     matches!((actuator, reset), (Some(a), Some(r)) if a < r)
 }
 
-/// A batch whose effect outlives a reset in a way the tree does not track.
-fn leaves_the_tree(batch: &[Payload]) -> bool {
+/// [`is_root`] for a world with latency emulation: the batch also restarts
+/// the delay generator, and after its last reset it holds nothing whose
+/// delay the commands before the seed could shift (only seeds and rates).
+fn is_seeded_root(batch: &[Payload]) -> bool {
+    let after_reset = batch
+        .iter()
+        .rposition(is_reset)
+        .map_or(&[][..], |r| &batch[r + 1..]);
+    is_root(batch)
+        && batch.iter().any(is_seed)
+        && after_reset.iter().all(|p| is_seed(p) || is_rate(p))
+}
+
+fn is_reset(p: &Payload) -> bool {
+    matches!(p, Payload::Control(c) if matches!(c.action, Some(Action::Reset(true))))
+}
+
+fn is_rate(p: &Payload) -> bool {
+    matches!(p, Payload::Control(c) if matches!(c.action, Some(Action::PublishRateHz(_))))
+}
+
+fn is_seed(p: &Payload) -> bool {
+    matches!(p, Payload::Control(c) if matches!(c.action, Some(Action::LatencySeed(_))))
+}
+
+/// A batch whose effect outlives a root in a way the tree does not track:
+/// a pause, or a latency seed where there is no latency emulation (the
+/// world refuses it, and the stream no longer follows the batches).
+fn leaves_the_tree(batch: &[Payload], latency: bool) -> bool {
     batch.iter().any(|p| {
-        matches!(p, Payload::Control(c)
-            if matches!(c.action, Some(Action::Pause(_) | Action::LatencySeed(_))))
+        matches!(p, Payload::Control(c) if matches!(c.action, Some(Action::Pause(_))))
+            || (!latency && is_seed(p))
     })
 }
 
@@ -282,8 +333,8 @@ fn rate_after(rate: u32, batch: &[Payload]) -> u32 {
 
 impl Cursor {
     /// A cursor for a connection to a world publishing at `rate` (its
-    /// Hello's).
-    pub(crate) fn new(cache: Arc<RunCache>, rate: u32) -> Self {
+    /// Hello's), with latency emulation if `latency`.
+    pub(crate) fn new(cache: Arc<RunCache>, rate: u32, latency: bool) -> Self {
         Self {
             cache,
             at: None,
@@ -292,26 +343,45 @@ impl Cursor {
             real_rate: rate,
             real_at: None,
             live_only: false,
+            latency,
+            seed: None,
         }
+    }
+
+    /// The root `batch` starts, if any: the batch itself, or with latency
+    /// emulation also the seed the last batch ended with joined to it.
+    fn root_of(&self, seed: Option<Payload>, batch: &[Payload]) -> Option<Vec<Payload>> {
+        if !self.latency {
+            return is_root(batch).then(|| batch.to_vec());
+        }
+        if is_seeded_root(batch) {
+            return Some(batch.to_vec());
+        }
+        let joined: Vec<Payload> = seed.into_iter().chain(batch.iter().cloned()).collect();
+        is_seeded_root(&joined).then_some(joined)
     }
 
     /// The next state of the driver's stream after it sent `batch`.
     pub(crate) fn next(&mut self, batch: Vec<Payload>) -> Next {
         let rate = self.rate;
         self.rate = rate_after(rate, &batch);
-        if self.live_only || leaves_the_tree(&batch) {
+        let last_seed = batch.last().filter(|p| self.latency && is_seed(p)).cloned();
+        let seed = std::mem::replace(&mut self.seed, last_seed);
+        if self.live_only || leaves_the_tree(&batch, self.latency) {
             self.live_only = true;
             let resync = self.resync_to(self.at);
             self.at = None;
             self.recording = None;
             return Next::Simulate { resync, batch };
         }
-        if is_root(&batch) {
-            let found = self.cache.tree().root(rate, &batch);
+        if let Some(root) = self.root_of(seed, &batch) {
+            let found = self.cache.tree().root(rate, &root);
             if let Some(n) = found {
                 return self.stored(n);
             }
-            // A reset needs no resynchronisation, only the same rate.
+            // A root needs no resynchronisation, only the same rate; the world
+            // gets the root batch, so a joined seed reseeds a world whose
+            // last batches were replayed.
             let resync = (self.real_rate != rate).then(|| Path {
                 rate: Some(rate),
                 first_step: 0,
@@ -319,9 +389,12 @@ impl Cursor {
             });
             self.recording = Some(Edge::Root {
                 rate,
-                batch: batch.clone(),
+                batch: root.clone(),
             });
-            return Next::Simulate { resync, batch };
+            return Next::Simulate {
+                resync,
+                batch: root,
+            };
         }
         let Some(at) = self.at else {
             self.recording = None;
@@ -438,14 +511,16 @@ mod tests {
         assert!(!is_root(&[Payload::reset()]));
         assert!(!is_root(&[Payload::reset(), Payload::move_(0.0, 0.0)]));
         assert!(!is_root(&[Payload::move_(0.1, 0.0)]));
-        assert!(leaves_the_tree(&[Payload::latency_seed(3)]));
-        assert!(!leaves_the_tree(&reset_batch()));
+        assert!(leaves_the_tree(&[Payload::latency_seed(3)], false));
+        assert!(!leaves_the_tree(&[Payload::latency_seed(3)], true));
+        assert!(leaves_the_tree(&[Payload::pause()], true));
+        assert!(!leaves_the_tree(&reset_batch(), false));
     }
 
     #[test]
     fn a_second_link_replays_what_the_first_recorded_and_resyncs_to_branch() {
         let cache = Arc::new(RunCache::new());
-        let mut first = Cursor::new(Arc::clone(&cache), 100);
+        let mut first = Cursor::new(Arc::clone(&cache), 100, false);
         // Start of a job: outside the tree, live.
         assert!(simulate(&mut first, Vec::new(), 9.0).is_none());
         let startup = vec![
@@ -457,7 +532,7 @@ mod tests {
         assert!(simulate(&mut first, vec![Payload::move_(1.0, 0.0)], 0.1).is_none());
         assert!(simulate(&mut first, vec![Payload::move_(1.0, 0.0)], 0.2).is_none());
 
-        let mut second = Cursor::new(Arc::clone(&cache), 100);
+        let mut second = Cursor::new(Arc::clone(&cache), 100, false);
         assert!(simulate(&mut second, Vec::new(), 5.0).is_none());
         assert_eq!(stored(&mut second, startup), frame(0.0));
         assert_eq!(
@@ -499,8 +574,8 @@ mod tests {
     #[test]
     fn links_overtaking_each_other_resync_only_the_gap() {
         let cache = Arc::new(RunCache::new());
-        let mut leader = Cursor::new(Arc::clone(&cache), 100);
-        let mut follower = Cursor::new(Arc::clone(&cache), 100);
+        let mut leader = Cursor::new(Arc::clone(&cache), 100, false);
+        let mut follower = Cursor::new(Arc::clone(&cache), 100, false);
         let push = |i: u32| vec![Payload::move_(f64::from(i), 0.0)];
         let x = |i: u32| f64::from(i) / 10.0;
         // Sends the resync path and the batch; the path's (rate, first
@@ -556,8 +631,8 @@ mod tests {
     #[test]
     fn a_different_frame_for_a_recorded_edge_is_divergence() {
         let cache = Arc::new(RunCache::new());
-        let mut a = Cursor::new(Arc::clone(&cache), 100);
-        let mut b = Cursor::new(Arc::clone(&cache), 100);
+        let mut a = Cursor::new(Arc::clone(&cache), 100, false);
+        let mut b = Cursor::new(Arc::clone(&cache), 100, false);
         // Both miss the same root at once (two workers), then report.
         for c in [&mut a, &mut b] {
             assert!(matches!(c.next(reset_batch()), Next::Simulate { .. }));
@@ -569,10 +644,141 @@ mod tests {
         );
     }
 
+    /// The start-up batch every driver sends after its first state.
+    fn startup() -> Vec<Payload> {
+        vec![
+            Payload::publish_rate(100),
+            Payload::move_(0.0, 0.0),
+            Payload::reset(),
+        ]
+    }
+
+    fn joined(seed: u64) -> Vec<Payload> {
+        let mut batch = vec![Payload::latency_seed(seed)];
+        batch.extend(startup());
+        batch
+    }
+
+    #[test]
+    fn seeded_roots_restart_both_the_bodies_and_the_delays() {
+        assert!(is_seeded_root(&joined(7)));
+        // The previous job's closing reset, then the next job's seed.
+        let mut closing = reset_batch();
+        closing.push(Payload::latency_seed(7));
+        assert!(is_seeded_root(&closing));
+        assert!(!is_seeded_root(&reset_batch()));
+        assert!(!is_seeded_root(&[Payload::latency_seed(7)]));
+        // A Move after the reset would be applied at an offset that the
+        // commands before the seed drew.
+        closing.push(Payload::move_(1.0, 0.0));
+        assert!(!is_seeded_root(&closing));
+    }
+
+    /// A job's first batch is the seed alone on a fresh link: live, and the
+    /// start-up's reset batch joined to it is the root. Later resets are
+    /// batches on the path, since the delays keep drawing across them.
+    #[test]
+    fn a_jitter_root_is_the_seed_and_its_path_runs_through_resets() {
+        let cache = Arc::new(RunCache::new());
+        let mut first = Cursor::new(Arc::clone(&cache), 100, true);
+        // Before any seed even a reset batch is no root: the delays are unknown.
+        assert!(simulate(&mut first, reset_batch(), 9.0).is_none());
+        assert!(simulate(&mut first, vec![Payload::latency_seed(7)], 8.0).is_none());
+        assert!(cache.tree().roots.is_empty());
+        let Next::Simulate {
+            resync: None,
+            batch,
+        } = first.next(startup())
+        else {
+            panic!("expected a simulation of a new root");
+        };
+        // The world gets the seed again with the reset.
+        assert_eq!(batch, joined(7));
+        first.sent(&batch);
+        first.simulated(frame(0.0)).expect("record");
+        let run = [
+            vec![Payload::move_(1.0, 0.0)],
+            reset_batch(),
+            vec![Payload::set_pose("actuator", [0.1, 0.0, 0.03], 0.0)],
+            vec![Payload::move_(1.0, 0.0)],
+        ];
+        for (i, b) in run.iter().enumerate() {
+            simulate(&mut first, b.clone(), 0.1 * (i + 1) as f64);
+        }
+        {
+            let tree = cache.tree();
+            assert_eq!(tree.roots.len(), 1);
+            assert_eq!(tree.depth(tree.nodes.len() - 1), run.len());
+        }
+
+        // The same job on a link that ran another job before: its first
+        // batch also carries the previous job's closing reset, a root of
+        // its own; then the joined root and the whole path are replayed.
+        let mut second = Cursor::new(Arc::clone(&cache), 100, true);
+        let mut closing = reset_batch();
+        closing.push(Payload::latency_seed(7));
+        assert!(simulate(&mut second, closing, 5.0).is_none());
+        assert_eq!(stored(&mut second, startup()), frame(0.0));
+        for (i, b) in run.iter().enumerate() {
+            assert_eq!(stored(&mut second, b.clone()), frame(0.1 * (i + 1) as f64));
+        }
+        // A new branch: the world is brought there from the joined root,
+        // which reseeds it.
+        let Next::Simulate {
+            resync: Some(path), ..
+        } = second.next(vec![Payload::move_(0.5, 0.0)])
+        else {
+            panic!("expected a resynchronised simulation");
+        };
+        assert_eq!((path.rate, path.first_step), (Some(100), 0));
+        assert_eq!(path.steps.len(), 1 + run.len());
+        assert_eq!(path.steps[0].0, joined(7));
+        assert_eq!(
+            cache.counts(),
+            CacheCounts {
+                replayed: 1 + run.len() as u64,
+                simulated: 3 + run.len() as u64 + 1
+            }
+        );
+    }
+
+    #[test]
+    fn a_different_seed_is_a_different_root_and_divergence_is_still_checked() {
+        let cache = Arc::new(RunCache::new());
+        let mut a = Cursor::new(Arc::clone(&cache), 100, true);
+        simulate(&mut a, vec![Payload::latency_seed(7)], 8.0);
+        simulate(&mut a, startup(), 0.0);
+        simulate(&mut a, vec![Payload::move_(1.0, 0.0)], 0.1);
+
+        let mut b = Cursor::new(Arc::clone(&cache), 100, true);
+        simulate(&mut b, vec![Payload::latency_seed(8)], 8.0);
+        assert!(simulate(&mut b, startup(), 0.0).is_none());
+        assert_eq!(cache.tree().roots.len(), 2);
+        assert_eq!(cache.counts().replayed, 0);
+
+        // Seed 7 again on two links at once, and one world moves
+        // differently: divergence.
+        let mut c = Cursor::new(Arc::clone(&cache), 100, true);
+        simulate(&mut c, vec![Payload::latency_seed(7)], 8.0);
+        assert_eq!(stored(&mut c, startup()), frame(0.0));
+        assert_eq!(stored(&mut c, vec![Payload::move_(1.0, 0.0)]), frame(0.1));
+        for cursor in [&mut a, &mut c] {
+            assert!(matches!(
+                cursor.next(vec![Payload::move_(2.0, 0.0)]),
+                Next::Simulate { .. }
+            ));
+        }
+        a.simulated(frame(0.2)).expect("first record");
+        assert_eq!(
+            c.simulated(frame(0.25)),
+            Err(ReplayError::Diverged { step: 2 })
+        );
+    }
+
     #[test]
     fn pausing_or_latency_seeds_switch_to_live_for_good() {
         let cache = Arc::new(RunCache::new());
-        let mut c = Cursor::new(Arc::clone(&cache), 100);
+        let mut c = Cursor::new(Arc::clone(&cache), 100, false);
         simulate(&mut c, reset_batch(), 0.0);
         simulate(&mut c, vec![Payload::latency_seed(1)], 0.1);
         // Even a known root is simulated now.

@@ -12,7 +12,7 @@ use super::link::WorldLink;
 use super::move_to_target::{MttJob, MttTask};
 use super::push_task::protocol::{Protocol, PushJob, Variant};
 use super::push_task::task::PushTask;
-use super::replay::RunCache;
+use super::replay::{CacheCounts, RunCache};
 use super::workers::{run_jobs, Worker, WorldSource};
 use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
 use crate::results::move_to_target::{MttJobResult, TargetSummary};
@@ -31,10 +31,14 @@ pub struct Plan {
     pub seed: u64,
     /// Name of the model, for the report.
     pub model: String,
-    /// Recorded runs to reuse, shared by the workers (and by experiments
-    /// given the same cache). Only used in [`Mode::Lockstep`], where a
-    /// world's states are a function of the commands since its last reset
-    /// (see [`super::replay`]); ignored in the other modes.
+    /// Recorded runs to reuse, shared by the workers, and by experiments run
+    /// one after the other with plans that hold the same cache (a clone of
+    /// this plan with another `model`, say: both models' curves then
+    /// simulate each job once). The cache does not know the world, so share
+    /// it only between experiments on the same scene and mode. Only used
+    /// where [`Mode::reuses_runs`], where
+    /// a world's states are a function of the commands since a reset or
+    /// latency seed (see [`super::replay`]); ignored in the other modes.
     pub runs: Option<Arc<RunCache>>,
 }
 
@@ -48,10 +52,22 @@ impl Plan {
         }
     }
 
-    /// `run` with the states the worlds simulated, if runs were reused.
-    fn with_reuse(&self, mut run: RunInfo) -> RunInfo {
-        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
-            run.simulated_states = cache.counts().simulated;
+    /// The cache in use, if runs are reused.
+    fn cache(&self) -> Option<&Arc<RunCache>> {
+        self.runs.as_ref().filter(|_| self.mode.reuses_runs())
+    }
+
+    /// The cache's counts so far, taken when an experiment starts: a shared
+    /// cache counts the states of every experiment that used it.
+    fn counts(&self) -> CacheCounts {
+        self.cache().map(|c| c.counts()).unwrap_or_default()
+    }
+
+    /// `run` with the states the worlds simulated since `start`, if runs
+    /// were reused.
+    fn with_reuse(&self, mut run: RunInfo, start: CacheCounts) -> RunInfo {
+        if let Some(cache) = self.cache() {
+            run.simulated_states = cache.counts().simulated - start.simulated;
         }
         run
     }
@@ -63,8 +79,10 @@ impl Plan {
     fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
         let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
-        if let (Mode::Lockstep, Some(cache)) = (self.mode, &self.runs) {
-            worker.link.reuse_runs(Arc::clone(cache));
+        if let Some(cache) = self.cache() {
+            worker
+                .link
+                .reuse_runs(Arc::clone(cache), self.mode.jitter());
         }
         Ok(worker)
     }
@@ -113,6 +131,7 @@ pub fn push_task<M: Model>(
     progress: impl FnMut(usize),
 ) -> Result<PushReport, ExperimentError> {
     let started = Instant::now();
+    let counts = plan.counts();
     let variant = protocol.variant;
     let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
     let untrained = Mutex::new(untrained);
@@ -143,12 +162,15 @@ pub fn push_task<M: Model>(
             train_runs,
             &results,
         )?,
-        run: plan.with_reuse(RunInfo::of(
-            results.iter().map(|r| (r.counters, r.timing)),
-            RATE_HZ,
-            plan.workers().min(jobs.len()),
-            started.elapsed().as_secs_f64(),
-        )),
+        run: plan.with_reuse(
+            RunInfo::of(
+                results.iter().map(|r| (r.counters, r.timing)),
+                RATE_HZ,
+                plan.workers().min(jobs.len()),
+                started.elapsed().as_secs_f64(),
+            ),
+            counts,
+        ),
     })
 }
 
@@ -162,6 +184,7 @@ pub fn constant_feedback<M: Model>(
     plan: &Plan,
 ) -> Result<FeedbackReport, ExperimentError> {
     let started = Instant::now();
+    let counts = plan.counts();
     let jobs = [super::seed::derive(
         plan.seed,
         super::constant_feedback::EXPERIMENT,
@@ -190,12 +213,15 @@ pub fn constant_feedback<M: Model>(
         variant: Variant::ConstantFeedback.as_str().to_owned(),
         publish_rate_hz: LOW_RATE_HZ,
         runs: task.runs,
-        run: plan.with_reuse(RunInfo::of(
-            [(counters, timing)],
-            LOW_RATE_HZ,
-            1,
-            started.elapsed().as_secs_f64(),
-        )),
+        run: plan.with_reuse(
+            RunInfo::of(
+                [(counters, timing)],
+                LOW_RATE_HZ,
+                1,
+                started.elapsed().as_secs_f64(),
+            ),
+            counts,
+        ),
     })
 }
 
@@ -212,6 +238,7 @@ pub fn move_to_target<M: Model>(
     progress: impl FnMut(usize),
 ) -> Result<MttReport, ExperimentError> {
     let started = Instant::now();
+    let counts = plan.counts();
     let jobs = MttJob::all(targets, repetitions, max_steps, plan.seed);
     let untrained = Mutex::new(untrained);
     let results = run_jobs(
@@ -251,11 +278,14 @@ pub fn move_to_target<M: Model>(
         repetitions,
         max_steps,
         targets: entries,
-        run: plan.with_reuse(RunInfo::of(
-            results.iter().map(|r| (r.counters, r.timing)),
-            RATE_HZ,
-            plan.workers().min(jobs.len()),
-            started.elapsed().as_secs_f64(),
-        )),
+        run: plan.with_reuse(
+            RunInfo::of(
+                results.iter().map(|r| (r.counters, r.timing)),
+                RATE_HZ,
+                plan.workers().min(jobs.len()),
+                started.elapsed().as_secs_f64(),
+            ),
+            counts,
+        ),
     })
 }
