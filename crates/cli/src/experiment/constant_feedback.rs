@@ -89,9 +89,10 @@ impl<M: Model> Task<M> for FeedbackTask {
 mod tests {
     use learner::BLUE_ID;
 
-    use super::super::driver::test_support::{blue_home, describe, frame, Probe};
+    use super::super::driver::test_support::{blue_home, describe, frame};
     use super::super::driver::Driver;
     use super::*;
+    use learner::testing::Probe;
 
     #[test]
     fn runs_end_only_beyond_one_metre_and_training_stays_on() {

@@ -273,9 +273,6 @@ pub(crate) mod test_support {
 
     use pushlearn::wire::pb::{client_message::Payload, sim_control};
 
-    /// The learner's test double, shared with its own tests.
-    pub use learner::testing::Probe;
-
     /// A frame with the actuator at (x, y) and the given blocks.
     pub fn frame(actuator: (f64, f64), blocks: &[(u32, ObjectState)]) -> Frame {
         let obs = |name: &str, id, x, y, yaw: f64, z| Observation {
@@ -330,8 +327,9 @@ pub(crate) mod test_support {
 
 #[cfg(test)]
 mod tests {
-    use super::test_support::{blue_home, describe, frame, Probe};
+    use super::test_support::{blue_home, describe, frame};
     use super::*;
+    use learner::testing::Probe;
 
     /// A task that starts one run at x = 0.1 and records what reaches it.
     #[derive(Debug, Default)]

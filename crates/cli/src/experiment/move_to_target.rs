@@ -249,10 +249,11 @@ impl MttJobResult {
 
 #[cfg(test)]
 mod tests {
-    use super::super::driver::test_support::{blue_home, describe, frame, Probe};
+    use super::super::driver::test_support::{blue_home, describe, frame};
     use super::super::driver::Driver;
     use super::*;
     use crate::results::move_to_target::TARGETS;
+    use learner::testing::Probe;
 
     /// An obedient world (see `push_task` tests) driven until the job ends.
     fn simulate(driver: &mut Driver<Probe, MttTask>) -> Vec<Vec<String>> {

@@ -386,7 +386,8 @@ mod tests {
     use learner::BLUE_ID;
 
     use super::*;
-    use crate::experiment::driver::test_support::{blue_home, describe, frame, Probe};
+    use crate::experiment::driver::test_support::{blue_home, describe, frame};
+    use learner::testing::Probe;
 
     /// The shipped scenes' (`docs/spec/world.md` §3).
     pub(crate) fn heights() -> StartHeights {

@@ -210,8 +210,9 @@ mod tests {
 
     use super::super::protocol::{Protocol, Variant, TWO_OBJECT_TRAINING_STARTS};
     use super::*;
-    use crate::experiment::driver::test_support::{blue_home, describe, frame, Probe};
+    use crate::experiment::driver::test_support::{blue_home, describe, frame};
     use crate::experiment::driver::Driver;
+    use learner::testing::Probe;
 
     /// Feeds a driver the states a perfectly obedient world would publish:
     /// after SetPose the actuator is where it was put, after Move it advances
