@@ -11,7 +11,7 @@ use pushlearn_cli::experiment::push_task::protocol::{Protocol, Variant};
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::{push_task, Plan};
 use pushlearn_cli::experiment::workers::WorldSource;
-use pushlearn_cli::experiment::Mode;
+use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
 use pushlearn_cli::results::PushReport;
 use serde_json::Value;
@@ -578,8 +578,9 @@ fn jitter_runs_shared_by_both_models_give_bit_identical_results() {
         workers: 2,
         source: WorldSource::Spawn {
             bin: binary(),
-            args: Mode::LockstepJitter.serve_args(variant.scene()),
+            args: Mode::LockstepJitter.serve_args(variant.scene(), LATENCY_MAX_STEPS),
         },
+        latency_max: LATENCY_MAX_STEPS,
         seed: 1,
         model: String::new(),
         runs: Some(Arc::clone(&cache)),

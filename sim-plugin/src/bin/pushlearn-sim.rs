@@ -50,7 +50,7 @@ enum Cmd {
         after_help = "Examples:\n  \
             pushlearn-sim                                   realtime, 127.0.0.1:11345\n  \
             pushlearn-sim serve --mode lockstep --port 0    lock-step on a free port\n  \
-            pushlearn-sim serve --mode lockstep --latency-max 5 --latency-seed 7"
+            pushlearn-sim serve --mode lockstep --latency-max 2 --latency-seed 7"
     )]
     Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
@@ -98,8 +98,9 @@ struct ServeArgs {
     #[arg(long, value_name = "HZ")]
     rate: Option<u32>,
     /// Lock-step latency emulation: each Move takes effect after a uniformly
-    /// drawn 0..=L steps of the next interval (the thesis saw up to about 5).
-    /// Off unless given; needs --mode lockstep.
+    /// drawn 0..=L steps of the next interval (`pushlearn experiment` uses 2,
+    /// derived from the thesis's timing in docs/spec/world.md §8). Off unless
+    /// given; needs --mode lockstep.
     #[arg(long, value_name = "L")]
     latency_max: Option<u32>,
     /// Seed of the latency emulation's generator (clients can reseed it with

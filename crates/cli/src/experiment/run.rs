@@ -26,6 +26,9 @@ use pushlearn::wire::pb::client_message::Payload;
 #[derive(Clone, Debug)]
 pub struct Plan {
     pub mode: Mode,
+    /// With latency emulation, the largest delay of a Move in steps (the
+    /// world's `--latency-max`); recorded in the report's setup.
+    pub latency_max: u32,
     pub workers: usize,
     pub source: WorldSource,
     pub seed: u64,
@@ -35,7 +38,8 @@ pub struct Plan {
     /// one after the other with plans that hold the same cache (a clone of
     /// this plan with another `model`, say: both models' curves then
     /// simulate each job once). The cache does not know the world, so share
-    /// it only between experiments on the same scene and mode. Only used
+    /// it only between experiments on the same scene, mode and latency
+    /// maximum. Only used
     /// where [`Mode::reuses_runs`], where
     /// a world's states are a function of the commands since a reset or
     /// latency seed (see [`super::replay`]); ignored in the other modes.
@@ -48,6 +52,7 @@ impl Plan {
             experiment: experiment.to_owned(),
             model: self.model.clone(),
             mode: self.mode.as_str().to_owned(),
+            latency_max_steps: self.mode.jitter().then_some(self.latency_max),
             seed: self.seed,
         }
     }

@@ -412,6 +412,7 @@ mod tests {
                 experiment: "push-task".into(),
                 model: "draft".into(),
                 mode: "lockstep".into(),
+                latency_max_steps: None,
                 seed: 1,
             },
             folds: 1,

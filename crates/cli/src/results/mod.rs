@@ -35,6 +35,10 @@ pub struct Setup {
     pub experiment: String,
     pub model: String,
     pub mode: String,
+    /// With latency emulation, the largest delay of a Move in physics steps
+    /// (absent without; documents written before it was recorded used 5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latency_max_steps: Option<u32>,
     pub seed: u64,
 }
 
@@ -46,6 +50,7 @@ impl Setup {
             experiment: experiment.into(),
             model: model.into(),
             mode: "lockstep".into(),
+            latency_max_steps: None,
             seed: 1,
         }
     }

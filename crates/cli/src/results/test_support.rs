@@ -100,6 +100,7 @@ pub(crate) fn mtt_report() -> MttReport {
             experiment: "move-to-target".into(),
             model: "interaction".into(),
             mode: "lockstep-jitter".into(),
+            latency_max_steps: Some(2),
             seed: 1,
         },
         repetitions: 1,
