@@ -71,8 +71,8 @@ impl Plan {
     /// `run` with the states the worlds simulated since `start`, if runs
     /// were reused.
     fn with_reuse(&self, mut run: RunInfo, start: CacheCounts) -> RunInfo {
-        if let Some(cache) = self.cache() {
-            run.simulated_states = cache.counts().simulated - start.simulated;
+        if let (Some(cache), Some(timing)) = (self.cache(), run.timing.as_mut()) {
+            timing.simulated_states = cache.counts().simulated - start.simulated;
         }
         run
     }

@@ -84,15 +84,30 @@ impl std::ops::AddAssign for Timing {
 /// `docs/spec/experiments.md` §6, start-position corrections.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RunInfo {
-    pub workers: usize,
-    pub wall_seconds: f64,
     /// World states handled by the drivers.
     pub messages: u64,
+    /// 2/f (`docs/spec/experiments.md` §6).
+    pub budget_seconds: f64,
+    /// Messages dropped after resets and repositionings.
+    pub ignored: u64,
+    /// Failed start-position checks (each answered by a SetPose).
+    pub reset_errors: u64,
+    pub parse_errors: u64,
+    /// What depends on the machine and its load (and, with reuse, on which
+    /// worker got to a run first). Absent from documents that must be
+    /// reproducible byte for byte ([`RunInfo::without_timing`]).
+    #[serde(flatten, default, skip_serializing_if = "Option::is_none")]
+    pub timing: Option<RunTiming>,
+}
+
+/// The machine-dependent part of a [`RunInfo`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RunTiming {
+    pub workers: usize,
+    pub wall_seconds: f64,
     /// Messages whose handling took longer than `budget_seconds`.
     pub too_slow: u64,
     pub too_slow_fraction: f64,
-    /// 2/f (`docs/spec/experiments.md` §6).
-    pub budget_seconds: f64,
     pub mean_handling_ms: f64,
     /// Median and 99th percentile of the handling times (within 1/16).
     #[serde(default)]
@@ -104,11 +119,6 @@ pub struct RunInfo {
     /// when lockstep runs were replayed (docs/performance.md).
     #[serde(default)]
     pub simulated_states: u64,
-    /// Messages dropped after resets and repositionings.
-    pub ignored: u64,
-    /// Failed start-position checks (each answered by a SetPose).
-    pub reset_errors: u64,
-    pub parse_errors: u64,
 }
 
 impl RunInfo {
@@ -131,21 +141,33 @@ impl RunInfo {
         } else {
             timing.busy_seconds / timing.messages as f64
         };
+        let summary = timing.histogram.summary();
         Self {
-            workers,
-            wall_seconds,
             messages: timing.messages,
-            too_slow: timing.too_slow,
-            too_slow_fraction: timing.too_slow_fraction(),
             budget_seconds: budget(publish_rate_hz).as_secs_f64(),
-            mean_handling_ms: mean * 1e3,
-            simulated_states: timing.messages,
-            p50_handling_us: timing.histogram.summary().p50_us,
-            p99_handling_us: timing.histogram.summary().p99_us,
-            max_handling_ms: timing.max_seconds * 1e3,
             ignored: counters.ignored,
             reset_errors: counters.reset_errors,
             parse_errors: counters.parse_errors,
+            timing: Some(RunTiming {
+                workers,
+                wall_seconds,
+                too_slow: timing.too_slow,
+                too_slow_fraction: timing.too_slow_fraction(),
+                mean_handling_ms: mean * 1e3,
+                p50_handling_us: summary.p50_us,
+                p99_handling_us: summary.p99_us,
+                max_handling_ms: timing.max_seconds * 1e3,
+                simulated_states: timing.messages,
+            }),
+        }
+    }
+
+    /// This run without its machine-dependent part.
+    #[must_use]
+    pub fn without_timing(self) -> Self {
+        Self {
+            timing: None,
+            ..self
         }
     }
 }
@@ -169,5 +191,19 @@ mod tests {
         sum += t;
         assert_eq!((sum.messages, sum.too_slow), (6, 2));
         assert_eq!(Timing::default().too_slow_fraction(), 0.0);
+    }
+
+    #[test]
+    fn timing_is_optional_in_documents_and_flat_when_present() {
+        let run = RunInfo::of([(Counters::default(), Timing::default())], 100, 2, 1.5);
+        let with = serde_json::to_value(&run).unwrap();
+        assert_eq!(with["wall_seconds"], 1.5);
+        assert_eq!(with["workers"], 2);
+        let back: RunInfo = serde_json::from_value(with).unwrap();
+        assert_eq!(back, run);
+        let without = serde_json::to_value(run.clone().without_timing()).unwrap();
+        assert!(without.get("wall_seconds").is_none() && without.get("workers").is_none());
+        let back: RunInfo = serde_json::from_value(without).unwrap();
+        assert_eq!(back, run.without_timing());
     }
 }
