@@ -33,43 +33,60 @@ impl Cart {
         };
         if !points.is_empty() {
             let n_labels = labels.iter().max().map_or(0, |&m| m + 1);
-            let mut idx: Vec<usize> = (0..points.len()).collect();
-            tree.grow(points, labels, n_labels, &mut idx);
+            tree.grow(points, labels, n_labels, (0..points.len()).collect());
         }
         tree
     }
 
-    /// Grows the subtree of the points `idx` and returns its node index.
-    fn grow(
-        &mut self,
-        points: &[Vec<f64>],
-        labels: &[usize],
-        n_labels: usize,
-        idx: &mut [usize],
-    ) -> usize {
-        let mut counts = vec![0.0; n_labels];
-        for &i in idx.iter() {
-            counts[labels[i]] += 1.0;
+    /// Grows the tree of the points `all`, depth first with the left
+    /// subtree before the right one (the arena order of a recursive
+    /// pre-order walk), on an explicit stack: an unpruned tree over
+    /// thousands of references can be thousands of levels deep.
+    fn grow(&mut self, points: &[Vec<f64>], labels: &[usize], n_labels: usize, all: Vec<usize>) {
+        let mut pending = vec![Pending {
+            idx: all,
+            parent: None,
+        }];
+        while let Some(Pending { idx, parent }) = pending.pop() {
+            let mut counts = vec![0.0; n_labels];
+            for &i in &idx {
+                counts[labels[i]] += 1.0;
+            }
+            let at = self.nodes.len();
+            let label = majority(&counts).unwrap_or(0);
+            self.nodes.push(Node::Leaf(label));
+            if let Some((split, side)) = parent {
+                if let Node::Split { left, right, .. } = &mut self.nodes[split] {
+                    match side {
+                        Side::Left => *left = at,
+                        Side::Right => *right = at,
+                    }
+                }
+            }
+            let Some((feature, threshold)) = best_split(points, labels, &counts, &idx, self.dim)
+            else {
+                continue;
+            };
+            // Partition keeping the original order on each side, so that
+            // the result never depends on an unstable sort.
+            let (left, right): (Vec<usize>, Vec<usize>) =
+                idx.iter().partition(|&&i| points[i][feature] <= threshold);
+            self.nodes[at] = Node::Split {
+                feature,
+                threshold,
+                left: at,
+                right: at,
+            };
+            // Last in, first out: the left subtree is grown first.
+            pending.push(Pending {
+                idx: right,
+                parent: Some((at, Side::Right)),
+            });
+            pending.push(Pending {
+                idx: left,
+                parent: Some((at, Side::Left)),
+            });
         }
-        let at = self.nodes.len();
-        let label = majority(&counts).unwrap_or(0);
-        self.nodes.push(Node::Leaf(label));
-        let Some((feature, threshold)) = best_split(points, labels, &counts, idx, self.dim) else {
-            return at;
-        };
-        // Partition in place, keeping the original order on each side so
-        // that the result never depends on an unstable sort.
-        let (mut left, mut right): (Vec<usize>, Vec<usize>) =
-            idx.iter().partition(|&&i| points[i][feature] <= threshold);
-        let l = self.grow(points, labels, n_labels, &mut left);
-        let r = self.grow(points, labels, n_labels, &mut right);
-        self.nodes[at] = Node::Split {
-            feature,
-            threshold,
-            left: l,
-            right: r,
-        };
-        at
     }
 
     /// The label of the leaf `x` falls into; `None` for an empty tree.
@@ -94,6 +111,19 @@ impl Cart {
     pub fn is_consistent(&self, n: usize) -> bool {
         arena_is_consistent(&self.nodes, self.dim, |&label| label < n)
     }
+}
+
+/// A subtree still to grow: its points, and the split whose child it is.
+struct Pending {
+    idx: Vec<usize>,
+    parent: Option<(usize, Side)>,
+}
+
+/// Which child of a split a pending subtree becomes.
+#[derive(Clone, Copy)]
+enum Side {
+    Left,
+    Right,
 }
 
 /// Gini impurity times the count: `n − Σ c² / n`.
@@ -137,7 +167,11 @@ fn best_split(
             let right: Vec<f64> = counts.iter().zip(&left).map(|(c, l)| c - l).collect();
             let impurity = weighted_gini(&left, nl) + weighted_gini(&right, n - nl);
             if best.is_none_or(|(b, _, _)| impurity < b) {
-                best = Some((impurity, f, v + (next - v) / 2.0));
+                // Halfway, unless `v` and `next` are neighbouring doubles
+                // whose midpoint rounds up to `next`: then `v` itself, so
+                // that the split still separates them.
+                let half = v + (next - v) / 2.0;
+                best = Some((impurity, f, if half < next { half } else { v }));
             }
         }
     }
@@ -178,6 +212,39 @@ mod tests {
         assert_eq!(tree.classify(&[5.0, 5.0]), Some(1));
         let tree = Cart::fit(2, &p, &[2, 1, 2, 0]);
         assert_eq!(tree.classify(&[1.0, 1.0]), Some(2));
+    }
+
+    #[test]
+    fn neighbouring_doubles_are_still_separated() {
+        // The midpoint of these two rounds to the larger one, which would
+        // put both points on the left and never stop splitting.
+        let v = f64::from_bits(1.0f64.to_bits() + 1);
+        let next = f64::from_bits(v.to_bits() + 1);
+        assert_eq!(v + (next - v) / 2.0, next);
+        let tree = Cart::fit(1, &[vec![v], vec![next]], &[0, 1]);
+        assert_eq!(tree.node_count(), 3);
+        assert_eq!(
+            (tree.classify(&[v]), tree.classify(&[next])),
+            (Some(0), Some(1))
+        );
+    }
+
+    #[test]
+    fn a_tree_thousands_of_levels_deep_grows_without_recursion() {
+        // Alternating labels along one axis: every split peels off one
+        // point, so the tree is as deep as the data is long.
+        let n = 3_000;
+        let points: Vec<Vec<f64>> = (0..n).map(|i| vec![f64::from(i)]).collect();
+        let labels: Vec<usize> = (0..n).map(|i| usize::from(i % 2 == 1)).collect();
+        let tree = std::thread::Builder::new()
+            .stack_size(64 * 1024)
+            .spawn(move || Cart::fit(1, &points, &labels))
+            .expect("thread")
+            .join()
+            .expect("no stack overflow");
+        assert!(tree.is_consistent(2));
+        assert_eq!(tree.classify(&[4.0]), Some(0));
+        assert_eq!(tree.classify(&[2_999.0]), Some(1));
     }
 
     #[test]
