@@ -9,6 +9,9 @@
 //!   and figures;
 //! * [`results`]: what the experiments measured, as plain data: filled by
 //!   [`experiment`], rendered by [`report`];
+//! * [`spec`]: an experiment as data, run into its report document;
+//! * [`reproduce`]: every experiment behind `docs/results.md`, and the page
+//!   itself, regenerated and checked (`pushlearn reproduce`);
 //! * [`view`]: the browser viewer (`pushlearn view`).
 //!
 //! The wire types and the world client come from the root protocol crate,
@@ -21,5 +24,7 @@ pub mod learn;
 pub mod load;
 pub mod models;
 pub mod report;
+pub mod reproduce;
 pub mod results;
+pub mod spec;
 pub mod view;

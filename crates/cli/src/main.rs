@@ -26,6 +26,7 @@ enum Command {
     Learn(cli::learn::LearnArgs),
     View(cli::view::ViewArgs),
     Report(cli::report::ReportArgs),
+    Reproduce(cli::reproduce::ReproduceArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +43,7 @@ fn main() -> ExitCode {
         Command::Learn(args) => cli::learn::run(args),
         Command::View(args) => cli::view::run(args),
         Command::Report(args) => cli::report::run(args),
+        Command::Reproduce(args) => cli::reproduce::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

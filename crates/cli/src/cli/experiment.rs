@@ -6,17 +6,16 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use learner::{Model, ObjectState};
+use learner::ObjectState;
 use pushlearn_cli::experiment::move_to_target::MAX_STEPS;
-use pushlearn_cli::experiment::push_task::protocol::{Protocol, Variant};
+use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
-use pushlearn_cli::experiment::run::{self, Plan};
+use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
-use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS, LOW_RATE_HZ, RATE_HZ};
-use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
-use pushlearn_cli::report::{self, draft, table};
+use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
+use pushlearn_cli::models::{ModelKind, ModelOptions};
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
-use pushlearn_cli::results::{FeedbackReport, MttReport, PushReport};
+use pushlearn_cli::spec::Spec;
 
 /// Run one of the thesis's experiments and print its table beside the
 /// thesis's numbers.
@@ -213,7 +212,10 @@ pub fn parse_numbers(text: &str, n: usize) -> Result<Vec<f64>, String> {
 }
 
 impl WorldArgs {
-    fn plan(&self, model: ModelKind, scene: &str) -> Result<Plan> {
+    fn plan(&self, scene: &str) -> Result<Plan> {
+        if self.mode != Mode::LockstepJitter && self.latency_max != LATENCY_MAX_STEPS {
+            bail!("--latency-max sets the latency emulation of --mode lockstep-jitter; drop it or add --mode lockstep-jitter");
+        }
         let source = match &self.connect {
             Some(addr) => WorldSource::Connect(addr.clone()),
             None => WorldSource::Spawn {
@@ -221,9 +223,6 @@ impl WorldArgs {
                 args: self.mode.serve_args(scene, self.latency_max),
             },
         };
-        if self.mode != Mode::LockstepJitter && self.latency_max != LATENCY_MAX_STEPS {
-            bail!("--latency-max sets the latency emulation of --mode lockstep-jitter; drop it or add --mode lockstep-jitter");
-        }
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
         Ok(Plan {
             mode: self.mode,
@@ -231,37 +230,32 @@ impl WorldArgs {
             workers: self.workers.map_or(cpus, |n| n as usize),
             source,
             seed: self.seed,
-            model: model.as_str().to_owned(),
+            model: String::new(),
             runs: (self.mode.reuses_runs() && !self.no_reuse)
                 .then(|| std::sync::Arc::new(RunCache::new())),
         })
     }
 
-    fn write_json<T: serde::Serialize>(&self, report: &T) -> Result<()> {
-        if let Some(path) = &self.json {
-            report::write_json(path, report)
-                .with_context(|| format!("writing {}", path.display()))?;
-        }
-        Ok(())
-    }
-
-    /// Checks before the experiment runs that the figure directory can be
-    /// created, so that a typo does not cost a whole run.
-    fn check_plots(&self) -> Result<()> {
+    /// Checks before the experiment runs that its outputs can be written —
+    /// the figure directory created, the JSON file's directory present — so
+    /// that a typo does not cost a whole run.
+    fn check_outputs(&self) -> Result<()> {
         if let Some(dir) = &self.plots {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
         }
-        Ok(())
-    }
-
-    fn write_plots(
-        &self,
-        plot: impl FnOnce(&std::path::Path) -> Result<Vec<PathBuf>, report::plot::PlotError>,
-    ) -> Result<()> {
-        if let Some(dir) = &self.plots {
-            let written = plot(dir)?;
-            eprintln!("wrote {} figures to {}", written.len(), dir.display());
+        if let Some(path) = &self.json {
+            let parent = path
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .unwrap_or(std::path::Path::new("."));
+            if !parent.is_dir() {
+                bail!(
+                    "cannot write --json {}: the directory {} does not exist",
+                    path.display(),
+                    parent.display()
+                );
+            }
         }
         Ok(())
     }
@@ -286,7 +280,7 @@ fn progress(len: usize, what: &str) -> ProgressBar {
 /// On Ctrl-C or SIGTERM: kill the world processes, then exit. (An
 /// interrupted program does not unwind, so the processes' own clean-up would
 /// not run.)
-fn end_worlds_on_signal() {
+pub(crate) fn end_worlds_on_signal() {
     std::thread::spawn(|| {
         let Ok(runtime) = tokio::runtime::Builder::new_current_thread()
             .enable_all()
@@ -319,63 +313,62 @@ fn end_worlds_on_signal() {
 /// Runs `pushlearn experiment`.
 pub fn run(args: ExperimentArgs) -> Result<()> {
     end_worlds_on_signal();
-    match args.command {
-        ExperimentCommand::PushTask(args) => push_task(&args),
-        ExperimentCommand::MoveToTarget(args) => move_to_target(&args),
+    let (spec, world) = match &args.command {
+        ExperimentCommand::PushTask(args) => (push_task_spec(args)?, &args.world),
+        ExperimentCommand::MoveToTarget(args) => (move_to_target_spec(args), &args.world),
+    };
+    spec.validate()?;
+    world.check_outputs()?;
+    let plan = world.plan(spec.scene())?;
+    let bar = progress(spec.jobs(), spec.title());
+    let document = spec.run(&plan, |done| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    if let Some(path) = &world.json {
+        std::fs::write(path, document.to_json()?)
+            .with_context(|| format!("writing {}", path.display()))?;
     }
+    if let Some(dir) = &world.plots {
+        let written = document.plot(dir)?;
+        eprintln!("wrote {} figures to {}", written.len(), dir.display());
+    }
+    let mut out = std::io::stdout().lock();
+    document.write_tables(&mut out)?;
+    Ok(out.flush()?)
 }
 
-fn push_task(args: &PushTaskArgs) -> Result<()> {
-    if args.report == ReportKind::Draft {
-        return draft_tables(args);
-    }
+fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
     let variant = args.variant;
-    args.world.check_plots()?;
-    let plan = args.world.plan(args.model, variant.scene())?;
+    if args.report == ReportKind::Draft {
+        if variant != Variant::Random
+            || args.train_runs.is_some()
+            || args.options != ModelOptions::default()
+        {
+            bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs and the model options");
+        }
+        let folds = args
+            .folds
+            .map_or(variant_folds(Variant::Draft), |n| n as usize);
+        return Ok(Spec::DraftTables { folds });
+    }
     if variant == Variant::ConstantFeedback {
         if args.train_runs.is_some() {
             bail!("--variant constant-feedback has no training phase; drop --train-runs");
         }
-        let report =
-            args.model
-                .dispatch(&args.options, LOW_RATE_HZ, Feedback { plan: &plan })??;
-        args.world.write_json(&report)?;
-        args.world
-            .write_plots(|dir| report::plot::feedback(&report, args.model, dir))?;
-        let mut out = std::io::stdout().lock();
-        table::feedback(&mut out, &report, args.model)?;
-        return Ok(out.flush()?);
+        return Ok(Spec::ConstantFeedback {
+            model: args.model,
+            options: args.options.clone(),
+        });
     }
-    let train_runs: Vec<usize> = match &args.train_runs {
-        Some(list) => list.iter().map(|&n| n as usize).collect(),
-        None => variant.default_train_runs(),
-    };
-    let protocol = Protocol::new(variant, args.options.config_number());
-    let fixed = protocol.fixed_starts.len();
-    if variant == Variant::TwoObjects && train_runs.iter().any(|&n| n > fixed) {
-        bail!("the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}");
-    }
-    let folds = args.folds.map_or(variant_folds(variant), |n| n as usize);
-    let bar = progress(train_runs.len() * folds, "push task");
-    let report = args.model.dispatch(
-        &args.options,
-        protocol.rate_hz,
-        Push {
-            protocol: &protocol,
-            train_runs: &train_runs,
-            folds,
-            plan: &plan,
-            bar: &bar,
+    Ok(Spec::PushTask {
+        model: args.model,
+        options: args.options.clone(),
+        variant,
+        train_runs: match &args.train_runs {
+            Some(list) => list.iter().map(|&n| n as usize).collect(),
+            None => variant.default_train_runs(),
         },
-    )??;
-    bar.finish_and_clear();
-    args.world.write_json(&report)?;
-    args.world
-        .write_plots(|dir| report::plot::push(&report, args.model, dir))?;
-    let mut out = std::io::stdout().lock();
-    table::push(&mut out, &report, args.model)?;
-    draft::keypoint_section(&mut out, &report)?;
-    Ok(out.flush()?)
+        folds: args.folds.map_or(variant_folds(variant), |n| n as usize),
+    })
 }
 
 /// Folds when --folds is not given: the thesis's 20, and one model per row
@@ -388,144 +381,17 @@ fn variant_folds(variant: Variant) -> usize {
     }
 }
 
-/// `push-task --report draft`: every row of the draft's Tables 6.1/6.2 on
-/// the draft's protocol.
-fn draft_tables(args: &PushTaskArgs) -> Result<()> {
-    if args.variant != Variant::Random
-        || args.train_runs.is_some()
-        || args.options != ModelOptions::default()
-    {
-        bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs and the model options");
-    }
-    let rows = draft::rows();
-    let folds = args
-        .folds
-        .map_or(variant_folds(Variant::Draft), |n| n as usize);
-    let bar = progress(rows.len() * folds, "draft tables");
-    let mut results = Vec::new();
-    let mut reports = Vec::new();
-    for (i, row) in rows.iter().enumerate() {
-        let plan = args.world.plan(row.model, Variant::Draft.scene())?;
-        let protocol = Protocol::new(Variant::Draft, row.options.config_number());
-        let report = row.model.dispatch(
-            &row.options,
-            protocol.rate_hz,
-            Push {
-                protocol: &protocol,
-                train_runs: &[row.train_runs],
-                folds,
-                plan: &plan,
-                bar: &ProgressBar::hidden(),
-            },
-        )??;
-        bar.set_position(((i + 1) * folds) as u64);
-        let entry = report
-            .results
-            .first()
-            .context("a draft row produced no results")?;
-        results.push(draft::DraftRowResult::of(row, entry));
-        reports.push(report);
-    }
-    bar.finish_and_clear();
-    let setup = reports
-        .first()
-        .map(|r| r.setup.clone())
-        .context("the draft has no rows")?;
-    let report = draft::DraftReport {
-        setup,
-        folds,
-        test_positions: Protocol::from(Variant::Draft).test_positions,
-        rows: results,
-        reports,
-    };
-    args.world.write_json(&report)?;
-    let mut out = std::io::stdout().lock();
-    draft::tables(&mut out, &report)?;
-    Ok(out.flush()?)
-}
-
-fn move_to_target(args: &MoveToTargetArgs) -> Result<()> {
-    args.world.check_plots()?;
-    let plan = args.world.plan(args.model, "one_block")?;
-    let targets = if args.target.is_empty() {
-        TARGETS.to_vec()
-    } else {
-        args.target.clone()
-    };
-    let repetitions = args.repetitions as usize;
-    let bar = progress(targets.len() * repetitions, "move to target");
-    let report = args.model.dispatch(
-        &args.options,
-        RATE_HZ,
-        MoveToTarget {
-            targets: &targets,
-            repetitions,
-            max_steps: args.max_steps,
-            plan: &plan,
-            bar: &bar,
+fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
+    Spec::MoveToTarget {
+        model: args.model,
+        options: args.options.clone(),
+        targets: if args.target.is_empty() {
+            TARGETS.to_vec()
+        } else {
+            args.target.clone()
         },
-    )??;
-    bar.finish_and_clear();
-    args.world.write_json(&report)?;
-    args.world
-        .write_plots(|dir| report::plot::move_to_target(&report, args.model, dir))?;
-    let mut out = std::io::stdout().lock();
-    table::move_to_target(&mut out, &report, args.model)?;
-    Ok(out.flush()?)
-}
-
-struct Push<'a> {
-    protocol: &'a Protocol,
-    train_runs: &'a [usize],
-    folds: usize,
-    plan: &'a Plan,
-    bar: &'a ProgressBar,
-}
-
-impl WithModel for Push<'_> {
-    type Output = Result<PushReport>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        Ok(run::push_task(
-            untrained,
-            self.protocol,
-            self.train_runs,
-            self.folds,
-            self.plan,
-            |done| self.bar.set_position(done as u64),
-        )?)
-    }
-}
-
-struct Feedback<'a> {
-    plan: &'a Plan,
-}
-
-impl WithModel for Feedback<'_> {
-    type Output = Result<FeedbackReport>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        Ok(run::constant_feedback(untrained, self.plan)?)
-    }
-}
-
-struct MoveToTarget<'a> {
-    targets: &'a [ObjectState],
-    repetitions: usize,
-    max_steps: u64,
-    plan: &'a Plan,
-    bar: &'a ProgressBar,
-}
-
-impl WithModel for MoveToTarget<'_> {
-    type Output = Result<MttReport>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        Ok(run::move_to_target(
-            untrained,
-            self.targets,
-            self.repetitions,
-            self.max_steps,
-            self.plan,
-            |done| self.bar.set_position(done as u64),
-        )?)
+        repetitions: args.repetitions as usize,
+        max_steps: args.max_steps,
     }
 }
 

@@ -4,6 +4,7 @@ pub mod ctl;
 pub mod experiment;
 pub mod learn;
 pub mod report;
+pub mod reproduce;
 pub mod view;
 
 /// Whether `err` comes from writing to a closed stdout pipe.

@@ -45,7 +45,7 @@ pub const RATE_HZ: u32 = 100;
 pub const LOW_RATE_HZ: u32 = 10;
 
 /// How the world is timed (`docs/spec/world.md` §8).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {
     /// The world steps on its own at 500 steps/s, as in the thesis; the

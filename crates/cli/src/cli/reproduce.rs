@@ -1,0 +1,323 @@
+//! `pushlearn reproduce`: every experiment behind `docs/results.md`, its
+//! documents, figures and the page itself, regenerated — or checked against
+//! the committed ones.
+
+use std::cell::RefCell;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds};
+use pushlearn_cli::reproduce::compare::{first_json_difference, first_line_difference};
+use pushlearn_cli::reproduce::{
+    self, manifest, page, Progress, Reproduction, Settings, FIGURES_DIR, PAGE, QUICK_DIR,
+    RESULTS_DIR, TEMPLATE, TIMING,
+};
+
+/// Regenerate docs/results.md, its documents (docs/results/*.json) and its
+/// figures (docs/figures/) from scratch, or check that the committed ones
+/// still match the code.
+///
+/// Runs the calibration sweep and every experiment the page reports (both
+/// models' learning curves with the default latency, with the harsher
+/// L_max = 5 and in lock-step; four more seeds for the targets; fixed
+/// three; two objects; constant feedback; Move to Target; the draft's
+/// tables and selectors), in one process. Experiments on the same world
+/// share recorded runs, so each distinct run is simulated once. The
+/// documents leave out what depends on the machine (wall and handling
+/// times, which go to docs/results/timing.md), so two runs write the same
+/// bytes. The page is docs/results/template.md with its placeholders
+/// filled from the documents.
+#[derive(Debug, Args)]
+#[command(after_help = "Examples:\n  \
+    pushlearn reproduce                    regenerate everything (a few minutes on 2 cores)\n  \
+    pushlearn reproduce --check            fail, naming the first differing value, if the committed results are stale\n  \
+    pushlearn reproduce --quick --check    the reduced check CI runs (docs/results/quick/)\n  \
+    pushlearn reproduce --quick            regenerate docs/results/quick/ after a change that moves a number")]
+pub struct ReproduceArgs {
+    /// The reduced reproduction (2 folds, fewer training runs, 1 Move to
+    /// Target repetition) into docs/results/quick/: no figures, no page.
+    #[arg(long)]
+    quick: bool,
+
+    /// Regenerate into memory and compare with the committed files instead
+    /// of writing; fails, naming each stale file's first differing value.
+    #[arg(long)]
+    check: bool,
+
+    /// The repository root [default: the current directory].
+    #[arg(long, value_name = "DIR", default_value = ".")]
+    root: PathBuf,
+
+    /// World processes per experiment [default: the number of CPUs].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    workers: Option<u32>,
+
+    /// The world daemon binary [default: `pushlearn-sim` next to this
+    /// executable, else on PATH].
+    #[arg(long, value_name = "PATH")]
+    sim_bin: Option<PathBuf>,
+}
+
+/// Runs `pushlearn reproduce`.
+pub fn run(args: ReproduceArgs) -> Result<()> {
+    super::experiment::end_worlds_on_signal();
+    let root = &args.root;
+    let template_path = root.join(TEMPLATE);
+    let template = if args.quick {
+        None
+    } else {
+        Some(std::fs::read_to_string(&template_path).with_context(|| {
+            format!(
+                "cannot read the page's template {}; run from the repository root or pass --root",
+                template_path.display()
+            )
+        })?)
+    };
+    if !root.join("docs").is_dir() {
+        bail!(
+            "{} has no docs/ directory; run from the repository root or pass --root",
+            root.display()
+        );
+    }
+    let entries = if args.quick {
+        manifest::quick()
+    } else {
+        manifest::full()
+    };
+    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+    let settings = Settings {
+        sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
+        workers: args.workers.map_or(cpus, |n| n as usize),
+    };
+    let results = run_with_bars(&entries, &settings)?;
+    let dir = root.join(if args.quick { QUICK_DIR } else { RESULTS_DIR });
+    let files = results.files()?;
+    let page = template.map(|t| page::generate(&t, &results)).transpose()?;
+    let command = if args.quick {
+        "pushlearn reproduce --quick"
+    } else {
+        "pushlearn reproduce"
+    };
+    let states: u64 = results
+        .produced
+        .iter()
+        .flat_map(|p| p.document.runs())
+        .map(|r| r.messages)
+        .sum();
+    if args.check {
+        check(root, &dir, &files, page.as_deref())?;
+        println!(
+            "{command} --check: {} documents{} match the code ({} experiments, {states} messages, {:.1} s)",
+            files.len(),
+            if page.is_some() { " and the page" } else { "" },
+            results.produced.len(),
+            results.wall_seconds
+        );
+        return Ok(());
+    }
+    reproduce::write_files(&dir, &files)?;
+    for stale in stale_documents(&dir, &files)? {
+        std::fs::remove_file(&stale)
+            .with_context(|| format!("removing the stale {}", stale.display()))?;
+        eprintln!(
+            "removed {}: no experiment produces it any more",
+            stale.display()
+        );
+    }
+    reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
+    let mut figures = 0;
+    if let Some(page) = &page {
+        figures = draw_figures(root, &results, page)?;
+        reproduce::write_atomically(&root.join(PAGE), page)?;
+    }
+    println!(
+        "{command}: {} experiments, {states} messages, in {:.1} s; wrote {} documents to {}{}{}",
+        results.produced.len(),
+        results.wall_seconds,
+        files.len(),
+        dir.display(),
+        if figures > 0 {
+            format!(
+                ", {figures} figures to {}",
+                root.join(FIGURES_DIR).display()
+            )
+        } else {
+            String::new()
+        },
+        if page.is_some() {
+            format!(" and {}", root.join(PAGE).display())
+        } else {
+            String::new()
+        }
+    );
+    Ok(())
+}
+
+/// Draws the figures of the experiments that have them and keeps those the
+/// page shows (`figures/NAME.png`) in docs/figures/, replacing the old ones;
+/// a figure the page shows that no experiment draws is an error.
+fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize> {
+    let figure_dir = root.join(FIGURES_DIR);
+    let scratch = figure_dir.join(".reproduce");
+    if scratch.exists() {
+        std::fs::remove_dir_all(&scratch)
+            .with_context(|| format!("removing {}", scratch.display()))?;
+    }
+    std::fs::create_dir_all(&scratch).with_context(|| format!("creating {}", scratch.display()))?;
+    for p in results.produced.iter().filter(|p| p.entry.figures) {
+        p.document
+            .plot(&scratch)
+            .with_context(|| format!("drawing the figures of {}", p.entry.name))?;
+    }
+    let mut shown: Vec<&str> = page
+        .match_indices("](figures/")
+        .filter_map(|(at, _)| {
+            let name = &page[at + "](figures/".len()..];
+            name.find(')').map(|end| &name[..end])
+        })
+        .collect();
+    shown.sort_unstable();
+    shown.dedup();
+    for name in &shown {
+        let drawn = scratch.join(name);
+        if !drawn.is_file() {
+            bail!("{PAGE} shows figures/{name}, which no experiment of the reproduction draws");
+        }
+        std::fs::rename(&drawn, figure_dir.join(name))
+            .with_context(|| format!("moving figures/{name} into place"))?;
+    }
+    std::fs::remove_dir_all(&scratch).with_context(|| format!("removing {}", scratch.display()))?;
+    Ok(shown.len())
+}
+
+/// Runs the reproduction with one progress bar per experiment (on stderr,
+/// when it is a terminal).
+fn run_with_bars(entries: &[manifest::Entry], settings: &Settings) -> Result<Reproduction> {
+    let terminal = std::io::stderr().is_terminal();
+    let bars = if terminal {
+        MultiProgress::new()
+    } else {
+        MultiProgress::with_draw_target(ProgressDrawTarget::hidden())
+    };
+    let style = ProgressStyle::with_template(
+        "{prefix:>34} {wide_bar} {pos}/{len} jobs [{elapsed_precise}]",
+    )
+    .ok();
+    let current: RefCell<Option<ProgressBar>> = RefCell::new(None);
+    let total = bars.add(ProgressBar::new(entries.len() as u64));
+    if let Ok(style) = ProgressStyle::with_template(
+        "{prefix:>34} {wide_bar} {pos}/{len} experiments [{elapsed_precise}]",
+    ) {
+        total.set_style(style);
+    }
+    total.set_prefix("pushlearn reproduce");
+    let result = reproduce::run(entries, settings, |event| match event {
+        Progress::Started { entry, jobs } => {
+            if !terminal {
+                // Logs get one line per experiment instead of bars.
+                eprintln!("reproduce: {} ({jobs} jobs) …", entry.name);
+            }
+            let bar = bars.insert_before(&total, ProgressBar::new(jobs as u64));
+            if let Some(style) = &style {
+                bar.set_style(style.clone());
+            }
+            bar.set_prefix(entry.name.clone());
+            *current.borrow_mut() = Some(bar);
+        }
+        Progress::Jobs { done, .. } => {
+            if let Some(bar) = current.borrow().as_ref() {
+                bar.set_position(done as u64);
+            }
+        }
+        Progress::Finished { .. } => {
+            if let Some(bar) = current.borrow_mut().take() {
+                bar.finish();
+            }
+            total.inc(1);
+        }
+    });
+    total.finish_and_clear();
+    if result.is_err() {
+        kill_all_worlds();
+    }
+    Ok(result?)
+}
+
+/// Compares the regenerated files with the committed ones; fails naming
+/// every stale file and its first differing value.
+fn check(root: &Path, dir: &Path, files: &[(String, String)], page: Option<&str>) -> Result<()> {
+    let mut problems = Vec::new();
+    for (name, now) in files {
+        let path = dir.join(name);
+        match std::fs::read_to_string(&path) {
+            Err(e) => problems.push(format!(
+                "{}: cannot read the committed file: {e}",
+                path.display()
+            )),
+            Ok(committed) if committed == *now => {}
+            Ok(committed) => match first_json_difference(&committed, now) {
+                Ok(Some(difference)) => problems.push(format!("{}: {difference}", path.display())),
+                Ok(None) => problems.push(format!(
+                    "{}: same values, different bytes (regenerate it)",
+                    path.display()
+                )),
+                Err(e) => problems.push(format!("{}: {e}", path.display())),
+            },
+        }
+    }
+    for stale in stale_documents(dir, files)? {
+        problems.push(format!(
+            "{}: committed, but no experiment produces it any more",
+            stale.display()
+        ));
+    }
+    if let Some(page) = page {
+        let path = root.join(PAGE);
+        match std::fs::read_to_string(&path) {
+            Err(e) => problems.push(format!(
+                "{}: cannot read the committed page: {e}",
+                path.display()
+            )),
+            Ok(committed) => {
+                if let Some(difference) = first_line_difference(&committed, page) {
+                    problems.push(format!("{}: {difference}", path.display()));
+                }
+            }
+        }
+    }
+    if problems.is_empty() {
+        return Ok(());
+    }
+    bail!(
+        "the committed results no longer match the code ({} stale):\n  {}\nregenerate them with `pushlearn reproduce{}` and commit the result",
+        problems.len(),
+        problems.join("\n  "),
+        if dir.ends_with("quick") { " --quick" } else { "" }
+    )
+}
+
+/// JSON files in `dir` that the reproduction does not write.
+fn stale_documents(dir: &Path, files: &[(String, String)]) -> Result<Vec<PathBuf>> {
+    let mut stale = Vec::new();
+    let listing = match std::fs::read_dir(dir) {
+        Ok(listing) => listing,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(stale),
+        Err(e) => return Err(e).with_context(|| format!("listing {}", dir.display())),
+    };
+    for item in listing {
+        let path = item
+            .with_context(|| format!("listing {}", dir.display()))?
+            .path();
+        let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+            continue;
+        };
+        if path.extension().is_some_and(|e| e == "json") && !files.iter().any(|(f, _)| f == name) {
+            stale.push(path);
+        }
+    }
+    stale.sort();
+    Ok(stale)
+}

@@ -1,0 +1,418 @@
+//! The experiments behind `docs/results.md` ([`full`]) and the reduced set
+//! CI checks ([`quick`]), each with the `pushlearn experiment` command that
+//! runs it alone.
+
+use std::fmt::Write as _;
+
+use learner::interaction::SelectorKind;
+
+use crate::experiment::move_to_target::MAX_STEPS;
+use crate::experiment::push_task::protocol::Variant;
+use crate::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
+use crate::models::{ModelKind, ModelOptions};
+use crate::results::move_to_target::{REPETITIONS, TARGETS};
+use crate::spec::Spec;
+
+/// The seeds whose spread `docs/results.md` shows beside seed 1 for the
+/// issue's targets (20 folds each).
+pub const SPREAD_SEEDS: [u64; 4] = [2, 3, 4, 5];
+
+/// One experiment of a reproduction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Entry {
+    /// Its document's file name without `.json`.
+    pub name: String,
+    pub spec: Spec,
+    pub mode: Mode,
+    /// The latency maximum with `Mode::LockstepJitter`.
+    pub latency_max: u32,
+    pub seed: u64,
+    /// Whether its figures go into `docs/figures/`.
+    pub figures: bool,
+}
+
+impl Entry {
+    fn new(name: impl Into<String>, spec: Spec) -> Self {
+        Self {
+            name: name.into(),
+            spec,
+            mode: Mode::LockstepJitter,
+            latency_max: LATENCY_MAX_STEPS,
+            seed: 1,
+            figures: false,
+        }
+    }
+
+    fn mode(self, mode: Mode) -> Self {
+        Self { mode, ..self }
+    }
+
+    fn latency_max(self, latency_max: u32) -> Self {
+        Self {
+            latency_max,
+            ..self
+        }
+    }
+
+    fn seed(self, seed: u64) -> Self {
+        Self { seed, ..self }
+    }
+
+    fn with_figures(self) -> Self {
+        Self {
+            figures: true,
+            ..self
+        }
+    }
+
+    /// The worlds this entry can share recorded runs with: the same scene,
+    /// mode and latency maximum (`crate::experiment::run::Plan::runs`).
+    #[must_use]
+    pub fn world_key(&self) -> (&'static str, Mode, u32) {
+        let latency = if self.mode.jitter() {
+            self.latency_max
+        } else {
+            0
+        };
+        (self.spec.scene(), self.mode, latency)
+    }
+
+    /// The `pushlearn experiment` command that produces this entry's
+    /// document alone (into `dir`).
+    #[must_use]
+    pub fn command(&self, dir: &str) -> String {
+        let mut line = String::from("pushlearn experiment ");
+        let default = ModelOptions::default();
+        let options = |line: &mut String, options: &ModelOptions| {
+            if options.selector != default.selector {
+                let _ = write!(line, " --selector {}", options.selector.as_str());
+            }
+        };
+        match &self.spec {
+            Spec::PushTask {
+                model,
+                options: o,
+                variant,
+                train_runs,
+                folds,
+            } => {
+                let _ = write!(line, "push-task --model {model}");
+                if *variant != Variant::Random {
+                    let _ = write!(line, " --variant {}", variant.as_str());
+                }
+                if *train_runs != variant.default_train_runs() {
+                    let runs: Vec<String> = train_runs.iter().map(ToString::to_string).collect();
+                    let _ = write!(line, " --train-runs {}", runs.join(","));
+                }
+                let default_folds = if *variant == Variant::Draft { 1 } else { 20 };
+                if *folds != default_folds {
+                    let _ = write!(line, " --folds {folds}");
+                }
+                options(&mut line, o);
+            }
+            Spec::ConstantFeedback { model, options: o } => {
+                let _ = write!(
+                    line,
+                    "push-task --model {model} --variant constant-feedback"
+                );
+                options(&mut line, o);
+            }
+            Spec::MoveToTarget {
+                model,
+                options: o,
+                repetitions,
+                max_steps,
+                ..
+            } => {
+                let _ = write!(line, "move-to-target --model {model}");
+                if *repetitions != REPETITIONS {
+                    let _ = write!(line, " --repetitions {repetitions}");
+                }
+                if *max_steps != MAX_STEPS {
+                    let _ = write!(line, " --max-steps {max_steps}");
+                }
+                options(&mut line, o);
+            }
+            Spec::DraftTables { folds } => {
+                line.push_str("push-task --report draft");
+                if *folds != 1 {
+                    let _ = write!(line, " --folds {folds}");
+                }
+            }
+        }
+        if self.mode != Mode::LockstepJitter {
+            let _ = write!(line, " --mode {}", self.mode.as_str());
+        } else if self.latency_max != LATENCY_MAX_STEPS {
+            let _ = write!(line, " --latency-max {}", self.latency_max);
+        }
+        if self.seed != 1 {
+            let _ = write!(line, " --seed {}", self.seed);
+        }
+        let _ = write!(line, " --json {dir}/{}.json", self.name);
+        line
+    }
+}
+
+const MODELS: [ModelKind; 2] = [ModelKind::Gate, ModelKind::Interaction];
+
+fn push(model: ModelKind, variant: Variant, train_runs: Vec<usize>, folds: usize) -> Spec {
+    Spec::PushTask {
+        model,
+        options: ModelOptions::default(),
+        variant,
+        train_runs,
+        folds,
+    }
+}
+
+fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
+    Spec::MoveToTarget {
+        model,
+        options: ModelOptions::default(),
+        targets: TARGETS.to_vec(),
+        repetitions,
+        max_steps: MAX_STEPS,
+    }
+}
+
+/// Every experiment behind `docs/results.md`, in the order they run:
+/// experiments that share a world (scene, mode, latency) are adjacent, so
+/// that both models' runs are simulated once.
+#[must_use]
+pub fn full() -> Vec<Entry> {
+    let mut entries = Vec::new();
+    let curve = || Variant::Random.default_train_runs();
+    for (suffix, mode, latency) in [
+        ("", Mode::LockstepJitter, LATENCY_MAX_STEPS),
+        ("-lockstep", Mode::Lockstep, LATENCY_MAX_STEPS),
+        ("-latency5", Mode::LockstepJitter, LATENCY_MAX_STEPS_HARSH),
+    ] {
+        for model in MODELS {
+            let entry = Entry::new(
+                format!("push-task-{model}{suffix}"),
+                push(model, Variant::Random, curve(), 20),
+            )
+            .mode(mode)
+            .latency_max(latency);
+            entries.push(if suffix.is_empty() {
+                entry.with_figures()
+            } else {
+                entry
+            });
+        }
+    }
+    for seed in SPREAD_SEEDS {
+        for model in MODELS {
+            entries.push(
+                Entry::new(
+                    format!("push-task-{model}-seed{seed}"),
+                    push(model, Variant::Random, vec![10, 30], 20),
+                )
+                .seed(seed),
+            );
+        }
+    }
+    for (suffix, latency) in [
+        ("", LATENCY_MAX_STEPS),
+        ("-latency5", LATENCY_MAX_STEPS_HARSH),
+    ] {
+        for model in MODELS {
+            let entry = Entry::new(
+                format!("fixed-three-{model}{suffix}"),
+                push(model, Variant::FixedThree, vec![3], 20),
+            )
+            .latency_max(latency);
+            entries.push(if suffix.is_empty() {
+                entry.with_figures()
+            } else {
+                entry
+            });
+        }
+    }
+    entries.push(
+        Entry::new(
+            "fixed-three-gate-lockstep",
+            push(ModelKind::Gate, Variant::FixedThree, vec![3], 20),
+        )
+        .mode(Mode::Lockstep),
+    );
+    for (suffix, latency) in [
+        ("", LATENCY_MAX_STEPS),
+        ("-latency5", LATENCY_MAX_STEPS_HARSH),
+    ] {
+        for runs in [6, 7] {
+            let entry = Entry::new(
+                format!("two-objects-{runs}{suffix}"),
+                push(ModelKind::Gate, Variant::TwoObjects, vec![runs], 20),
+            )
+            .latency_max(latency);
+            entries.push(if suffix.is_empty() {
+                entry.with_figures()
+            } else {
+                entry
+            });
+        }
+    }
+    for model in MODELS {
+        entries.push(
+            Entry::new(
+                format!("constant-feedback-{model}"),
+                Spec::ConstantFeedback {
+                    model,
+                    options: ModelOptions::default(),
+                },
+            )
+            .with_figures(),
+        );
+    }
+    for (suffix, mode, latency) in [
+        ("", Mode::LockstepJitter, LATENCY_MAX_STEPS),
+        ("-lockstep", Mode::Lockstep, LATENCY_MAX_STEPS),
+        ("-latency5", Mode::LockstepJitter, LATENCY_MAX_STEPS_HARSH),
+    ] {
+        for model in MODELS {
+            let entry = Entry::new(
+                format!("move-to-target-{model}{suffix}"),
+                move_to_target(model, REPETITIONS),
+            )
+            .mode(mode)
+            .latency_max(latency);
+            entries.push(if suffix.is_empty() {
+                entry.with_figures()
+            } else {
+                entry
+            });
+        }
+    }
+    for seed in SPREAD_SEEDS {
+        for model in MODELS {
+            entries.push(
+                Entry::new(
+                    format!("move-to-target-{model}-seed{seed}"),
+                    move_to_target(model, REPETITIONS),
+                )
+                .seed(seed),
+            );
+        }
+    }
+    entries.push(Entry::new("draft", Spec::DraftTables { folds: 1 }));
+    for selector in SelectorKind::ALL {
+        entries.push(Entry::new(
+            format!("selector-{}", selector.as_str()),
+            Spec::PushTask {
+                model: ModelKind::Interaction,
+                options: ModelOptions {
+                    selector,
+                    ..ModelOptions::default()
+                },
+                variant: Variant::Draft,
+                train_runs: vec![3, 10, 30],
+                folds: 5,
+            },
+        ));
+    }
+    entries
+}
+
+/// A reduced reproduction that still exercises every experiment and both
+/// models with latency emulation, in a few seconds: what CI compares with
+/// the committed `docs/results/quick/`.
+#[must_use]
+pub fn quick() -> Vec<Entry> {
+    let mut entries = Vec::new();
+    for model in MODELS {
+        entries.push(Entry::new(
+            format!("push-task-{model}"),
+            push(model, Variant::Random, vec![1, 3, 10], 2),
+        ));
+    }
+    entries.push(
+        Entry::new(
+            "push-task-gate-latency5",
+            push(ModelKind::Gate, Variant::Random, vec![1, 3, 10], 2),
+        )
+        .latency_max(LATENCY_MAX_STEPS_HARSH),
+    );
+    entries.push(Entry::new(
+        "fixed-three-interaction",
+        push(ModelKind::Interaction, Variant::FixedThree, vec![3], 2),
+    ));
+    entries.push(Entry::new(
+        "two-objects-6",
+        push(ModelKind::Gate, Variant::TwoObjects, vec![6], 2),
+    ));
+    entries.push(Entry::new(
+        "constant-feedback-gate",
+        Spec::ConstantFeedback {
+            model: ModelKind::Gate,
+            options: ModelOptions::default(),
+        },
+    ));
+    for model in MODELS {
+        entries.push(Entry::new(
+            format!("move-to-target-{model}"),
+            move_to_target(model, 1),
+        ));
+    }
+    entries
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_are_unique_and_commands_name_their_document() {
+        for entries in [full(), quick()] {
+            let mut names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+            names.sort_unstable();
+            let before = names.len();
+            names.dedup();
+            assert_eq!(names.len(), before, "duplicate names");
+            for e in &entries {
+                let command = e.command("docs/results");
+                assert!(
+                    command.ends_with(&format!("--json docs/results/{}.json", e.name)),
+                    "{command}"
+                );
+                e.spec.validate().expect("every entry is runnable");
+            }
+        }
+    }
+
+    #[test]
+    fn commands_spell_out_only_what_differs_from_the_defaults() {
+        let entries = full();
+        let find = |name: &str| {
+            entries
+                .iter()
+                .find(|e| e.name == name)
+                .map(|e| e.command("d"))
+                .expect("entry")
+        };
+        assert_eq!(
+            find("push-task-gate"),
+            "pushlearn experiment push-task --model gate --json d/push-task-gate.json"
+        );
+        assert_eq!(
+            find("push-task-interaction-latency5"),
+            "pushlearn experiment push-task --model interaction --latency-max 5 --json d/push-task-interaction-latency5.json"
+        );
+        assert_eq!(
+            find("two-objects-7"),
+            "pushlearn experiment push-task --model gate --variant two-objects --train-runs 7 --json d/two-objects-7.json"
+        );
+        assert_eq!(
+            find("selector-tree"),
+            "pushlearn experiment push-task --model interaction --variant draft --train-runs 3,10,30 --folds 5 --selector tree --json d/selector-tree.json"
+        );
+        assert_eq!(
+            find("move-to-target-gate-seed3"),
+            "pushlearn experiment move-to-target --model gate --seed 3 --json d/move-to-target-gate-seed3.json"
+        );
+        assert_eq!(
+            find("draft"),
+            "pushlearn experiment push-task --report draft --json d/draft.json"
+        );
+    }
+}

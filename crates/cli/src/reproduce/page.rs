@@ -1,0 +1,766 @@
+//! `docs/results.md` from its hand-written template and the reproduction's
+//! documents. The template is Markdown with two kinds of placeholders:
+//!
+//! * a line `<!-- reproduce: KIND [ARG] -->` becomes a generated block
+//!   (see [`Block`]): a table beside the thesis's numbers, a document's
+//!   terminal report with its command, …;
+//! * `{{NAME:PATH}}` or `{{NAME:PATH:D}}` inside prose becomes the number at
+//!   the JSON `PATH` of document `NAME` (`results[4].block_pos_err.mean`),
+//!   with `D` decimals (default 4), so that numbers quoted in sentences are
+//!   generated too.
+//!
+//! Nothing else of the template changes, except that an HTML comment
+//! opening it (notes for its editors) is dropped; an unknown placeholder,
+//! document or path is an error naming it, never an empty cell.
+
+use std::fmt::Write as _;
+
+use learner::eval::MeanStd;
+
+use super::calibration::CalibrationRow;
+use super::manifest::{Entry, SPREAD_SEEDS};
+use super::{Reproduction, RESULTS_DIR, TEMPLATE};
+use crate::models::ModelKind;
+use crate::report::reference::{self, Ms};
+use crate::results::push_task::{CurveEntry, SelectionCount};
+use crate::results::{MttReport, PushReport};
+use crate::spec::Document;
+
+/// Why the page cannot be generated.
+#[derive(Debug, thiserror::Error)]
+pub enum PageError {
+    #[error("{TEMPLATE} line {line}: {message}")]
+    Template { line: usize, message: String },
+}
+
+/// What a `<!-- reproduce: … -->` line expands to.
+enum Block<'a> {
+    /// `targets`: the issue's targets, seed 1 and the spread of seeds 2–5.
+    Targets,
+    /// `calibration`: the sweep's table and the facts the thesis states.
+    Calibration,
+    /// `curves MODEL`: the learning curve beside lockstep, the harsh latency
+    /// and the thesis.
+    Curves(ModelKind),
+    /// `report NAME`: the command and the terminal report of one document.
+    Report(&'a str),
+    /// `move-to-target`: reached targets per model and timing setting.
+    MoveToTarget,
+    /// `latency`: the default latency maximum beside the harsh one.
+    Latency,
+    /// `actuator-folds NAME`: the per-fold actuator errors of a curve.
+    ActuatorFolds(&'a str),
+    /// `selectors`: the interaction model's selectors on the draft protocol.
+    Selectors,
+    /// `commands`: every experiment's stand-alone command.
+    Commands,
+}
+
+impl<'a> Block<'a> {
+    fn parse(text: &'a str) -> Result<Self, String> {
+        let mut words = text.split_whitespace();
+        let kind = words.next().unwrap_or_default();
+        let arg = words.next();
+        let model = |arg: Option<&str>| match arg {
+            Some("gate") => Ok(ModelKind::Gate),
+            Some("interaction") => Ok(ModelKind::Interaction),
+            other => Err(format!(
+                "`{kind}` needs a model (gate or interaction), got {other:?}"
+            )),
+        };
+        let name =
+            |arg: Option<&'a str>| arg.ok_or_else(|| format!("`{kind}` needs a document name"));
+        let block = match kind {
+            "targets" => Block::Targets,
+            "calibration" => Block::Calibration,
+            "curves" => Block::Curves(model(arg)?),
+            "report" => Block::Report(name(arg)?),
+            "move-to-target" => Block::MoveToTarget,
+            "latency" => Block::Latency,
+            "actuator-folds" => Block::ActuatorFolds(name(arg)?),
+            "selectors" => Block::Selectors,
+            "commands" => Block::Commands,
+            other => return Err(format!("unknown block `{other}`")),
+        };
+        if words.next().is_some() {
+            return Err(format!("`{text}` has more arguments than `{kind}` takes"));
+        }
+        Ok(block)
+    }
+}
+
+/// The page: `template` with every placeholder replaced.
+///
+/// # Errors
+/// A placeholder that is unknown or names a document or value the
+/// reproduction does not have.
+pub fn generate(template: &str, results: &Reproduction) -> Result<String, PageError> {
+    let mut page = String::new();
+    // A comment opening the template is for its editors, not the page.
+    let skip = if template.starts_with("<!--") {
+        template
+            .lines()
+            .position(|l| l.contains("-->"))
+            .map_or(0, |end| end + 1)
+    } else {
+        0
+    };
+    for (i, line) in template.lines().enumerate().skip(skip) {
+        let error = |message: String| PageError::Template {
+            line: i + 1,
+            message,
+        };
+        if let Some(directive) = line
+            .trim()
+            .strip_prefix("<!-- reproduce:")
+            .and_then(|rest| rest.strip_suffix("-->"))
+        {
+            let block = Block::parse(directive.trim()).map_err(error)?;
+            page.push_str(&render(&block, results).map_err(error)?);
+        } else {
+            page.push_str(&inline_values(line, results).map_err(error)?);
+            page.push('\n');
+        }
+    }
+    Ok(page)
+}
+
+fn inline_values(line: &str, results: &Reproduction) -> Result<String, String> {
+    let mut out = String::new();
+    let mut rest = line;
+    while let Some(start) = rest.find("{{") {
+        out.push_str(&rest[..start]);
+        let after = &rest[start + 2..];
+        let end = after
+            .find("}}")
+            .ok_or_else(|| "`{{` without `}}`".to_owned())?;
+        out.push_str(&value(&after[..end], results)?);
+        rest = &after[end + 2..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+/// `NAME:PATH[:D]`.
+fn value(spec: &str, results: &Reproduction) -> Result<String, String> {
+    let mut parts = spec.split(':');
+    let (Some(name), Some(path)) = (parts.next(), parts.next()) else {
+        return Err(format!("`{{{{{spec}}}}}` is not NAME:PATH[:DECIMALS]"));
+    };
+    let decimals: usize = match parts.next() {
+        Some(d) => d
+            .parse()
+            .map_err(|_| format!("`{d}` in `{{{{{spec}}}}}` is not a number of decimals"))?,
+        None => 4,
+    };
+    let document = results
+        .document(name)
+        .ok_or_else(|| format!("no document `{name}` in this reproduction"))?;
+    let json: serde_json::Value = serde_json::from_str(
+        &document
+            .to_json()
+            .map_err(|e| format!("cannot serialise `{name}`: {e}"))?,
+    )
+    .map_err(|e| format!("cannot read `{name}` back: {e}"))?;
+    let mut at = &json;
+    for step in path.split('.') {
+        let (key, indices) = match step.find('[') {
+            Some(i) => (&step[..i], &step[i..]),
+            None => (step, ""),
+        };
+        if !key.is_empty() {
+            at = at
+                .get(key)
+                .ok_or_else(|| format!("`{name}` has no `{key}` in `{path}`"))?;
+        }
+        for index in indices.split('[').filter(|s| !s.is_empty()) {
+            let i: usize = index
+                .trim_end_matches(']')
+                .parse()
+                .map_err(|_| format!("`[{index}` in `{path}` is not an index"))?;
+            at = at
+                .get(i)
+                .ok_or_else(|| format!("`{name}`: `{path}` has no entry {i}"))?;
+        }
+    }
+    match at {
+        serde_json::Value::Number(n) if n.is_f64() => {
+            Ok(format!("{:.decimals$}", n.as_f64().unwrap_or(f64::NAN)))
+        }
+        serde_json::Value::Number(n) => Ok(n.to_string()),
+        other => Err(format!("`{name}:{path}` is {other}, not a number")),
+    }
+}
+
+fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
+    match block {
+        Block::Targets => targets(results),
+        Block::Calibration => Ok(calibration(&results.calibration)),
+        Block::Curves(model) => curves(results, *model),
+        Block::Report(name) => report(results, name),
+        Block::MoveToTarget => move_to_target(results),
+        Block::Latency => latency(results),
+        Block::ActuatorFolds(name) => actuator_folds(push_doc(results, name)?),
+        Block::Selectors => selectors(results),
+        Block::Commands => Ok(commands(results.produced.iter().map(|p| &p.entry))),
+    }
+}
+
+fn push_doc<'r>(results: &'r Reproduction, name: &str) -> Result<&'r PushReport, String> {
+    match results.document(name) {
+        Some(Document::Push(r)) => Ok(r),
+        Some(_) => Err(format!("`{name}` is not a push-task document")),
+        None => Err(format!("no document `{name}` in this reproduction")),
+    }
+}
+
+fn mtt_doc<'r>(results: &'r Reproduction, name: &str) -> Result<&'r MttReport, String> {
+    match results.document(name) {
+        Some(Document::MoveToTarget(r)) => Ok(r),
+        Some(_) => Err(format!("`{name}` is not a move-to-target document")),
+        None => Err(format!("no document `{name}` in this reproduction")),
+    }
+}
+
+fn entry_at<'r>(report: &'r PushReport, name: &str, n: usize) -> Result<&'r CurveEntry, String> {
+    report
+        .results
+        .iter()
+        .find(|e| e.train_runs == n)
+        .ok_or_else(|| format!("`{name}` has no results for {n} training runs"))
+}
+
+fn reached(report: &MttReport) -> usize {
+    report.targets.iter().map(|t| t.summary.reached).sum()
+}
+
+fn runs(report: &MttReport) -> usize {
+    report.targets.iter().map(|t| t.summary.runs).sum()
+}
+
+fn ms(m: MeanStd) -> String {
+    format!("{:.4} ± {:.4}", m.mean, m.std)
+}
+
+fn thesis_ms(r: Ms) -> String {
+    format!("{:.4} ± {:.4}", r.0, r.1)
+}
+
+/// One target row: seed 1, the other seeds' range, met or not.
+struct TargetRow {
+    what: String,
+    thesis: String,
+    /// Seed 1, then the spread seeds, in order.
+    values: Vec<f64>,
+    decimals: usize,
+    /// Whether a value meets the target.
+    meets: Box<dyn Fn(f64) -> bool>,
+}
+
+fn targets(results: &Reproduction) -> Result<String, String> {
+    let mut rows = Vec::new();
+    let seeds = |base: &str| -> Vec<String> {
+        std::iter::once(base.to_owned())
+            .chain(SPREAD_SEEDS.iter().map(|s| format!("{base}-seed{s}")))
+            .collect()
+    };
+    for (model, n, pos, ori, actuator) in [
+        (ModelKind::Gate, 10, 0.049, 0.15, Some(0.0022)),
+        (ModelKind::Gate, 30, 0.036, 0.109, None),
+        (ModelKind::Interaction, 10, 0.117, 0.327, None),
+        (ModelKind::Interaction, 30, 0.086, 0.250, None),
+    ] {
+        let names = seeds(&format!("push-task-{model}"));
+        let entries: Vec<&CurveEntry> = names
+            .iter()
+            .map(|name| entry_at(push_doc(results, name)?, name, n))
+            .collect::<Result<_, _>>()?;
+        let mut add =
+            |what: &str, target: f64, unit: &str, pick: fn(&CurveEntry) -> f64, decimals| {
+                rows.push(TargetRow {
+                    what: format!("{model}, {n} runs: {what}"),
+                    thesis: format!("≤ {target} {unit}"),
+                    values: entries.iter().map(|e| pick(e)).collect(),
+                    decimals,
+                    meets: Box::new(move |v| v <= target),
+                });
+            };
+        add("block position", pos, "m", |e| e.blue.block_pos_err.mean, 3);
+        add(
+            "block orientation",
+            ori,
+            "rad",
+            |e| e.blue.block_ori_err.mean,
+            3,
+        );
+        if let Some(actuator) = actuator {
+            add(
+                "actuator",
+                actuator,
+                "m",
+                |e| e.blue.actuator_pos_err.mean,
+                4,
+            );
+        }
+    }
+    for (model, least) in [(ModelKind::Gate, 19), (ModelKind::Interaction, 14)] {
+        let names = seeds(&format!("move-to-target-{model}"));
+        let reports: Vec<&MttReport> = names
+            .iter()
+            .map(|name| mtt_doc(results, name))
+            .collect::<Result<_, _>>()?;
+        let total = reports.first().map_or(0, |r| runs(r));
+        rows.push(TargetRow {
+            what: format!("Move to Target, {model}: reached of {total}"),
+            thesis: format!("≥ {least}"),
+            values: reports.iter().map(|r| reached(r) as f64).collect(),
+            decimals: 0,
+            meets: Box::new(move |v| v >= f64::from(least)),
+        });
+    }
+    let mut out = String::new();
+    let (first, last) = (SPREAD_SEEDS[0], SPREAD_SEEDS[SPREAD_SEEDS.len() - 1]);
+    let _ = writeln!(
+        out,
+        "| Target (20 folds, default mode) | Thesis | Ours, seed 1 | Seeds {first}–{last}: min – max | Met (seed 1) | Seeds 1–{last} meeting it |"
+    );
+    let _ = writeln!(out, "|---|---|---|---|---|---|");
+    for row in rows {
+        let d = row.decimals;
+        let others = &row.values[1..];
+        let min = others.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = others.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let seed1 = row.values[0];
+        let met = row.values.iter().filter(|&&v| (row.meets)(v)).count();
+        let _ = writeln!(
+            out,
+            "| {} | {} | {seed1:.d$} | {min:.d$} – {max:.d$} | {} | {met} of {} |",
+            row.what,
+            row.thesis,
+            if (row.meets)(seed1) { "yes" } else { "no" },
+            row.values.len()
+        );
+    }
+    Ok(out)
+}
+
+fn calibration(rows: &[CalibrationRow]) -> String {
+    let mut out = String::from("```\n");
+    let _ = writeln!(
+        out,
+        "{:>7}  {:>13}  {:>8}  {:>8}  {:>9}  {:>11}  {:>9}",
+        "x0", "first contact", "x", "y", "yaw", "translation", "rotation"
+    );
+    for r in rows {
+        let contact = r
+            .first_contact_message
+            .map_or_else(|| "-".to_owned(), |m| m.to_string());
+        let _ = writeln!(
+            out,
+            "{:>7.3}  {:>13}  {:>8.4}  {:>8.4}  {:>9.4}  {:>11.4}  {:>9.4}",
+            r.x0, contact, r.block_x, r.block_y, r.block_yaw, r.translation, r.rotation
+        );
+    }
+    out.push_str("```\n\n");
+    let contact = rows.iter().filter_map(|r| r.first_contact_message).min();
+    let central = rows.iter().find(|r| r.x0 == 0.0);
+    let largest = rows
+        .iter()
+        .max_by(|a, b| a.rotation.abs().total_cmp(&b.rotation.abs()));
+    let misses: Vec<String> = rows
+        .iter()
+        .filter(|r| r.first_contact_message.is_none())
+        .map(|r| format!("{:.3}", r.x0))
+        .collect();
+    let _ = writeln!(out, "| Fact | Thesis | Ours |");
+    let _ = writeln!(out, "|---|---|---|");
+    let _ = writeln!(
+        out,
+        "| messages to reach the block | ≈ 35 | contact in message {} |",
+        contact.map_or_else(|| "– (never)".to_owned(), |m| m.to_string())
+    );
+    let _ = writeln!(
+        out,
+        "| central push, translation | up to 0.6 m | {} |",
+        central.map_or_else(|| "–".to_owned(), |r| format!("{:.3} m", r.translation))
+    );
+    let _ = writeln!(
+        out,
+        "| largest rotation | 1.02 rad at about 0.105 m from the centre | {} |",
+        largest.map_or_else(
+            || "–".to_owned(),
+            |r| format!("{:.3} rad at x0 = {:.3} m", r.rotation.abs(), r.x0)
+        )
+    );
+    let _ = writeln!(
+        out,
+        "| test positions that miss the block | 6 of 21 | {} of {} ({}) |",
+        misses.len(),
+        rows.len(),
+        misses.join(", ")
+    );
+    out
+}
+
+fn curves(results: &Reproduction, model: ModelKind) -> Result<String, String> {
+    let names = [
+        format!("push-task-{model}"),
+        format!("push-task-{model}-latency5"),
+        format!("push-task-{model}-lockstep"),
+    ];
+    let reports: Vec<&PushReport> = names
+        .iter()
+        .map(|n| push_doc(results, n))
+        .collect::<Result<_, _>>()?;
+    let mut out = String::new();
+    for interacting in [false, true] {
+        let _ = writeln!(
+            out,
+            "{model}, {}\n",
+            if interacting {
+                "15 interacting positions"
+            } else {
+                "all 21 positions"
+            }
+        );
+        let _ = writeln!(
+            out,
+            "| N | block position: L_max 2 | L_max 5 | lockstep | thesis | block orientation: L_max 2 | L_max 5 | lockstep | thesis | actuator: L_max 2 | L_max 5 | lockstep | thesis |"
+        );
+        let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        for entry in &reports[0].results {
+            let n = entry.train_runs;
+            let rows: Vec<&CurveEntry> = names
+                .iter()
+                .zip(&reports)
+                .map(|(name, r)| entry_at(r, name, n))
+                .collect::<Result<_, _>>()?;
+            let r = reference::curve(model, n);
+            let mut line = format!("| {n} ");
+            let pick: [fn(&CurveEntry, bool) -> MeanStd; 3] = [
+                |e, i| {
+                    if i {
+                        e.blue.interacting.block_pos_err
+                    } else {
+                        e.blue.block_pos_err
+                    }
+                },
+                |e, i| {
+                    if i {
+                        e.blue.interacting.block_ori_err
+                    } else {
+                        e.blue.block_ori_err
+                    }
+                },
+                |e, i| {
+                    if i {
+                        e.blue.interacting.actuator_pos_err
+                    } else {
+                        e.blue.actuator_pos_err
+                    }
+                },
+            ];
+            for (column, pick) in pick.iter().enumerate() {
+                for row in &rows {
+                    let _ = write!(line, "| {} ", ms(pick(row, interacting)));
+                }
+                let thesis = r.map(|r| match (column, interacting) {
+                    (0, false) => thesis_ms(r.pos),
+                    (0, true) => thesis_ms(r.pos_interacting),
+                    (1, false) => thesis_ms(r.ori),
+                    (1, true) => thesis_ms(r.ori_interacting),
+                    (_, false) => thesis_ms(r.actuator),
+                    // The thesis's figure plots the script's value here.
+                    (_, true) => format!("{:.4} (script's value)", r.actuator_interacting_quirk.0),
+                });
+                let _ = write!(line, "| {} ", thesis.unwrap_or_else(|| "–".into()));
+            }
+            line.push_str("|\n");
+            out.push_str(&line);
+        }
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+fn entry_of<'r>(results: &'r Reproduction, name: &str) -> Result<&'r Entry, String> {
+    results
+        .produced
+        .iter()
+        .find(|p| p.entry.name == name)
+        .map(|p| &p.entry)
+        .ok_or_else(|| format!("no document `{name}` in this reproduction"))
+}
+
+fn report(results: &Reproduction, name: &str) -> Result<String, String> {
+    let entry = entry_of(results, name)?;
+    let document = results
+        .document(name)
+        .ok_or_else(|| format!("no document `{name}`"))?;
+    let mut text = Vec::new();
+    document
+        .write_tables(&mut text)
+        .map_err(|e| format!("cannot render `{name}`: {e}"))?;
+    let text = String::from_utf8_lossy(&text);
+    Ok(format!(
+        "```sh\n{}\n```\n\n```\n{}```\n",
+        entry.command(RESULTS_DIR),
+        text
+    ))
+}
+
+fn move_to_target(results: &Reproduction) -> Result<String, String> {
+    let mut out = String::from(
+        "| Model | Setting | Target 1 | Target 2 | Target 3 | Target 4 | Reached | Mean steps (1–4) |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for model in [ModelKind::Gate, ModelKind::Interaction] {
+        let thesis = reference::move_to_target(model);
+        let cells: Vec<String> = thesis.iter().map(|r| format!("{}", r.reached)).collect();
+        let steps: Vec<String> = thesis.iter().map(|r| format!("{:.0}", r.steps)).collect();
+        let _ = writeln!(
+            out,
+            "| {model} | thesis | {} | {} | {} |",
+            cells.join(" | "),
+            thesis.iter().map(|r| r.reached).sum::<usize>(),
+            steps.join(" / ")
+        );
+        for (suffix, setting) in [
+            ("", "L_max 2 (default)"),
+            ("-latency5", "L_max 5"),
+            ("-lockstep", "lockstep"),
+        ] {
+            let name = format!("move-to-target-{model}{suffix}");
+            let r = mtt_doc(results, &name)?;
+            let cells: Vec<String> = r
+                .targets
+                .iter()
+                .map(|t| t.summary.reached.to_string())
+                .collect();
+            let steps: Vec<String> = r
+                .targets
+                .iter()
+                .map(|t| format!("{:.0}", t.summary.steps))
+                .collect();
+            let _ = writeln!(
+                out,
+                "| {model} | {setting} | {} | {} | {} |",
+                cells.join(" | "),
+                reached(r),
+                steps.join(" / ")
+            );
+        }
+    }
+    Ok(out)
+}
+
+fn latency(results: &Reproduction) -> Result<String, String> {
+    let mut out =
+        String::from("| Experiment | Value | L_max 2 (default) | L_max 5 |\n|---|---|---|---|\n");
+    for model in [ModelKind::Gate, ModelKind::Interaction] {
+        let base = format!("push-task-{model}");
+        let harsh = format!("{base}-latency5");
+        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
+        for n in [1, 10, 30] {
+            let (ea, eb) = (entry_at(a, &base, n)?, entry_at(b, &harsh, n)?);
+            let _ = writeln!(
+                out,
+                "| curve, {model}, {n} runs | block pos / ori / actuator | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
+                ea.blue.block_pos_err.mean,
+                ea.blue.block_ori_err.mean,
+                ea.blue.actuator_pos_err.mean,
+                eb.blue.block_pos_err.mean,
+                eb.blue.block_ori_err.mean,
+                eb.blue.actuator_pos_err.mean
+            );
+        }
+    }
+    for model in [ModelKind::Gate, ModelKind::Interaction] {
+        let base = format!("fixed-three-{model}");
+        let harsh = format!("{base}-latency5");
+        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
+        let (ea, eb) = (entry_at(a, &base, 3)?, entry_at(b, &harsh, 3)?);
+        let _ = writeln!(
+            out,
+            "| fixed three, {model} | block pos / ori / actuator, all positions | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
+            ea.blue.block_pos_err.mean,
+            ea.blue.block_ori_err.mean,
+            ea.blue.actuator_pos_err.mean,
+            eb.blue.block_pos_err.mean,
+            eb.blue.block_ori_err.mean,
+            eb.blue.actuator_pos_err.mean
+        );
+    }
+    for runs in [6, 7] {
+        let base = format!("two-objects-{runs}");
+        let harsh = format!("{base}-latency5");
+        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
+        let (ea, eb) = (entry_at(a, &base, runs)?, entry_at(b, &harsh, runs)?);
+        let red = |e: &CurveEntry| {
+            e.red.as_ref().map_or_else(
+                || "–".to_owned(),
+                |r| format!("{:.4} / {:.4}", r.block_pos_err.mean, r.block_ori_err.mean),
+            )
+        };
+        let _ = writeln!(
+            out,
+            "| two objects, {runs} runs | red pos / ori | {} | {} |",
+            red(ea),
+            red(eb)
+        );
+    }
+    for model in [ModelKind::Gate, ModelKind::Interaction] {
+        let a = mtt_doc(results, &format!("move-to-target-{model}"))?;
+        let b = mtt_doc(results, &format!("move-to-target-{model}-latency5"))?;
+        let _ = writeln!(
+            out,
+            "| Move to Target, {model} | reached of {} | {} | {} |",
+            runs(a),
+            reached(a),
+            reached(b)
+        );
+    }
+    Ok(out)
+}
+
+fn actuator_folds(report: &PushReport) -> Result<String, String> {
+    let mut out = String::from(
+        "| N | folds ≥ 0.01 m | their values | the other folds (mean ± std) |\n|---|---|---|---|\n",
+    );
+    for e in &report.results {
+        let (bad, good): (Vec<f64>, Vec<f64>) =
+            e.actuator_pos_err_by_fold.iter().partition(|&&v| v >= 0.01);
+        let mut bad_sorted = bad.clone();
+        bad_sorted.sort_by(f64::total_cmp);
+        let values: Vec<String> = bad_sorted.iter().map(|v| format!("{v:.3}")).collect();
+        let good = if good.is_empty() {
+            "–".to_owned()
+        } else {
+            ms(MeanStd::of(&good))
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} of {} | {} | {good} |",
+            e.train_runs,
+            bad.len(),
+            e.actuator_pos_err_by_fold.len(),
+            if values.is_empty() {
+                "–".to_owned()
+            } else {
+                values.join(", ")
+            }
+        );
+    }
+    Ok(out)
+}
+
+fn selectors(results: &Reproduction) -> Result<String, String> {
+    let mut out = String::from(
+        "| Selector | N_train | selector agreement | actuator key-point | block key-point | block pos | block ori |\n|---|---|---|---|---|---|---|\n",
+    );
+    for p in &results.produced {
+        let Some(kind) = p.entry.name.strip_prefix("selector-") else {
+            continue;
+        };
+        let Document::Push(report) = &p.document else {
+            return Err(format!("`{}` is not a push-task document", p.entry.name));
+        };
+        for e in &report.results {
+            let score = |id: u32| {
+                e.keypoints.get(&id).map_or_else(
+                    || "–".to_owned(),
+                    |s| format!("{:.3} / {:.3} / {:.4}", s.final_dif, s.cum_dif, s.mean_dif),
+                )
+            };
+            let agreement = e
+                .selection
+                .as_ref()
+                .and_then(SelectionCount::accuracy)
+                .map_or_else(|| "–".to_owned(), |a| format!("{:.1} %", 100.0 * a));
+            let _ = writeln!(
+                out,
+                "| {kind} | {} | {agreement} | {} | {} | {:.4} | {:.4} |",
+                e.train_runs,
+                score(learner::ACTUATOR_ID),
+                score(learner::BLUE_ID),
+                e.blue.block_pos_err.mean,
+                e.blue.block_ori_err.mean
+            );
+        }
+    }
+    Ok(out)
+}
+
+fn commands<'e>(entries: impl Iterator<Item = &'e Entry>) -> String {
+    let mut out = String::from("```sh\n");
+    for entry in entries {
+        let _ = writeln!(out, "{}", entry.command(RESULTS_DIR));
+    }
+    out.push_str("```\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reproduce::{Produced, Reproduction};
+    use crate::results::test_support::push_report;
+
+    fn reproduction() -> Reproduction {
+        let entry = manifest_entry("push-task-gate");
+        Reproduction {
+            calibration: Vec::new(),
+            produced: vec![Produced {
+                entry,
+                document: Document::Push(push_report("random", &[1, 10])),
+                timing: Vec::new(),
+            }],
+            wall_seconds: 0.0,
+        }
+    }
+
+    fn manifest_entry(name: &str) -> Entry {
+        super::super::manifest::full()
+            .into_iter()
+            .find(|e| e.name == name)
+            .expect("entry")
+    }
+
+    #[test]
+    fn prose_keeps_its_text_and_gets_its_numbers() {
+        let results = reproduction();
+        let template = "# Title\n\nAfter one run the error is {{push-task-gate:results[0].block_pos_err.mean:3}} m.\n";
+        let page = generate(template, &results).unwrap();
+        let expected = format!(
+            "# Title\n\nAfter one run the error is {:.3} m.\n",
+            push_report("random", &[1, 10]).results[0]
+                .blue
+                .block_pos_err
+                .mean
+        );
+        assert_eq!(page, expected);
+    }
+
+    #[test]
+    fn blocks_expand_and_unknown_ones_are_named_with_their_line() {
+        let results = reproduction();
+        let page = generate(
+            "a\n<!-- reproduce: report push-task-gate -->\nb\n",
+            &results,
+        )
+        .unwrap();
+        assert!(page.starts_with("a\n```sh\npushlearn experiment push-task --model gate"));
+        assert!(page.contains("Push task (random), gate model"));
+        assert!(page.ends_with("```\nb\n"));
+        let err = generate("x\n<!-- reproduce: tables -->\n", &results).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!("{TEMPLATE} line 2: unknown block `tables`")
+        );
+        let err = generate("{{push-task-gate:results[9].x}}\n", &results).unwrap_err();
+        assert!(err.to_string().contains("has no entry 9"), "{err}");
+        let err = generate("{{nothing:a}}\n", &results).unwrap_err();
+        assert!(err.to_string().contains("no document `nothing`"), "{err}");
+        let err = generate("<!-- reproduce: curves gate -->\n", &results).unwrap_err();
+        assert!(err.to_string().contains("push-task-gate-latency5"), "{err}");
+    }
+}

@@ -1,0 +1,412 @@
+//! An experiment as data: which experiment, which model and options, how
+//! many folds ([`Spec`]), run on a [`Plan`] into its report document
+//! ([`Document`]). `pushlearn experiment` builds one from its flags,
+//! `pushlearn reproduce` has a list of them (`crate::reproduce`).
+
+use learner::{Model, ObjectState};
+
+use crate::experiment::push_task::protocol::{Protocol, Variant};
+use crate::experiment::run::{self, Plan};
+use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
+use crate::models::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
+use crate::report::draft::{self, DraftReport, DraftRowResult};
+use crate::report::plot::{self, PlotError};
+use crate::report::table;
+use crate::results::run_info::RunInfo;
+use crate::results::{FeedbackReport, MttReport, PushReport, Setup};
+
+/// One experiment of `docs/spec/experiments.md`, fully configured.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Spec {
+    /// Push Task Simulation (§3.1–§3.3, and the draft's protocol).
+    PushTask {
+        model: ModelKind,
+        options: ModelOptions,
+        variant: Variant,
+        train_runs: Vec<usize>,
+        folds: usize,
+    },
+    /// The push task with constant feedback at 10 Hz (§3.4).
+    ConstantFeedback {
+        model: ModelKind,
+        options: ModelOptions,
+    },
+    /// Move to Target (§4).
+    MoveToTarget {
+        model: ModelKind,
+        options: ModelOptions,
+        targets: Vec<ObjectState>,
+        repetitions: usize,
+        max_steps: u64,
+    },
+    /// Every row of the thesis draft's Tables 6.1 and 6.2, each on the
+    /// draft's protocol with `folds` folds.
+    DraftTables { folds: usize },
+}
+
+/// What a [`Spec`] produced.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Document {
+    Push(PushReport),
+    Feedback(FeedbackReport),
+    MoveToTarget(MttReport),
+    Draft(DraftReport),
+}
+
+/// Why a [`Spec`] did not produce its document.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// The model options do not fit the model.
+    #[error(transparent)]
+    Options(#[from] ModelOptionsError),
+    /// The experiment failed.
+    #[error(transparent)]
+    Experiment(#[from] ExperimentError),
+    /// The configuration cannot be run.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Spec {
+    /// The scene the experiment's worlds must load.
+    #[must_use]
+    pub fn scene(&self) -> &'static str {
+        match self {
+            Spec::PushTask { variant, .. } => variant.scene(),
+            Spec::ConstantFeedback { .. } => Variant::ConstantFeedback.scene(),
+            Spec::MoveToTarget { .. } => "one_block",
+            Spec::DraftTables { .. } => Variant::Draft.scene(),
+        }
+    }
+
+    /// The model whose name goes into the report (the draft has its own).
+    #[must_use]
+    pub fn model(&self) -> Option<ModelKind> {
+        match self {
+            Spec::PushTask { model, .. }
+            | Spec::ConstantFeedback { model, .. }
+            | Spec::MoveToTarget { model, .. } => Some(*model),
+            Spec::DraftTables { .. } => None,
+        }
+    }
+
+    /// A few words for progress bars.
+    #[must_use]
+    pub fn title(&self) -> &'static str {
+        match self {
+            Spec::PushTask { .. } => "push task",
+            Spec::ConstantFeedback { .. } => "constant feedback",
+            Spec::MoveToTarget { .. } => "move to target",
+            Spec::DraftTables { .. } => "draft tables",
+        }
+    }
+
+    /// How many jobs the progress callback counts up to.
+    #[must_use]
+    pub fn jobs(&self) -> usize {
+        match self {
+            Spec::PushTask {
+                train_runs, folds, ..
+            } => train_runs.len() * folds,
+            Spec::ConstantFeedback { .. } => 1,
+            Spec::MoveToTarget {
+                targets,
+                repetitions,
+                ..
+            } => targets.len() * repetitions,
+            Spec::DraftTables { folds } => draft::rows().len() * folds,
+        }
+    }
+
+    /// Checks what can be checked before anything runs.
+    ///
+    /// # Errors
+    /// A configuration the experiment cannot run, named.
+    pub fn validate(&self) -> Result<(), SpecError> {
+        if let Spec::PushTask {
+            variant: Variant::TwoObjects,
+            train_runs,
+            ..
+        } = self
+        {
+            let fixed = Variant::TwoObjects.fixed_starts().len();
+            if train_runs.iter().any(|&n| n > fixed) {
+                return Err(SpecError::Invalid(format!(
+                    "the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}"
+                )));
+            }
+        }
+        if let Spec::PushTask {
+            variant: Variant::ConstantFeedback,
+            ..
+        } = self
+        {
+            return Err(SpecError::Invalid(
+                "constant feedback is its own experiment (Spec::ConstantFeedback)".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Runs the experiment on `plan` (whose model name is replaced by this
+    /// spec's), calling `progress` with the number of jobs done.
+    ///
+    /// # Errors
+    /// Invalid options or configuration, or the first failing job.
+    pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
+        self.validate()?;
+        let mut plan = plan.clone();
+        if let Some(model) = self.model() {
+            model.as_str().clone_into(&mut plan.model);
+        }
+        Ok(match self {
+            Spec::PushTask {
+                model,
+                options,
+                variant,
+                train_runs,
+                folds,
+            } => {
+                let protocol = Protocol::new(*variant, options.config_number());
+                Document::Push(model.dispatch(
+                    options,
+                    protocol.rate_hz,
+                    Push {
+                        protocol: &protocol,
+                        train_runs,
+                        folds: *folds,
+                        plan: &plan,
+                        progress: &progress,
+                    },
+                )??)
+            }
+            Spec::ConstantFeedback { model, options } => {
+                progress(0);
+                let report = model.dispatch(options, LOW_RATE_HZ, Feedback { plan: &plan })??;
+                progress(1);
+                Document::Feedback(report)
+            }
+            Spec::MoveToTarget {
+                model,
+                options,
+                targets,
+                repetitions,
+                max_steps,
+            } => Document::MoveToTarget(model.dispatch(
+                options,
+                RATE_HZ,
+                MoveToTarget {
+                    targets,
+                    repetitions: *repetitions,
+                    max_steps: *max_steps,
+                    plan: &plan,
+                    progress: &progress,
+                },
+            )??),
+            Spec::DraftTables { folds } => Document::Draft(draft_tables(*folds, &plan, progress)?),
+        })
+    }
+}
+
+/// Every row of the draft's tables on the draft's protocol, one after the
+/// other on `plan` (so with its cache, if it has one).
+fn draft_tables(
+    folds: usize,
+    plan: &Plan,
+    progress: impl Fn(usize),
+) -> Result<DraftReport, SpecError> {
+    let rows = draft::rows();
+    let mut results = Vec::new();
+    let mut reports = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let mut plan = plan.clone();
+        row.model.as_str().clone_into(&mut plan.model);
+        let protocol = Protocol::new(Variant::Draft, row.options.config_number());
+        let report = row.model.dispatch(
+            &row.options,
+            protocol.rate_hz,
+            Push {
+                protocol: &protocol,
+                train_runs: &[row.train_runs],
+                folds,
+                plan: &plan,
+                progress: &|done| progress(i * folds + done),
+            },
+        )??;
+        let entry = report
+            .results
+            .first()
+            .ok_or_else(|| SpecError::Invalid(format!("draft row {} gave no results", row.name)))?;
+        results.push(DraftRowResult::of(row, entry));
+        reports.push(report);
+    }
+    let setup = reports
+        .first()
+        .map(|r| r.setup.clone())
+        .ok_or_else(|| SpecError::Invalid("the draft has no rows".into()))?;
+    Ok(DraftReport {
+        setup,
+        folds,
+        test_positions: Protocol::from(Variant::Draft).test_positions,
+        rows: results,
+        reports,
+    })
+}
+
+impl Document {
+    /// The document's setup (its experiment, model, mode and seed).
+    #[must_use]
+    pub fn setup(&self) -> &Setup {
+        match self {
+            Document::Push(r) => &r.setup,
+            Document::Feedback(r) => &r.setup,
+            Document::MoveToTarget(r) => &r.setup,
+            Document::Draft(r) => &r.setup,
+        }
+    }
+
+    /// How its runs went: one, or one per row of the draft's tables.
+    #[must_use]
+    pub fn runs(&self) -> Vec<&RunInfo> {
+        match self {
+            Document::Push(r) => vec![&r.run],
+            Document::Feedback(r) => vec![&r.run],
+            Document::MoveToTarget(r) => vec![&r.run],
+            Document::Draft(r) => r.reports.iter().map(|r| &r.run).collect(),
+        }
+    }
+
+    /// The document without its machine-dependent parts, so that two runs
+    /// of the same spec give the same bytes.
+    #[must_use]
+    pub fn without_timing(self) -> Self {
+        match self {
+            Document::Push(mut r) => {
+                r.run = r.run.without_timing();
+                Document::Push(r)
+            }
+            Document::Feedback(mut r) => {
+                r.run = r.run.without_timing();
+                Document::Feedback(r)
+            }
+            Document::MoveToTarget(mut r) => {
+                r.run = r.run.without_timing();
+                Document::MoveToTarget(r)
+            }
+            Document::Draft(mut r) => {
+                for report in &mut r.reports {
+                    report.run = std::mem::take(&mut report.run).without_timing();
+                }
+                Document::Draft(r)
+            }
+        }
+    }
+
+    /// The terminal tables beside the thesis's numbers, as `pushlearn
+    /// experiment` prints them.
+    ///
+    /// # Errors
+    /// Writing to `out`.
+    pub fn write_tables(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        match self {
+            Document::Push(r) => {
+                let model = model_of(&r.setup);
+                table::push(out, r, model)?;
+                draft::keypoint_section(out, r)
+            }
+            Document::Feedback(r) => table::feedback(out, r, model_of(&r.setup)),
+            Document::MoveToTarget(r) => table::move_to_target(out, r, model_of(&r.setup)),
+            Document::Draft(r) => draft::tables(out, r),
+        }
+    }
+
+    /// Draws the document's figures into `dir` (the draft's tables have
+    /// none).
+    ///
+    /// # Errors
+    /// A figure cannot be drawn or written.
+    pub fn plot(&self, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, PlotError> {
+        match self {
+            Document::Push(r) => plot::push(r, model_of(&r.setup), dir),
+            Document::Feedback(r) => plot::feedback(r, model_of(&r.setup), dir),
+            Document::MoveToTarget(r) => plot::move_to_target(r, model_of(&r.setup), dir),
+            Document::Draft(_) => Ok(Vec::new()),
+        }
+    }
+
+    /// Pretty JSON, one trailing newline.
+    ///
+    /// # Errors
+    /// Serialisation failed (not expected for these types).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        let mut text = match self {
+            Document::Push(r) => serde_json::to_string_pretty(r),
+            Document::Feedback(r) => serde_json::to_string_pretty(r),
+            Document::MoveToTarget(r) => serde_json::to_string_pretty(r),
+            Document::Draft(r) => serde_json::to_string_pretty(r),
+        }?;
+        text.push('\n');
+        Ok(text)
+    }
+}
+
+struct Push<'a> {
+    protocol: &'a Protocol,
+    train_runs: &'a [usize],
+    folds: usize,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for Push<'_> {
+    type Output = Result<PushReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::push_task(
+            untrained,
+            self.protocol,
+            self.train_runs,
+            self.folds,
+            self.plan,
+            self.progress,
+        )
+    }
+}
+
+struct Feedback<'a> {
+    plan: &'a Plan,
+}
+
+impl WithModel for Feedback<'_> {
+    type Output = Result<FeedbackReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::constant_feedback(untrained, self.plan)
+    }
+}
+
+struct MoveToTarget<'a> {
+    targets: &'a [ObjectState],
+    repetitions: usize,
+    max_steps: u64,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for MoveToTarget<'_> {
+    type Output = Result<MttReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::move_to_target(
+            untrained,
+            self.targets,
+            self.repetitions,
+            self.max_steps,
+            self.plan,
+            self.progress,
+        )
+    }
+}
+
+/// The model a document of ours names (the gate model's tables for any
+/// other name, which only a hand-edited file has).
+fn model_of(setup: &Setup) -> ModelKind {
+    <ModelKind as clap::ValueEnum>::from_str(&setup.model, false).unwrap_or(ModelKind::Gate)
+}
