@@ -12,3 +12,4 @@ cargo test --workspace --locked
 # cannot land without `pushlearn reproduce --quick` (docs/results.md).
 cargo build --release --locked -p pushlearn-cli -p sim-plugin --bins
 target/release/pushlearn reproduce --quick --check
+target/release/pushlearn reproduce --page-only --check

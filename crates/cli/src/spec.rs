@@ -13,7 +13,7 @@ use crate::report::draft::{self, DraftReport, DraftRowResult};
 use crate::report::plot::{self, PlotError};
 use crate::report::table;
 use crate::results::run_info::RunInfo;
-use crate::results::{FeedbackReport, MttReport, PushReport, Setup};
+use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
 
 /// One experiment of `docs/spec/experiments.md`, fully configured.
 #[derive(Clone, Debug, PartialEq)]
@@ -331,6 +331,39 @@ impl Document {
             Document::Feedback(r) => plot::feedback(r, model_of(&r.setup), dir),
             Document::MoveToTarget(r) => plot::move_to_target(r, model_of(&r.setup), dir),
             Document::Draft(_) => Ok(Vec::new()),
+        }
+    }
+
+    /// Reads back a document `spec` produced (as [`Document::to_json`]
+    /// wrote it).
+    ///
+    /// # Errors
+    /// Not JSON, not a report, or a report of another experiment.
+    pub fn from_json(text: &str, spec: &Spec) -> Result<Self, String> {
+        if let Spec::DraftTables { .. } = spec {
+            return serde_json::from_str(text)
+                .map(Document::Draft)
+                .map_err(|e| format!("not the draft's tables: {e}"));
+        }
+        let document = match AnyReport::from_json(text).map_err(|e| e.to_string())? {
+            AnyReport::Push(r) => Document::Push(r),
+            AnyReport::Feedback(r) => Document::Feedback(r),
+            AnyReport::MoveToTarget(r) => Document::MoveToTarget(r),
+        };
+        let fits = matches!(
+            (&document, spec),
+            (Document::Push(_), Spec::PushTask { .. })
+                | (Document::Feedback(_), Spec::ConstantFeedback { .. })
+                | (Document::MoveToTarget(_), Spec::MoveToTarget { .. })
+        );
+        if fits {
+            Ok(document)
+        } else {
+            Err(format!(
+                "a {} document, expected one of {}",
+                document.setup().experiment,
+                spec.title()
+            ))
         }
     }
 

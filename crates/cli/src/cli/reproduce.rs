@@ -42,6 +42,12 @@ pub struct ReproduceArgs {
     #[arg(long)]
     quick: bool,
 
+    /// Run no experiment: regenerate docs/results.md and its figures from
+    /// the committed documents (after editing docs/results/template.md);
+    /// with --check, check the page against them.
+    #[arg(long, conflicts_with = "quick")]
+    page_only: bool,
+
     /// Regenerate into memory and compare with the committed files instead
     /// of writing; fails, naming each stale file's first differing value.
     #[arg(long)]
@@ -89,15 +95,29 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     };
     let cpus = std::thread::available_parallelism().map_or(1, usize::from);
     let settings = Settings {
-        sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
+        sim_bin: if args.page_only {
+            PathBuf::new()
+        } else {
+            find_sim_binary(args.sim_bin.as_deref())?
+        },
         workers: args.workers.map_or(cpus, |n| n as usize),
     };
-    let results = run_with_bars(&entries, &settings)?;
     let dir = root.join(if args.quick { QUICK_DIR } else { RESULTS_DIR });
-    let files = results.files()?;
+    let results = if args.page_only {
+        reproduce::load(&entries, &dir)?
+    } else {
+        run_with_bars(&entries, &settings)?
+    };
+    let files = if args.page_only {
+        Vec::new()
+    } else {
+        results.files()?
+    };
     let page = template.map(|t| page::generate(&t, &results)).transpose()?;
     let command = if args.quick {
         "pushlearn reproduce --quick"
+    } else if args.page_only {
+        "pushlearn reproduce --page-only"
     } else {
         "pushlearn reproduce"
     };
@@ -107,6 +127,30 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         .flat_map(|p| p.document.runs())
         .map(|r| r.messages)
         .sum();
+    if args.page_only {
+        if args.check {
+            check(root, &dir, &files, page.as_deref())?;
+            println!(
+                "{command} --check: {PAGE} matches {TEMPLATE} and the documents in {RESULTS_DIR}"
+            );
+            return Ok(());
+        }
+        let figures = match &page {
+            Some(page) => {
+                let figures = draw_figures(root, &results, page)?;
+                reproduce::write_atomically(&root.join(PAGE), page)?;
+                figures
+            }
+            None => 0,
+        };
+        println!(
+            "{command}: wrote {} and {figures} figures from the {} documents in {}",
+            root.join(PAGE).display(),
+            results.produced.len() + 1,
+            dir.display()
+        );
+        return Ok(());
+    }
     if args.check {
         check(root, &dir, &files, page.as_deref())?;
         println!(
@@ -118,16 +162,18 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         );
         return Ok(());
     }
-    reproduce::write_files(&dir, &files)?;
-    for stale in stale_documents(&dir, &files)? {
-        std::fs::remove_file(&stale)
-            .with_context(|| format!("removing the stale {}", stale.display()))?;
-        eprintln!(
-            "removed {}: no experiment produces it any more",
-            stale.display()
-        );
+    if !args.page_only {
+        reproduce::write_files(&dir, &files)?;
+        for stale in stale_documents(&dir, &files)? {
+            std::fs::remove_file(&stale)
+                .with_context(|| format!("removing the stale {}", stale.display()))?;
+            eprintln!(
+                "removed {}: no experiment produces it any more",
+                stale.display()
+            );
+        }
+        reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
     }
-    reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
     let mut figures = 0;
     if let Some(page) = &page {
         figures = draw_figures(root, &results, page)?;
@@ -178,6 +224,7 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
             let name = &page[at + "](figures/".len()..];
             name.find(')').map(|end| &name[..end])
         })
+        .filter(|name| name.ends_with(".png"))
         .collect();
     shown.sort_unstable();
     shown.dedup();
@@ -268,7 +315,12 @@ fn check(root: &Path, dir: &Path, files: &[(String, String)], page: Option<&str>
             },
         }
     }
-    for stale in stale_documents(dir, files)? {
+    let stale = if files.is_empty() {
+        Vec::new()
+    } else {
+        stale_documents(dir, files)?
+    };
+    for stale in stale {
         problems.push(format!(
             "{}: committed, but no experiment produces it any more",
             stale.display()

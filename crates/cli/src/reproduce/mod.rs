@@ -66,6 +66,10 @@ pub enum ReproduceError {
         #[source]
         source: std::io::Error,
     },
+    #[error(
+        "cannot read the document {path}: {reason} (run `pushlearn reproduce` to regenerate it)"
+    )]
+    Load { path: String, reason: String },
     #[error("cannot serialise {name}: {source}")]
     Json {
         name: String,
@@ -270,6 +274,48 @@ pub fn run(
         calibration,
         produced,
         wall_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// The reproduction whose documents are in `dir` (as [`Reproduction::files`]
+/// wrote them), without running anything: for regenerating the page after
+/// its template changed.
+///
+/// # Errors
+/// A document is missing or unreadable, named.
+pub fn load(entries: &[Entry], dir: &Path) -> Result<Reproduction, ReproduceError> {
+    let read = |name: &str| {
+        let path = dir.join(name);
+        std::fs::read_to_string(&path).map_err(|e| ReproduceError::Load {
+            path: path.display().to_string(),
+            reason: e.to_string(),
+        })
+    };
+    let calibration_text = read(CALIBRATION)?;
+    let calibration =
+        serde_json::from_str(&calibration_text).map_err(|e| ReproduceError::Load {
+            path: dir.join(CALIBRATION).display().to_string(),
+            reason: e.to_string(),
+        })?;
+    let mut produced = Vec::new();
+    for entry in entries {
+        let name = format!("{}.json", entry.name);
+        let document = Document::from_json(&read(&name)?, &entry.spec).map_err(|reason| {
+            ReproduceError::Load {
+                path: dir.join(&name).display().to_string(),
+                reason,
+            }
+        })?;
+        produced.push(Produced {
+            entry: entry.clone(),
+            document,
+            timing: Vec::new(),
+        });
+    }
+    Ok(Reproduction {
+        calibration,
+        produced,
+        wall_seconds: 0.0,
     })
 }
 

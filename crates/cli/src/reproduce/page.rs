@@ -117,6 +117,11 @@ pub fn generate(template: &str, results: &Reproduction) -> Result<String, PageEr
         {
             let block = Block::parse(directive.trim()).map_err(error)?;
             page.push_str(&render(&block, results).map_err(error)?);
+            // A blank line after each block, so that adjacent blocks stay
+            // separate Markdown blocks.
+            if !page.ends_with("\n\n") {
+                page.push('\n');
+            }
         } else {
             page.push_str(&inline_values(line, results).map_err(error)?);
             page.push('\n');
@@ -564,7 +569,7 @@ fn latency(results: &Reproduction) -> Result<String, String> {
             let (ea, eb) = (entry_at(a, &base, n)?, entry_at(b, &harsh, n)?);
             let _ = writeln!(
                 out,
-                "| curve, {model}, {n} runs | block pos / ori / actuator | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
+                "| curve, {model}, N = {n} | block pos / ori / actuator | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
                 ea.blue.block_pos_err.mean,
                 ea.blue.block_ori_err.mean,
                 ea.blue.actuator_pos_err.mean,
