@@ -14,4 +14,5 @@ mod docs;
 mod experiment;
 mod python;
 mod reliability;
+mod reproduce;
 mod viewer;
