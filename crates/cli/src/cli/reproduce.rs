@@ -265,7 +265,8 @@ fn run_with_bars(entries: &[manifest::Entry], settings: &Settings) -> Result<Rep
         Progress::Started { entry, jobs } => {
             if !terminal {
                 // Logs get one line per experiment instead of bars.
-                eprintln!("reproduce: {} ({jobs} jobs) …", entry.name);
+                let plural = if jobs == 1 { "" } else { "s" };
+                eprintln!("reproduce: {} ({jobs} job{plural}) …", entry.name);
             }
             let bar = bars.insert_before(&total, ProgressBar::new(jobs as u64));
             if let Some(style) = &style {

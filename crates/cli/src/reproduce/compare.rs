@@ -3,9 +3,9 @@
 
 use serde_json::Value;
 
-/// The first difference between two JSON documents, depth first in
-/// document order, as `path: committed X, now Y`; `None` when they are
-/// equal (numbers compare exactly).
+/// The first difference between two JSON documents, depth first with the
+/// keys of each object in sorted order, as `path: committed X, now Y`;
+/// `None` when they are equal (numbers compare exactly).
 ///
 /// # Errors
 /// Either text is not JSON (named `committed` or `now`).

@@ -20,11 +20,15 @@ use learner::eval::MeanStd;
 use super::calibration::CalibrationRow;
 use super::manifest::{Entry, SPREAD_SEEDS};
 use super::{Reproduction, RESULTS_DIR, TEMPLATE};
+use crate::experiment::{LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use crate::models::ModelKind;
 use crate::report::reference::{self, Ms};
 use crate::results::push_task::{CurveEntry, SelectionCount};
 use crate::results::{MttReport, PushReport};
 use crate::spec::Document;
+
+/// How a generated block's line starts.
+const DIRECTIVE: &str = "<!-- reproduce:";
 
 /// Why the page cannot be generated.
 #[derive(Debug, thiserror::Error)]
@@ -97,7 +101,7 @@ impl<'a> Block<'a> {
 pub fn generate(template: &str, results: &Reproduction) -> Result<String, PageError> {
     let mut page = String::new();
     // A comment opening the template is for its editors, not the page.
-    let skip = if template.starts_with("<!--") {
+    let skip = if template.starts_with("<!--") && !template.starts_with(DIRECTIVE) {
         template
             .lines()
             .position(|l| l.contains("-->"))
@@ -112,7 +116,7 @@ pub fn generate(template: &str, results: &Reproduction) -> Result<String, PageEr
         };
         if let Some(directive) = line
             .trim()
-            .strip_prefix("<!-- reproduce:")
+            .strip_prefix(DIRECTIVE)
             .and_then(|rest| rest.strip_suffix("-->"))
         {
             let block = Block::parse(directive.trim()).map_err(error)?;
@@ -428,9 +432,12 @@ fn curves(results: &Reproduction, model: ModelKind) -> Result<String, String> {
                 "all 21 positions"
             }
         );
+        let columns = format!(
+            "L_max {LATENCY_MAX_STEPS} | L_max {LATENCY_MAX_STEPS_HARSH} | lockstep | thesis"
+        );
         let _ = writeln!(
             out,
-            "| N | block position: L_max 2 | L_max 5 | lockstep | thesis | block orientation: L_max 2 | L_max 5 | lockstep | thesis | actuator: L_max 2 | L_max 5 | lockstep | thesis |"
+            "| N | block position: {columns} | block orientation: {columns} | actuator: {columns} |"
         );
         let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
         for entry in &reports[0].results {
@@ -530,9 +537,9 @@ fn move_to_target(results: &Reproduction) -> Result<String, String> {
             steps.join(" / ")
         );
         for (suffix, setting) in [
-            ("", "L_max 2 (default)"),
-            ("-latency5", "L_max 5"),
-            ("-lockstep", "lockstep"),
+            ("", format!("L_max {LATENCY_MAX_STEPS} (default)")),
+            ("-latency5", format!("L_max {LATENCY_MAX_STEPS_HARSH}")),
+            ("-lockstep", "lockstep".to_owned()),
         ] {
             let name = format!("move-to-target-{model}{suffix}");
             let r = mtt_doc(results, &name)?;
@@ -559,8 +566,9 @@ fn move_to_target(results: &Reproduction) -> Result<String, String> {
 }
 
 fn latency(results: &Reproduction) -> Result<String, String> {
-    let mut out =
-        String::from("| Experiment | Value | L_max 2 (default) | L_max 5 |\n|---|---|---|---|\n");
+    let mut out = format!(
+        "| Experiment | Value | L_max {LATENCY_MAX_STEPS} (default) | L_max {LATENCY_MAX_STEPS_HARSH} |\n|---|---|---|---|\n"
+    );
     for model in [ModelKind::Gate, ModelKind::Interaction] {
         let base = format!("push-task-{model}");
         let harsh = format!("{base}-latency5");
@@ -755,7 +763,10 @@ mod tests {
         .unwrap();
         assert!(page.starts_with("a\n```sh\npushlearn experiment push-task --model gate"));
         assert!(page.contains("Push task (random), gate model"));
-        assert!(page.ends_with("```\nb\n"));
+        // A blank line keeps the block apart from what follows.
+        assert!(page.ends_with("```\n\nb\n"), "{page}");
+        let page = generate("<!-- notes\nfor editors -->\n# Page\n", &results).unwrap();
+        assert_eq!(page, "# Page\n");
         let err = generate("x\n<!-- reproduce: tables -->\n", &results).unwrap_err();
         assert_eq!(
             err.to_string(),
