@@ -58,11 +58,8 @@ impl Entry {
         Self { seed, ..self }
     }
 
-    fn with_figures(self) -> Self {
-        Self {
-            figures: true,
-            ..self
-        }
+    fn with_figures(self, figures: bool) -> Self {
+        Self { figures, ..self }
     }
 
     /// The worlds this entry can share recorded runs with: the same scene,
@@ -194,11 +191,8 @@ pub fn full() -> Vec<Entry> {
             )
             .mode(mode)
             .latency_max(latency);
-            entries.push(if suffix.is_empty() {
-                entry.with_figures()
-            } else {
-                entry
-            });
+            // Only the default setting's figures go on the page.
+            entries.push(entry.with_figures(suffix.is_empty()));
         }
     }
     for seed in SPREAD_SEEDS {
@@ -222,11 +216,8 @@ pub fn full() -> Vec<Entry> {
                 push(model, Variant::FixedThree, vec![3], 20),
             )
             .latency_max(latency);
-            entries.push(if suffix.is_empty() {
-                entry.with_figures()
-            } else {
-                entry
-            });
+            // Only the default setting's figures go on the page.
+            entries.push(entry.with_figures(suffix.is_empty()));
         }
     }
     entries.push(
@@ -246,11 +237,8 @@ pub fn full() -> Vec<Entry> {
                 push(ModelKind::Gate, Variant::TwoObjects, vec![runs], 20),
             )
             .latency_max(latency);
-            entries.push(if suffix.is_empty() {
-                entry.with_figures()
-            } else {
-                entry
-            });
+            // Only the default setting's figures go on the page.
+            entries.push(entry.with_figures(suffix.is_empty()));
         }
     }
     for model in MODELS {
@@ -262,7 +250,7 @@ pub fn full() -> Vec<Entry> {
                     options: ModelOptions::default(),
                 },
             )
-            .with_figures(),
+            .with_figures(true),
         );
     }
     for (suffix, mode, latency) in [
@@ -277,11 +265,8 @@ pub fn full() -> Vec<Entry> {
             )
             .mode(mode)
             .latency_max(latency);
-            entries.push(if suffix.is_empty() {
-                entry.with_figures()
-            } else {
-                entry
-            });
+            // Only the default setting's figures go on the page.
+            entries.push(entry.with_figures(suffix.is_empty()));
         }
     }
     for seed in SPREAD_SEEDS {

@@ -565,6 +565,15 @@ fn move_to_target(results: &Reproduction) -> Result<String, String> {
     Ok(out)
 }
 
+/// The blue block's position and orientation and the actuator's mean
+/// errors, as `p / o / a`.
+fn errors(e: &CurveEntry) -> String {
+    format!(
+        "{:.4} / {:.4} / {:.4}",
+        e.blue.block_pos_err.mean, e.blue.block_ori_err.mean, e.blue.actuator_pos_err.mean
+    )
+}
+
 fn latency(results: &Reproduction) -> Result<String, String> {
     let mut out = format!(
         "| Experiment | Value | L_max {LATENCY_MAX_STEPS} (default) | L_max {LATENCY_MAX_STEPS_HARSH} |\n|---|---|---|---|\n"
@@ -577,13 +586,9 @@ fn latency(results: &Reproduction) -> Result<String, String> {
             let (ea, eb) = (entry_at(a, &base, n)?, entry_at(b, &harsh, n)?);
             let _ = writeln!(
                 out,
-                "| curve, {model}, N = {n} | block pos / ori / actuator | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
-                ea.blue.block_pos_err.mean,
-                ea.blue.block_ori_err.mean,
-                ea.blue.actuator_pos_err.mean,
-                eb.blue.block_pos_err.mean,
-                eb.blue.block_ori_err.mean,
-                eb.blue.actuator_pos_err.mean
+                "| curve, {model}, N = {n} | block pos / ori / actuator | {} | {} |",
+                errors(ea),
+                errors(eb)
             );
         }
     }
@@ -594,13 +599,9 @@ fn latency(results: &Reproduction) -> Result<String, String> {
         let (ea, eb) = (entry_at(a, &base, 3)?, entry_at(b, &harsh, 3)?);
         let _ = writeln!(
             out,
-            "| fixed three, {model} | block pos / ori / actuator, all positions | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} |",
-            ea.blue.block_pos_err.mean,
-            ea.blue.block_ori_err.mean,
-            ea.blue.actuator_pos_err.mean,
-            eb.blue.block_pos_err.mean,
-            eb.blue.block_ori_err.mean,
-            eb.blue.actuator_pos_err.mean
+            "| fixed three, {model} | block pos / ori / actuator, all positions | {} | {} |",
+            errors(ea),
+            errors(eb)
         );
     }
     for runs in [6, 7] {
