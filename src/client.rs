@@ -310,6 +310,35 @@ impl SimClient {
         Ok(message.seq)
     }
 
+    /// [`SimClient::send`] for each of `payloads`, in order, written to the
+    /// socket at once; returns the last seq (`None` for no payloads). Every
+    /// payload is validated before anything is sent.
+    pub async fn send_all(&mut self, payloads: Vec<Payload>) -> Result<Option<u64>, ClientError> {
+        let mut messages = Vec::with_capacity(payloads.len());
+        for payload in payloads {
+            let message = pb::ClientMessage::new(0, payload);
+            validate(&message)?;
+            messages.push(message);
+        }
+        for message in &mut messages {
+            message.seq = self.seqs.next_seq().ok_or(ClientError::SeqExhausted)?;
+            tracing::debug!(
+                seq = message.seq,
+                kind = message.payload.as_ref().map_or("", Payload::kind),
+                "send"
+            );
+        }
+        let deadline = self.deadline();
+        within(
+            deadline,
+            self.timeout,
+            "the world to read a command",
+            self.connection.write_all(&messages),
+        )
+        .await??;
+        Ok(messages.last().map(|m| m.seq))
+    }
+
     /// The next message from the world, `Error`s included (answers to
     /// barriers excepted), within the timeout.
     pub async fn next_message(&mut self) -> Result<server_message::Payload, ClientError> {

@@ -69,6 +69,16 @@ impl<Out: Message, W: AsyncWrite + Unpin> FrameWriter<Out, W> {
         self.frames.send(message).await
     }
 
+    /// Writes several envelopes and flushes once: a reader of the other end
+    /// gets them in as few system calls (and wake-ups) as the socket allows.
+    /// Not cancel-safe, like [`FrameWriter::write`].
+    pub async fn write_all(&mut self, messages: &[Out]) -> Result<(), WireError> {
+        for message in messages {
+            self.frames.feed(message).await?;
+        }
+        SinkExt::<&Out>::flush(&mut self.frames).await
+    }
+
     /// Flushes and shuts the write direction down (the peer sees end of stream).
     pub async fn close(&mut self) -> Result<(), WireError> {
         SinkExt::<&Out>::close(&mut self.frames).await
@@ -117,6 +127,11 @@ where
     /// See [`FrameWriter::write`].
     pub async fn write(&mut self, message: &Out) -> Result<(), WireError> {
         self.writer.write(message).await
+    }
+
+    /// See [`FrameWriter::write_all`].
+    pub async fn write_all(&mut self, messages: &[Out]) -> Result<(), WireError> {
+        self.writer.write_all(messages).await
     }
 
     /// See [`FrameWriter::close`].

@@ -100,3 +100,59 @@ async fn unknown_server_payloads_are_skipped() {
         10
     );
 }
+
+/// `send_all` writes its payloads in order with consecutive seqs, and a
+/// batch with one invalid payload sends none of it.
+#[tokio::test]
+async fn a_batch_goes_out_in_order_and_an_invalid_one_not_at_all() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.expect("bind");
+    let addr = listener.local_addr().expect("address");
+    let received = tokio::spawn(async move {
+        let (mut stream, _) = listener.accept().await.expect("accept");
+        let hello: pb::ServerMessage = pb::Hello::default().into();
+        stream
+            .write_all(&encode_frame(&hello).expect("encode"))
+            .await
+            .expect("hello");
+        let mut bytes = Vec::new();
+        let _ = stream.read_to_end(&mut bytes).await;
+        bytes
+    });
+    let options = ClientOptions {
+        timeout: Some(Duration::from_secs(5)),
+        first_seq: 1,
+    };
+    let mut client = SimClient::connect_with(addr, options)
+        .await
+        .expect("connect");
+    let last = client
+        .send_all(vec![
+            pb::client_message::Payload::move_(0.0, 0.5),
+            pb::client_message::Payload::advance(),
+        ])
+        .await
+        .expect("a valid batch");
+    assert_eq!(last, Some(2));
+    let refused = client
+        .send_all(vec![
+            pb::client_message::Payload::advance(),
+            pb::client_message::Payload::move_(f64::NAN, 0.0),
+        ])
+        .await;
+    assert!(
+        matches!(refused, Err(ClientError::Invalid(_))),
+        "{refused:?}"
+    );
+    assert_eq!(client.send_all(Vec::new()).await.expect("nothing"), None);
+    client.close().await.expect("close");
+    let bytes = received.await.expect("the listener");
+    let (messages, error) = pushlearn::wire::decode_stream::<pb::ClientMessage>(&bytes);
+    assert!(error.is_none(), "{error:?}");
+    assert_eq!(
+        messages,
+        [
+            pb::ClientMessage::move_(1, 0.0, 0.5),
+            pb::ClientMessage::advance(2)
+        ]
+    );
+}

@@ -161,29 +161,49 @@ async fn drive<M: Model, T: Task<M>>(
     driver: &mut Driver<M, T>,
     setup: Vec<Payload>,
 ) -> Result<Timing, ExperimentError> {
-    for payload in setup {
-        client.send(payload).await?;
+    // In lock-step the driver's commands take effect at the next Advance
+    // whenever they arrive, so they go out with it in one write; in realtime
+    // they go out at once.
+    let mut pending = setup;
+    if pacing == Pacing::Realtime {
+        client.send_all(std::mem::take(&mut pending)).await?;
     }
     let budget = budget(driver.publish_rate_hz());
     let mut timing = Timing::default();
     while !driver.is_done() {
         let state = match pacing {
             Pacing::Lockstep => {
-                let advance = client.send(Payload::advance()).await?;
+                let advance = send_with_advance(client, std::mem::take(&mut pending)).await?;
                 client.wait_applied(advance).await?
             }
             Pacing::Realtime => client.next_state().await?,
         };
         let received = Instant::now();
         let commands = driver.on_state(&frame_from_state(&state));
-        for command in commands {
-            client.send(command).await?;
+        match pacing {
+            Pacing::Lockstep => pending = commands,
+            Pacing::Realtime => {
+                client.send_all(commands).await?;
+            }
         }
         timing.record(received.elapsed(), budget);
     }
+    client.send_all(pending).await?;
     // Surfaces a refusal of the last commands here rather than in the next job.
     client.sync().await?;
     Ok(timing)
+}
+
+/// Sends `batch` and an Advance in one write; the Advance's seq.
+async fn send_with_advance(
+    client: &mut SimClient,
+    mut batch: Vec<Payload>,
+) -> Result<u64, ExperimentError> {
+    batch.push(Payload::advance());
+    client
+        .send_all(batch)
+        .await?
+        .ok_or_else(|| ExperimentError::Incomplete("an Advance was not sent".into()))
 }
 
 /// [`drive`] in lock-step through a [`RunCache`]: states the cache holds
@@ -223,10 +243,7 @@ async fn send_and_advance(
     batch: Vec<Payload>,
 ) -> Result<pushlearn::wire::pb::WorldState, ExperimentError> {
     cursor.sent(&batch);
-    for command in batch {
-        client.send(command).await?;
-    }
-    let advance = client.send(Payload::advance()).await?;
+    let advance = send_with_advance(client, batch).await?;
     Ok(client.wait_applied(advance).await?)
 }
 
