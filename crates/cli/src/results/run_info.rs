@@ -35,7 +35,8 @@ impl std::ops::AddAssign for Counters {
 pub struct Timing {
     /// States handled.
     pub messages: u64,
-    /// States whose handling (parse, model work, sending the commands) took
+    /// States whose handling (parse, model work, and in realtime sending the
+    /// commands; in lock-step they go out with the next Advance) took
     /// longer than 2/f.
     pub too_slow: u64,
     /// Sum of the handling times, seconds.
