@@ -396,6 +396,47 @@ fn a_world_in_the_wrong_mode_or_scene_is_refused_clearly() {
     assert!(stderr.contains("needs `two_blocks`"), "{stderr}");
 }
 
+/// A running world's latency emulation is checked against the
+/// experiment's, so that a report cannot record another latency than the
+/// world used; with the matching --latency-max it runs and records it.
+#[test]
+fn a_world_with_another_latency_maximum_is_refused_and_the_matching_one_recorded() {
+    let world = Daemon::start(&["--mode", "lockstep", "--latency-max", "5"]);
+    let addr = world.addr.to_string();
+    let common = [
+        "experiment",
+        "push-task",
+        "--connect",
+        &addr,
+        "--train-runs",
+        "1",
+        "--folds",
+        "1",
+    ];
+    let out = pushlearn(&common);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains(
+            "the world has latency emulation up to 5 steps, this experiment needs latency emulation up to 2 steps"
+        ),
+        "{stderr}"
+    );
+    let out = pushlearn(&[&common[..], &["--mode", "lockstep"]].concat());
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("this experiment needs no latency emulation"),
+        "{stderr}"
+    );
+    let dir = TempDir::new("latency-connect");
+    let json = dir.file("five.json");
+    succeeded(&pushlearn(
+        &[&common[..], &["--latency-max", "5", "--json", &json]].concat(),
+    ));
+    assert_eq!(read_json(&json)["latency_max_steps"], 5);
+}
+
 /// The thesis draft's protocol and options over real sockets: the draft's
 /// starts, 20 test runs, key-point scores per body, the selector agreement
 /// of the interaction model, and the hard-coded actuator's exact steps.

@@ -102,7 +102,13 @@ fn pose(position: [f64; 3], [x, y, z, w]: [f64; 4]) -> pb::Pose {
 }
 
 /// Every connection's first message: the scene's bodies at their start poses.
-pub(super) fn hello(scene: &Scene, publish_rate: u32, timing: TimingMode) -> pb::Hello {
+/// `latency_max_steps` is the latency emulation's maximum, if it is on.
+pub(super) fn hello(
+    scene: &Scene,
+    publish_rate: u32,
+    timing: TimingMode,
+    latency_max_steps: Option<u32>,
+) -> pb::Hello {
     pb::Hello {
         scene: scene.name.clone(),
         step_size: scene.physics.step_size,
@@ -122,6 +128,7 @@ pub(super) fn hello(scene: &Scene, publish_rate: u32, timing: TimingMode) -> pb:
             })
             .collect(),
         shapes: scene.bodies.iter().map(shape).collect(),
+        latency_max_steps,
     }
 }
 
@@ -220,7 +227,7 @@ mod tests {
     #[test]
     fn hello_gives_every_body_its_size() {
         let scene = Scene::builtin("two_blocks").expect("embedded scene");
-        let hello = hello(&scene, 100, TimingMode::Realtime);
+        let hello = hello(&scene, 100, TimingMode::Realtime, None);
         let shapes: Vec<_> = hello
             .shapes
             .iter()

@@ -165,6 +165,7 @@ impl Gate {
             &self.scene,
             self.publish_rate.load(Ordering::Relaxed),
             self.timing.mode(),
+            self.timing.latency().map(|latency| latency.max_steps),
         )
     }
 

@@ -117,6 +117,29 @@ impl WorldLink {
         }
     }
 
+    /// Checks that the world emulates command latency up to `latency_max`
+    /// steps (`None`: not at all), as its Hello says; the report records
+    /// the experiment's value, which must be the world's.
+    ///
+    /// # Errors
+    /// The world's latency emulation differs.
+    pub fn require_latency(&self, latency_max: Option<u32>) -> Result<(), ExperimentError> {
+        let found = self.client.hello().latency_max_steps;
+        if found == latency_max {
+            return Ok(());
+        }
+        let describe = |l: Option<u32>| {
+            l.map_or_else(
+                || "no latency emulation".to_owned(),
+                |l| format!("latency emulation up to {l} steps"),
+            )
+        };
+        Err(ExperimentError::WrongLatency {
+            found: describe(found),
+            wanted: describe(latency_max),
+        })
+    }
+
     /// Runs `driver` until its job is done. `setup` is sent first (e.g. the
     /// job's latency seed).
     ///

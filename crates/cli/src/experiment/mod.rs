@@ -135,6 +135,13 @@ pub enum ExperimentError {
         found: String,
         wanted: &'static str,
     },
+    /// The world emulates another command latency than the experiment's.
+    #[error(
+        "the world has {found}, this experiment needs {wanted} (start it with the \
+         matching `pushlearn-sim serve --mode lockstep --latency-max N`, or pass its \
+         value as --latency-max; a world older than the Hello's latency field cannot be checked)"
+    )]
+    WrongLatency { found: String, wanted: String },
     /// The world has the wrong scene.
     #[error("the world runs scene `{found}`, this experiment needs `{wanted}`")]
     WrongScene { found: String, wanted: String },

@@ -84,6 +84,11 @@ impl Plan {
     fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
         let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
+        if self.mode.pacing() == super::link::Pacing::Lockstep {
+            worker
+                .link
+                .require_latency(self.mode.jitter().then_some(self.latency_max))?;
+        }
         if let Some(cache) = self.cache() {
             worker
                 .link
