@@ -93,25 +93,16 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     } else {
         manifest::full()
     };
-    let cpus = std::thread::available_parallelism().map_or(1, usize::from);
-    let settings = Settings {
-        sim_bin: if args.page_only {
-            PathBuf::new()
-        } else {
-            find_sim_binary(args.sim_bin.as_deref())?
-        },
-        workers: args.workers.map_or(cpus, |n| n as usize),
-    };
     let dir = root.join(if args.quick { QUICK_DIR } else { RESULTS_DIR });
     let results = if args.page_only {
         reproduce::load(&entries, &dir)?
     } else {
+        let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let settings = Settings {
+            sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
+            workers: args.workers.map_or(cpus, |n| n as usize),
+        };
         run_with_bars(&entries, &settings)?
-    };
-    let files = if args.page_only {
-        Vec::new()
-    } else {
-        results.files()?
     };
     let page = template.map(|t| page::generate(&t, &results)).transpose()?;
     let command = if args.quick {
@@ -129,7 +120,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         .sum();
     if args.page_only {
         if args.check {
-            check(root, &dir, &files, page.as_deref())?;
+            check(root, &dir, None, page.as_deref())?;
             println!(
                 "{command} --check: {PAGE} matches {TEMPLATE} and the documents in {RESULTS_DIR}"
             );
@@ -151,8 +142,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         );
         return Ok(());
     }
+    let files = results.files()?;
     if args.check {
-        check(root, &dir, &files, page.as_deref())?;
+        check(root, &dir, Some(&files), page.as_deref())?;
         println!(
             "{command} --check: {} documents{} match the code ({} experiments, {states} messages, {:.1} s)",
             files.len(),
@@ -162,18 +154,16 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         );
         return Ok(());
     }
-    if !args.page_only {
-        reproduce::write_files(&dir, &files)?;
-        for stale in stale_documents(&dir, &files)? {
-            std::fs::remove_file(&stale)
-                .with_context(|| format!("removing the stale {}", stale.display()))?;
-            eprintln!(
-                "removed {}: no experiment produces it any more",
-                stale.display()
-            );
-        }
-        reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
+    reproduce::write_files(&dir, &files)?;
+    for stale in stale_documents(&dir, &files)? {
+        std::fs::remove_file(&stale)
+            .with_context(|| format!("removing the stale {}", stale.display()))?;
+        eprintln!(
+            "removed {}: no experiment produces it any more",
+            stale.display()
+        );
     }
+    reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
     let mut figures = 0;
     if let Some(page) = &page {
         figures = draw_figures(root, &results, page)?;
@@ -295,10 +285,16 @@ fn run_with_bars(entries: &[manifest::Entry], settings: &Settings) -> Result<Rep
 }
 
 /// Compares the regenerated files with the committed ones; fails naming
-/// every stale file and its first differing value.
-fn check(root: &Path, dir: &Path, files: &[(String, String)], page: Option<&str>) -> Result<()> {
+/// every stale file and its first differing value. `files` is `None` when
+/// no document was regenerated (`--page-only`).
+fn check(
+    root: &Path,
+    dir: &Path,
+    files: Option<&[(String, String)]>,
+    page: Option<&str>,
+) -> Result<()> {
     let mut problems = Vec::new();
-    for (name, now) in files {
+    for (name, now) in files.unwrap_or_default() {
         let path = dir.join(name);
         match std::fs::read_to_string(&path) {
             Err(e) => problems.push(format!(
@@ -316,10 +312,9 @@ fn check(root: &Path, dir: &Path, files: &[(String, String)], page: Option<&str>
             },
         }
     }
-    let stale = if files.is_empty() {
-        Vec::new()
-    } else {
-        stale_documents(dir, files)?
+    let stale = match files {
+        Some(files) => stale_documents(dir, files)?,
+        None => Vec::new(),
     };
     for stale in stale {
         problems.push(format!(

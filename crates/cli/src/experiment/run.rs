@@ -22,6 +22,12 @@ use crate::results::run_info::{Counters, RunInfo, Timing};
 use crate::results::{FeedbackReport, MttReport, PushReport, Setup, TargetEntry};
 use pushlearn::wire::pb::client_message::Payload;
 
+/// When an experiment began, for [`Plan::run_info`].
+struct Started {
+    at: Instant,
+    counts: CacheCounts,
+}
+
 /// Where and how an experiment runs.
 #[derive(Clone, Debug)]
 pub struct Plan {
@@ -68,11 +74,33 @@ impl Plan {
         self.cache().map(|c| c.counts()).unwrap_or_default()
     }
 
-    /// `run` with the states the worlds simulated since `start`, if runs
+    /// Marks the start of an experiment: its wall clock, and the cache's
+    /// counts so far (a shared cache counts every experiment that used it).
+    fn started(&self) -> Started {
+        Started {
+            at: Instant::now(),
+            counts: self.counts(),
+        }
+    }
+
+    /// How the experiment begun at `started` went: the jobs' counters and
+    /// timings summed, and the states the worlds simulated since, if runs
     /// were reused.
-    fn with_reuse(&self, mut run: RunInfo, start: CacheCounts) -> RunInfo {
+    fn run_info(
+        &self,
+        started: &Started,
+        jobs: impl IntoIterator<Item = (Counters, Timing)>,
+        publish_rate_hz: u32,
+        workers: usize,
+    ) -> RunInfo {
+        let mut run = RunInfo::of(
+            jobs,
+            publish_rate_hz,
+            workers,
+            started.at.elapsed().as_secs_f64(),
+        );
         if let (Some(cache), Some(timing)) = (self.cache(), run.timing.as_mut()) {
-            timing.simulated_states = cache.counts().simulated - start.simulated;
+            timing.simulated_states = cache.counts().simulated - started.counts.simulated;
         }
         run
     }
@@ -140,8 +168,7 @@ pub fn push_task<M: Model>(
     plan: &Plan,
     progress: impl FnMut(usize),
 ) -> Result<PushReport, ExperimentError> {
-    let started = Instant::now();
-    let counts = plan.counts();
+    let started = plan.started();
     let variant = protocol.variant;
     let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
     let untrained = Mutex::new(untrained);
@@ -172,14 +199,11 @@ pub fn push_task<M: Model>(
             train_runs,
             &results,
         )?,
-        run: plan.with_reuse(
-            RunInfo::of(
-                results.iter().map(|r| (r.counters, r.timing)),
-                RATE_HZ,
-                plan.workers().min(jobs.len()),
-                started.elapsed().as_secs_f64(),
-            ),
-            counts,
+        run: plan.run_info(
+            &started,
+            results.iter().map(|r| (r.counters, r.timing)),
+            RATE_HZ,
+            plan.workers().min(jobs.len()),
         ),
     })
 }
@@ -193,8 +217,7 @@ pub fn constant_feedback<M: Model>(
     untrained: M,
     plan: &Plan,
 ) -> Result<FeedbackReport, ExperimentError> {
-    let started = Instant::now();
-    let counts = plan.counts();
+    let started = plan.started();
     let jobs = [super::seed::derive(
         plan.seed,
         super::constant_feedback::EXPERIMENT,
@@ -223,15 +246,7 @@ pub fn constant_feedback<M: Model>(
         variant: Variant::ConstantFeedback.as_str().to_owned(),
         publish_rate_hz: LOW_RATE_HZ,
         runs: task.runs,
-        run: plan.with_reuse(
-            RunInfo::of(
-                [(counters, timing)],
-                LOW_RATE_HZ,
-                1,
-                started.elapsed().as_secs_f64(),
-            ),
-            counts,
-        ),
+        run: plan.run_info(&started, [(counters, timing)], LOW_RATE_HZ, 1),
     })
 }
 
@@ -247,8 +262,7 @@ pub fn move_to_target<M: Model>(
     plan: &Plan,
     progress: impl FnMut(usize),
 ) -> Result<MttReport, ExperimentError> {
-    let started = Instant::now();
-    let counts = plan.counts();
+    let started = plan.started();
     let jobs = MttJob::all(targets, repetitions, max_steps, plan.seed);
     let untrained = Mutex::new(untrained);
     let results = run_jobs(
@@ -288,14 +302,11 @@ pub fn move_to_target<M: Model>(
         repetitions,
         max_steps,
         targets: entries,
-        run: plan.with_reuse(
-            RunInfo::of(
-                results.iter().map(|r| (r.counters, r.timing)),
-                RATE_HZ,
-                plan.workers().min(jobs.len()),
-                started.elapsed().as_secs_f64(),
-            ),
-            counts,
+        run: plan.run_info(
+            &started,
+            results.iter().map(|r| (r.counters, r.timing)),
+            RATE_HZ,
+            plan.workers().min(jobs.len()),
         ),
     })
 }

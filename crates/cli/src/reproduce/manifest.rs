@@ -152,6 +152,20 @@ impl Entry {
 
 const MODELS: [ModelKind; 2] = [ModelKind::Gate, ModelKind::Interaction];
 
+/// The latency settings an experiment is run with (name suffix, latency
+/// maximum): the default, and the harsher robustness row.
+const LATENCIES: [(&str, u32); 2] = [
+    ("", LATENCY_MAX_STEPS),
+    ("-latency5", LATENCY_MAX_STEPS_HARSH),
+];
+
+/// [`LATENCIES`] and lock-step, for the experiments reported in all three.
+const TIMINGS: [(&str, Mode, u32); 3] = [
+    ("", Mode::LockstepJitter, LATENCY_MAX_STEPS),
+    ("-lockstep", Mode::Lockstep, LATENCY_MAX_STEPS),
+    ("-latency5", Mode::LockstepJitter, LATENCY_MAX_STEPS_HARSH),
+];
+
 fn push(model: ModelKind, variant: Variant, train_runs: Vec<usize>, folds: usize) -> Spec {
     Spec::PushTask {
         model,
@@ -179,11 +193,7 @@ fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
 pub fn full() -> Vec<Entry> {
     let mut entries = Vec::new();
     let curve = || Variant::Random.default_train_runs();
-    for (suffix, mode, latency) in [
-        ("", Mode::LockstepJitter, LATENCY_MAX_STEPS),
-        ("-lockstep", Mode::Lockstep, LATENCY_MAX_STEPS),
-        ("-latency5", Mode::LockstepJitter, LATENCY_MAX_STEPS_HARSH),
-    ] {
+    for (suffix, mode, latency) in TIMINGS {
         for model in MODELS {
             let entry = Entry::new(
                 format!("push-task-{model}{suffix}"),
@@ -206,10 +216,7 @@ pub fn full() -> Vec<Entry> {
             );
         }
     }
-    for (suffix, latency) in [
-        ("", LATENCY_MAX_STEPS),
-        ("-latency5", LATENCY_MAX_STEPS_HARSH),
-    ] {
+    for (suffix, latency) in LATENCIES {
         for model in MODELS {
             let entry = Entry::new(
                 format!("fixed-three-{model}{suffix}"),
@@ -227,10 +234,7 @@ pub fn full() -> Vec<Entry> {
         )
         .mode(Mode::Lockstep),
     );
-    for (suffix, latency) in [
-        ("", LATENCY_MAX_STEPS),
-        ("-latency5", LATENCY_MAX_STEPS_HARSH),
-    ] {
+    for (suffix, latency) in LATENCIES {
         for runs in [6, 7] {
             let entry = Entry::new(
                 format!("two-objects-{runs}{suffix}"),
@@ -253,11 +257,7 @@ pub fn full() -> Vec<Entry> {
             .with_figures(true),
         );
     }
-    for (suffix, mode, latency) in [
-        ("", Mode::LockstepJitter, LATENCY_MAX_STEPS),
-        ("-lockstep", Mode::Lockstep, LATENCY_MAX_STEPS),
-        ("-latency5", Mode::LockstepJitter, LATENCY_MAX_STEPS_HARSH),
-    ] {
+    for (suffix, mode, latency) in TIMINGS {
         for model in MODELS {
             let entry = Entry::new(
                 format!("move-to-target-{model}{suffix}"),

@@ -574,16 +574,26 @@ fn errors(e: &CurveEntry) -> String {
     )
 }
 
+/// The `n`-run entries of document `base` and of its harsh-latency twin.
+fn with_harsh<'r>(
+    results: &'r Reproduction,
+    base: &str,
+    n: usize,
+) -> Result<(&'r CurveEntry, &'r CurveEntry), String> {
+    let harsh = format!("{base}-latency5");
+    Ok((
+        entry_at(push_doc(results, base)?, base, n)?,
+        entry_at(push_doc(results, &harsh)?, &harsh, n)?,
+    ))
+}
+
 fn latency(results: &Reproduction) -> Result<String, String> {
     let mut out = format!(
         "| Experiment | Value | L_max {LATENCY_MAX_STEPS} (default) | L_max {LATENCY_MAX_STEPS_HARSH} |\n|---|---|---|---|\n"
     );
     for model in [ModelKind::Gate, ModelKind::Interaction] {
-        let base = format!("push-task-{model}");
-        let harsh = format!("{base}-latency5");
-        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
         for n in [1, 10, 30] {
-            let (ea, eb) = (entry_at(a, &base, n)?, entry_at(b, &harsh, n)?);
+            let (ea, eb) = with_harsh(results, &format!("push-task-{model}"), n)?;
             let _ = writeln!(
                 out,
                 "| curve, {model}, N = {n} | block pos / ori / actuator | {} | {} |",
@@ -593,10 +603,7 @@ fn latency(results: &Reproduction) -> Result<String, String> {
         }
     }
     for model in [ModelKind::Gate, ModelKind::Interaction] {
-        let base = format!("fixed-three-{model}");
-        let harsh = format!("{base}-latency5");
-        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
-        let (ea, eb) = (entry_at(a, &base, 3)?, entry_at(b, &harsh, 3)?);
+        let (ea, eb) = with_harsh(results, &format!("fixed-three-{model}"), 3)?;
         let _ = writeln!(
             out,
             "| fixed three, {model} | block pos / ori / actuator, all positions | {} | {} |",
@@ -605,10 +612,7 @@ fn latency(results: &Reproduction) -> Result<String, String> {
         );
     }
     for runs in [6, 7] {
-        let base = format!("two-objects-{runs}");
-        let harsh = format!("{base}-latency5");
-        let (a, b) = (push_doc(results, &base)?, push_doc(results, &harsh)?);
-        let (ea, eb) = (entry_at(a, &base, runs)?, entry_at(b, &harsh, runs)?);
+        let (ea, eb) = with_harsh(results, &format!("two-objects-{runs}"), runs)?;
         let red = |e: &CurveEntry| {
             e.red.as_ref().map_or_else(
                 || "–".to_owned(),
