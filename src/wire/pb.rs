@@ -15,3 +15,14 @@ include!(concat!(env!("OUT_DIR"), "/pushlearn.rs"));
 /// without a protobuf compiler.
 pub const FILE_DESCRIPTOR: &[u8] =
     include_bytes!(concat!(env!("OUT_DIR"), "/pushlearn.descriptor.bin"));
+
+/// The learner protocol's messages (`proto/learner.proto`,
+/// `docs/learner-protocol.md`): the experiment driver and an external learner.
+pub mod learner {
+    include!(concat!(env!("OUT_DIR"), "/pushlearn.learner.rs"));
+
+    /// `proto/learner.proto` as a serialized `FileDescriptorProto`, like
+    /// [`super::FILE_DESCRIPTOR`] (it imports that one).
+    pub const FILE_DESCRIPTOR: &[u8] =
+        include_bytes!(concat!(env!("OUT_DIR"), "/learner.descriptor.bin"));
+}
