@@ -624,6 +624,7 @@ fn jitter_runs_shared_by_both_models_give_bit_identical_results() {
         latency_max: LATENCY_MAX_STEPS,
         seed: 1,
         model: String::new(),
+        learner: None,
         runs: Some(Arc::clone(&cache)),
     };
     let (mut states, mut simulated) = (0.0, 0.0);

@@ -18,6 +18,7 @@
 //! `pushlearn`.
 
 pub mod experiment;
+pub mod external;
 pub mod frame;
 pub mod latency;
 pub mod learn;

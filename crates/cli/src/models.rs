@@ -32,6 +32,35 @@ impl std::fmt::Display for ModelKind {
     }
 }
 
+/// The learner an experiment runs: a built-in model, in-process, or an
+/// external one over the learner protocol (`crate::external`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LearnerChoice {
+    Builtin(ModelKind),
+    External(crate::external::LearnerSpec),
+}
+
+/// The choice as `pushlearn experiment` flags: `--model gate`,
+/// `--learner 'CMD'` or `--learner-connect ADDR`.
+impl std::fmt::Display for LearnerChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use crate::external::Source;
+        match self {
+            LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
+            LearnerChoice::External(spec) => match &spec.source {
+                Source::Command(command) => write!(f, "--learner '{command}'"),
+                Source::Connect(addr) => write!(f, "--learner-connect {addr}"),
+            },
+        }
+    }
+}
+
+impl From<ModelKind> for LearnerChoice {
+    fn from(kind: ModelKind) -> Self {
+        LearnerChoice::Builtin(kind)
+    }
+}
+
 /// Something to do with an untrained model of either kind: the one generic
 /// entry point that [`ModelKind::dispatch`] instantiates for each learner.
 pub trait WithModel {
@@ -152,6 +181,8 @@ pub enum ModelOptionsError {
         "--no-angular-velocity needs velocity features (--flag use-dyns or bit 1 of --config)"
     )]
     NoVelocities,
+    #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
+    NotForExternal { option: String },
 }
 
 impl ModelOptions {
@@ -173,6 +204,40 @@ impl ModelOptions {
             self.selector.as_str(),
             self.no_angular_velocity
         )
+    }
+
+    /// Refuses what only configures a built-in model: --eta, --selector,
+    /// --no-angular-velocity and the model bits of --config (1, 16, 32, 64).
+    /// The driver's bits (2, 4, 8: rate and training starts) apply to any
+    /// learner.
+    ///
+    /// # Errors
+    /// The first option that does not apply, named.
+    pub fn check_external(&self) -> Result<(), ModelOptionsError> {
+        use learner::flags;
+        let refuse = |option: &str| {
+            Err(ModelOptionsError::NotForExternal {
+                option: option.to_owned(),
+            })
+        };
+        if self.eta != 0.0 {
+            return refuse("--eta");
+        }
+        if self.selector != SelectorKind::Aitm {
+            return refuse("--selector");
+        }
+        if self.no_angular_velocity {
+            return refuse("--no-angular-velocity");
+        }
+        let model_bits = flags::USE_DYNS
+            | flags::HARDCODEDACT
+            | flags::HARDCODEDGATE
+            | flags::USINGPREDICTIONBOOST;
+        let bits = self.config_number() & model_bits;
+        if bits != 0 {
+            return refuse(&format!("configuration bits {bits} (of --config/--flag)"));
+        }
+        Ok(())
     }
 
     /// Whether LOWFREQ is set.

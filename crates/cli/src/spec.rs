@@ -8,11 +8,13 @@ use learner::{Model, ObjectState};
 use crate::experiment::push_task::protocol::{Protocol, Variant};
 use crate::experiment::run::{self, Plan};
 use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
-use crate::models::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
+use crate::external::{ExternalModel, LearnerError};
+use crate::models::{LearnerChoice, ModelKind, ModelOptions, ModelOptionsError, WithModel};
 use crate::report::draft::{self, DraftReport, DraftRowResult};
 use crate::report::plot::{self, PlotError};
 use crate::report::table;
 use crate::results::run_info::RunInfo;
+use crate::results::LearnerRecord;
 use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
 
 /// One experiment of `docs/spec/experiments.md`, fully configured.
@@ -20,7 +22,7 @@ use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
 pub enum Spec {
     /// Push Task Simulation (§3.1–§3.3, and the draft's protocol).
     PushTask {
-        model: ModelKind,
+        model: LearnerChoice,
         options: ModelOptions,
         variant: Variant,
         train_runs: Vec<usize>,
@@ -28,12 +30,12 @@ pub enum Spec {
     },
     /// The push task with constant feedback at 10 Hz (§3.4).
     ConstantFeedback {
-        model: ModelKind,
+        model: LearnerChoice,
         options: ModelOptions,
     },
     /// Move to Target (§4).
     MoveToTarget {
-        model: ModelKind,
+        model: LearnerChoice,
         options: ModelOptions,
         targets: Vec<ObjectState>,
         repetitions: usize,
@@ -62,6 +64,9 @@ pub enum SpecError {
     /// The experiment failed.
     #[error(transparent)]
     Experiment(#[from] ExperimentError),
+    /// The external learner cannot be used.
+    #[error(transparent)]
+    Learner(#[from] LearnerError),
     /// The configuration cannot be run.
     #[error("{0}")]
     Invalid(String),
@@ -79,14 +84,23 @@ impl Spec {
         }
     }
 
-    /// The model whose name goes into the report (the draft has its own).
+    /// The learner the experiment runs (the draft has its own models).
     #[must_use]
-    pub fn model(&self) -> Option<ModelKind> {
+    pub fn model(&self) -> Option<&LearnerChoice> {
         match self {
             Spec::PushTask { model, .. }
             | Spec::ConstantFeedback { model, .. }
-            | Spec::MoveToTarget { model, .. } => Some(*model),
+            | Spec::MoveToTarget { model, .. } => Some(model),
             Spec::DraftTables { .. } => None,
+        }
+    }
+
+    /// The task's name in the learner protocol's Start.
+    fn task(&self) -> &'static str {
+        match self {
+            Spec::PushTask { .. } | Spec::DraftTables { .. } => "push-task",
+            Spec::ConstantFeedback { .. } => "constant-feedback",
+            Spec::MoveToTarget { .. } => "move-to-target",
         }
     }
 
@@ -156,9 +170,6 @@ impl Spec {
     pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
         self.validate()?;
         let mut plan = plan.clone();
-        if let Some(model) = self.model() {
-            model.as_str().clone_into(&mut plan.model);
-        }
         Ok(match self {
             Spec::PushTask {
                 model,
@@ -168,6 +179,7 @@ impl Spec {
                 folds,
             } => {
                 let protocol = Protocol::new(*variant, options.config_number());
+                let model = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
                 Document::Push(model.dispatch(
                     options,
                     protocol.rate_hz,
@@ -182,6 +194,7 @@ impl Spec {
             }
             Spec::ConstantFeedback { model, options } => {
                 progress(0);
+                let model = Ready::new(model, options, self.task(), LOW_RATE_HZ, &mut plan)?;
                 let report = model.dispatch(options, LOW_RATE_HZ, Feedback { plan: &plan })??;
                 progress(1);
                 Document::Feedback(report)
@@ -192,17 +205,19 @@ impl Spec {
                 targets,
                 repetitions,
                 max_steps,
-            } => Document::MoveToTarget(model.dispatch(
-                options,
-                RATE_HZ,
-                MoveToTarget {
-                    targets,
-                    repetitions: *repetitions,
-                    max_steps: *max_steps,
-                    plan: &plan,
-                    progress: &progress,
-                },
-            )??),
+            } => Document::MoveToTarget(
+                Ready::new(model, options, self.task(), RATE_HZ, &mut plan)?.dispatch(
+                    options,
+                    RATE_HZ,
+                    MoveToTarget {
+                        targets,
+                        repetitions: *repetitions,
+                        max_steps: *max_steps,
+                        plan: &plan,
+                        progress: &progress,
+                    },
+                )??,
+            ),
             Spec::DraftTables { folds } => Document::Draft(draft_tables(*folds, &plan, progress)?),
         })
     }
@@ -380,6 +395,53 @@ impl Document {
         }?;
         text.push('\n');
         Ok(text)
+    }
+}
+
+/// A learner ready to run: a built-in model's kind, or a connected
+/// external learner. Getting ready names the plan's model.
+enum Ready {
+    Builtin(ModelKind),
+    External(Box<ExternalModel>),
+}
+
+impl Ready {
+    fn new(
+        choice: &LearnerChoice,
+        options: &ModelOptions,
+        task: &str,
+        publish_rate_hz: u32,
+        plan: &mut Plan,
+    ) -> Result<Self, SpecError> {
+        Ok(match choice {
+            LearnerChoice::Builtin(kind) => {
+                kind.as_str().clone_into(&mut plan.model);
+                plan.learner = None;
+                Ready::Builtin(*kind)
+            }
+            LearnerChoice::External(spec) => {
+                options.check_external()?;
+                let model = ExternalModel::connect(spec, task, publish_rate_hz)?;
+                model.info().name.clone_into(&mut plan.model);
+                plan.learner = Some(LearnerRecord {
+                    version: model.info().version.clone(),
+                    source: spec.source.to_string(),
+                });
+                Ready::External(Box::new(model))
+            }
+        })
+    }
+
+    fn dispatch<W: WithModel>(
+        self,
+        options: &ModelOptions,
+        publish_rate_hz: u32,
+        job: W,
+    ) -> Result<W::Output, ModelOptionsError> {
+        match self {
+            Ready::Builtin(kind) => kind.dispatch(options, publish_rate_hz, job),
+            Ready::External(model) => Ok(job.run(*model)),
+        }
     }
 }
 

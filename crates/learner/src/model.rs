@@ -138,6 +138,23 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     /// Node statistics of every map (`docs/spec/experiments.md` §7.5).
     fn stats(&self) -> ModelStats;
 
+    /// Called once on a fresh clone before a fold's first message, with the
+    /// fold's seed (the seed of the driver's own generator for the fold,
+    /// `docs/spec/experiments.md` §5). In-process models need nothing here:
+    /// the clone is the fresh model. A model that lives in another process
+    /// (`pushlearn experiment --learner`) starts its fold there.
+    fn start_fold(&mut self, _seed: u64) {}
+
+    /// Why the model cannot answer any more, if it cannot. The methods above
+    /// are infallible because an in-process model cannot fail; a model
+    /// behind a pipe or a socket can (it crashed, hung, sent garbage). Such a
+    /// model answers neutrally from then on and says why here; the driver
+    /// asks after every message and ends the job with this. In-process
+    /// models never fail.
+    fn failure(&self) -> Option<String> {
+        None
+    }
+
     /// Selector diagnostics for the real transition `old` → `new` under
     /// `action`: per interaction pair, the AC the model's own assignment
     /// gives to the transition (`None` if no AC has its changed-feature set)

@@ -2,6 +2,7 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
@@ -13,7 +14,8 @@ use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
 use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
-use pushlearn_cli::models::{ModelKind, ModelOptions};
+use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
+use pushlearn_cli::models::{LearnerChoice, ModelKind, ModelOptions};
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
 use pushlearn_cli::spec::Spec;
 
@@ -109,11 +111,55 @@ struct WorldArgs {
     plots: Option<PathBuf>,
 }
 
+/// Which learner runs: a built-in model, or an external one over the
+/// learner protocol (docs/learner-protocol.md).
 #[derive(Debug, Args)]
-struct PushTaskArgs {
-    /// The learner.
+struct LearnerArgs {
+    /// The built-in learner.
     #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
     model: ModelKind,
+
+    /// Run an external learner instead: a command (run by `sh -c`, one
+    /// process per worker) that speaks the learner protocol on its stdin and
+    /// stdout, e.g. "python3 -m pushlearn.serve pushlearn.baselines:KnnLearner".
+    /// The report carries the name the learner gives in its hello.
+    #[arg(long, value_name = "CMD", conflicts_with = "model")]
+    learner: Option<String>,
+
+    /// Run an external learner that serves the learner protocol as a daemon
+    /// at HOST:PORT (one connection per worker).
+    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["model", "learner"])]
+    learner_connect: Option<String>,
+
+    /// How long an external learner may take over one answer (its hello
+    /// included) before the job fails, in seconds.
+    #[arg(long, value_name = "SECS", default_value_t = DEFAULT_TIMEOUT.as_secs_f64(), value_parser = parse_timeout)]
+    learner_timeout: f64,
+}
+
+impl LearnerArgs {
+    fn choice(&self) -> LearnerChoice {
+        let timeout = Duration::from_secs_f64(self.learner_timeout);
+        let external = |source| LearnerChoice::External(LearnerSpec { source, timeout });
+        match (&self.learner, &self.learner_connect) {
+            (Some(command), _) => external(Source::Command(command.clone())),
+            (None, Some(addr)) => external(Source::Connect(addr.clone())),
+            (None, None) => LearnerChoice::Builtin(self.model),
+        }
+    }
+}
+
+fn parse_timeout(text: &str) -> Result<f64, String> {
+    text.parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && *v > 0.0 && *v <= 86_400.0)
+        .ok_or_else(|| format!("'{text}' is not a number of seconds in (0, 86400]"))
+}
+
+#[derive(Debug, Args)]
+struct PushTaskArgs {
+    #[command(flatten)]
+    learner: LearnerArgs,
 
     /// Which experiment of the thesis: random training starts (§3.1),
     /// the three selected starts (§3.2), two blocks (§3.3), constant
@@ -159,9 +205,8 @@ enum ReportKind {
 
 #[derive(Debug, Args)]
 struct MoveToTargetArgs {
-    /// The learner.
-    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
-    model: ModelKind,
+    #[command(flatten)]
+    learner: LearnerArgs,
 
     /// A target pose X,Y,ORI of the blue block (metres, radians); repeat for
     /// more [default: the thesis's four targets].
@@ -231,6 +276,7 @@ impl WorldArgs {
             source,
             seed: self.seed,
             model: String::new(),
+            learner: None,
             runs: (self.mode.reuses_runs() && !self.no_reuse)
                 .then(|| std::sync::Arc::new(RunCache::new())),
         })
@@ -339,6 +385,9 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
 fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
     let variant = args.variant;
     if args.report == ReportKind::Draft {
+        if args.learner.learner.is_some() || args.learner.learner_connect.is_some() {
+            bail!("--report draft runs the draft's own built-in models; drop --learner/--learner-connect");
+        }
         if variant != Variant::Random
             || args.train_runs.is_some()
             || args.options != ModelOptions::default()
@@ -355,12 +404,12 @@ fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
             bail!("--variant constant-feedback has no training phase; drop --train-runs");
         }
         return Ok(Spec::ConstantFeedback {
-            model: args.model,
+            model: args.learner.choice(),
             options: args.options.clone(),
         });
     }
     Ok(Spec::PushTask {
-        model: args.model,
+        model: args.learner.choice(),
         options: args.options.clone(),
         variant,
         train_runs: match &args.train_runs {
@@ -383,7 +432,7 @@ fn variant_folds(variant: Variant) -> usize {
 
 fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
     Spec::MoveToTarget {
-        model: args.model,
+        model: args.learner.choice(),
         options: args.options.clone(),
         targets: if args.target.is_empty() {
             TARGETS.to_vec()

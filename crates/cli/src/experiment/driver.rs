@@ -172,6 +172,8 @@ pub struct Driver<M: Model, T: Task<M>> {
     core: Core<M>,
     model: M,
     task: T,
+    /// Why the model stopped answering ([`Model::failure`]); ends the job.
+    failure: Option<String>,
 }
 
 impl<M: Model, T: Task<M>> Driver<M, T> {
@@ -182,6 +184,7 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
             core: Core::new(publish_rate_hz),
             model,
             task,
+            failure: None,
         }
     }
 
@@ -214,7 +217,20 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
                 }
             }
         }
+        if let Some(why) = self.model.failure() {
+            // What the model answered after it failed is not a result.
+            self.failure = Some(why);
+            core.done = true;
+            core.out.clear();
+        }
         std::mem::take(&mut core.out)
+    }
+
+    /// Why the model stopped answering, if it did: the job then ended
+    /// without a result.
+    #[must_use]
+    pub fn failure(&self) -> Option<&str> {
+        self.failure.as_deref()
     }
 
     /// Whether the job has ended.

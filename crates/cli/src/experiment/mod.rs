@@ -160,6 +160,9 @@ pub enum ExperimentError {
     /// Reusing recorded runs failed (`replay`).
     #[error(transparent)]
     Replay(#[from] replay::ReplayError),
+    /// An external learner stopped answering (`crate::external`).
+    #[error("{job}: {why}")]
+    Learner { job: String, why: String },
     /// A job ended without its results (a bug in a handler).
     #[error("{0}")]
     Incomplete(String),

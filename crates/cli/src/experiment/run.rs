@@ -40,6 +40,8 @@ pub struct Plan {
     pub seed: u64,
     /// Name of the model, for the report.
     pub model: String,
+    /// An external learner's record, for the report.
+    pub learner: Option<crate::results::LearnerRecord>,
     /// Recorded runs to reuse, shared by the workers, and by experiments run
     /// one after the other with plans that hold the same cache (a clone of
     /// this plan with another `model`, say: both models' curves then
@@ -60,6 +62,7 @@ impl Plan {
             mode: self.mode.as_str().to_owned(),
             latency_max_steps: self.mode.jitter().then_some(self.latency_max),
             seed: self.seed,
+            learner: self.learner.clone(),
         }
     }
 
@@ -137,6 +140,12 @@ impl Plan {
     }
 }
 
+/// Which job a driver runs, for [`drive`]: its seed and its name in errors.
+struct Fold {
+    seed: u64,
+    name: String,
+}
+
 /// Runs one job's driver to its end on `link`.
 fn drive<M: Model, T: Task<M>>(
     link: &mut WorldLink,
@@ -144,14 +153,22 @@ fn drive<M: Model, T: Task<M>>(
     task: T,
     rate_hz: u32,
     setup: Vec<Payload>,
+    fold: Fold,
 ) -> Result<(T, Timing, Counters), ExperimentError> {
     // A fold starts from an untrained instance (`docs/spec/experiments.md` §2 new_fold).
-    let model = untrained
+    let mut model = untrained
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner)
         .clone();
+    model.start_fold(fold.seed);
     let mut driver = Driver::new(model, task, rate_hz);
     let timing = link.drive(&mut driver, setup)?;
+    if let Some(why) = driver.failure() {
+        return Err(ExperimentError::Learner {
+            job: fold.name,
+            why: why.to_owned(),
+        });
+    }
     let (task, _, counters) = driver.into_parts();
     Ok((task, timing, counters))
 }
@@ -183,6 +200,10 @@ pub fn push_task<M: Model>(
                 PushTask::new(job),
                 protocol.rate_hz,
                 plan.job_setup(job.latency_seed),
+                Fold {
+                    seed: job.seed,
+                    name: format!("N_train {} fold {}", job.n_train, job.fold),
+                },
             )?;
             PushJobResult::from_task(job, task, counters, timing)
         },
@@ -218,12 +239,10 @@ pub fn constant_feedback<M: Model>(
     plan: &Plan,
 ) -> Result<FeedbackReport, ExperimentError> {
     let started = plan.started();
-    let jobs = [super::seed::derive(
-        plan.seed,
-        super::constant_feedback::EXPERIMENT,
-        &[],
-        super::seed::Stream::Latency,
-    )];
+    let seed_of =
+        |stream| super::seed::derive(plan.seed, super::constant_feedback::EXPERIMENT, &[], stream);
+    let jobs = [seed_of(super::seed::Stream::Latency)];
+    let driver_seed = seed_of(super::seed::Stream::Driver);
     let untrained = Mutex::new(untrained);
     let mut results = run_jobs(
         &jobs,
@@ -236,6 +255,10 @@ pub fn constant_feedback<M: Model>(
                 FeedbackTask::new(Variant::ConstantFeedback.test_positions()),
                 LOW_RATE_HZ,
                 plan.job_setup(latency_seed),
+                Fold {
+                    seed: driver_seed,
+                    name: "the constant-feedback job".to_owned(),
+                },
             )
         },
         |_| {},
@@ -276,6 +299,14 @@ pub fn move_to_target<M: Model>(
                 MttTask::new(job),
                 RATE_HZ,
                 plan.job_setup(job.latency_seed),
+                Fold {
+                    seed: job.seed,
+                    name: format!(
+                        "target {} repetition {}",
+                        job.target_index + 1,
+                        job.repetition
+                    ),
+                },
             )?;
             MttJobResult::from_task(job, task, counters, timing)
         },

@@ -413,6 +413,7 @@ mod tests {
                 model: "draft".into(),
                 mode: "lockstep".into(),
                 latency_max_steps: None,
+                learner: None,
                 seed: 1,
             },
             folds: 1,

@@ -44,11 +44,27 @@ fn count_cell(ours: Option<MeanStd>, reference: Option<Ms>) -> String {
 ///
 /// # Errors
 /// Writing to `out`.
+/// "gate model", or for an external learner its name, version and the
+/// built-in model whose thesis values stand beside it.
+fn learner_title(setup: &crate::results::Setup, reference: ModelKind) -> String {
+    match &setup.learner {
+        None => format!("{} model", setup.model),
+        Some(record) => format!(
+            "learner '{}' {} ({}; thesis values: the {reference} model's)",
+            setup.model, record.version, record.source
+        ),
+    }
+}
+
 pub fn push(out: &mut impl Write, report: &PushReport, model: ModelKind) -> io::Result<()> {
     writeln!(
         out,
-        "Push task ({}), {} model, {} folds, mode {}, seed {}",
-        report.variant, model, report.folds, report.setup.mode, report.setup.seed
+        "Push task ({}), {}, {} folds, mode {}, seed {}",
+        report.variant,
+        learner_title(&report.setup, model),
+        report.folds,
+        report.setup.mode,
+        report.setup.seed
     )?;
     writeln!(
         out,
@@ -371,8 +387,10 @@ pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
 pub fn feedback(out: &mut impl Write, report: &FeedbackReport, model: ModelKind) -> io::Result<()> {
     writeln!(
         out,
-        "Push task with constant feedback, {model} model, {} Hz, mode {} (qualitative; the thesis shows images, §7)",
-        report.publish_rate_hz, report.setup.mode
+        "Push task with constant feedback, {}, {} Hz, mode {} (qualitative; the thesis shows images, §7)",
+        learner_title(&report.setup, model),
+        report.publish_rate_hz,
+        report.setup.mode
     )?;
     for run in &report.runs {
         writeln!(out)?;
@@ -416,8 +434,12 @@ pub fn move_to_target(
     };
     writeln!(
         out,
-        "Move to Target, {model} model, {} repetitions, at most {} steps, mode {}, seed {}",
-        report.repetitions, report.max_steps, report.setup.mode, report.setup.seed
+        "Move to Target, {}, {} repetitions, at most {} steps, mode {}, seed {}",
+        learner_title(&report.setup, model),
+        report.repetitions,
+        report.max_steps,
+        report.setup.mode,
+        report.setup.seed
     )?;
     writeln!(
         out,

@@ -93,7 +93,7 @@ impl Entry {
                 train_runs,
                 folds,
             } => {
-                let _ = write!(line, "push-task --model {model}");
+                let _ = write!(line, "push-task {model}");
                 if *variant != Variant::Random {
                     let _ = write!(line, " --variant {}", variant.as_str());
                 }
@@ -108,10 +108,7 @@ impl Entry {
                 options(&mut line, o);
             }
             Spec::ConstantFeedback { model, options: o } => {
-                let _ = write!(
-                    line,
-                    "push-task --model {model} --variant constant-feedback"
-                );
+                let _ = write!(line, "push-task {model} --variant constant-feedback");
                 options(&mut line, o);
             }
             Spec::MoveToTarget {
@@ -121,7 +118,7 @@ impl Entry {
                 max_steps,
                 ..
             } => {
-                let _ = write!(line, "move-to-target --model {model}");
+                let _ = write!(line, "move-to-target {model}");
                 if *repetitions != REPETITIONS {
                     let _ = write!(line, " --repetitions {repetitions}");
                 }
@@ -168,7 +165,7 @@ const TIMINGS: [(&str, Mode, u32); 3] = [
 
 fn push(model: ModelKind, variant: Variant, train_runs: Vec<usize>, folds: usize) -> Spec {
     Spec::PushTask {
-        model,
+        model: model.into(),
         options: ModelOptions::default(),
         variant,
         train_runs,
@@ -178,7 +175,7 @@ fn push(model: ModelKind, variant: Variant, train_runs: Vec<usize>, folds: usize
 
 fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
     Spec::MoveToTarget {
-        model,
+        model: model.into(),
         options: ModelOptions::default(),
         targets: TARGETS.to_vec(),
         repetitions,
@@ -250,7 +247,7 @@ pub fn full() -> Vec<Entry> {
             Entry::new(
                 format!("constant-feedback-{model}"),
                 Spec::ConstantFeedback {
-                    model,
+                    model: model.into(),
                     options: ModelOptions::default(),
                 },
             )
@@ -285,7 +282,7 @@ pub fn full() -> Vec<Entry> {
         entries.push(Entry::new(
             format!("selector-{}", selector.as_str()),
             Spec::PushTask {
-                model: ModelKind::Interaction,
+                model: ModelKind::Interaction.into(),
                 options: ModelOptions {
                     selector,
                     ..ModelOptions::default()
@@ -329,7 +326,7 @@ pub fn quick() -> Vec<Entry> {
     entries.push(Entry::new(
         "constant-feedback-gate",
         Spec::ConstantFeedback {
-            model: ModelKind::Gate,
+            model: ModelKind::Gate.into(),
             options: ModelOptions::default(),
         },
     ));

@@ -245,6 +245,7 @@ pub fn run(
             },
             seed: entry.seed,
             model: String::new(),
+            learner: None,
             runs: entry.mode.reuses_runs().then(|| Arc::clone(cache)),
         };
         progress(Progress::Started {

@@ -40,6 +40,19 @@ pub struct Setup {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub latency_max_steps: Option<u32>,
     pub seed: u64,
+    /// An external learner's version and where it ran (`--learner`);
+    /// absent for the built-in models. `model` is the name it gave.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub learner: Option<LearnerRecord>,
+}
+
+/// An external learner, as its reports record it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct LearnerRecord {
+    /// The version its hello gave.
+    pub version: String,
+    /// The command or the daemon's address.
+    pub source: String,
 }
 
 #[cfg(test)]
@@ -52,6 +65,7 @@ impl Setup {
             mode: "lockstep".into(),
             latency_max_steps: None,
             seed: 1,
+            learner: None,
         }
     }
 }

@@ -101,6 +101,7 @@ pub(crate) fn mtt_report() -> MttReport {
             model: "interaction".into(),
             mode: "lockstep-jitter".into(),
             latency_max_steps: Some(2),
+            learner: None,
             seed: 1,
         },
         repetitions: 1,

@@ -1,0 +1,467 @@
+//! One connection to an external learner (`docs/learner-protocol.md`): a
+//! child process spoken to on its stdin and stdout, or a learner daemon's
+//! TCP socket. Requests go out in the protocol's framing; one-way calls are
+//! buffered and leave with the next call that is answered, so a world
+//! message costs one round trip. A reader thread turns the learner's output
+//! into replies, so that every wait has a deadline even on a pipe.
+
+use std::collections::VecDeque;
+use std::io::{Read, Write};
+use std::net::{Shutdown, TcpStream};
+use std::os::unix::process::CommandExt;
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use bytes::BytesMut;
+use tokio_util::codec::Decoder;
+
+use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request};
+use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
+
+use super::LearnerError;
+
+/// Where a learner runs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Source {
+    /// A command line, run by `sh -c`: one child process per connection,
+    /// spoken to on its stdin and stdout (its stderr is ours).
+    Command(String),
+    /// A learner daemon's address: one connection per session.
+    Connect(String),
+}
+
+impl std::fmt::Display for Source {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Source::Command(command) => write!(f, "`{command}`"),
+            Source::Connect(addr) => write!(f, "the learner daemon at {addr}"),
+        }
+    }
+}
+
+/// What the reader thread saw.
+enum Event {
+    Reply(Reply),
+    Garbage(WireError),
+    Closed,
+}
+
+/// The write side and what must be cleaned up.
+enum Transport {
+    /// `stdin` is taken to close it when the session ends.
+    Child {
+        child: Child,
+        stdin: Option<ChildStdin>,
+    },
+    Socket(TcpStream),
+}
+
+impl Transport {
+    fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        match self {
+            Transport::Child {
+                stdin: Some(stdin), ..
+            } => stdin.write_all(bytes).and_then(|()| stdin.flush()),
+            Transport::Child { stdin: None, .. } => Err(std::io::ErrorKind::BrokenPipe.into()),
+            Transport::Socket(stream) => stream.write_all(bytes),
+        }
+    }
+}
+
+/// One learner instance.
+pub struct Session {
+    transport: Transport,
+    events: mpsc::Receiver<Event>,
+    next_seq: u64,
+    /// Encoded one-way requests not yet written.
+    pending: Vec<u8>,
+    /// One-way requests since the last answered one: (seq, call name), to
+    /// name the call a late Error reply is about.
+    unanswered: VecDeque<(u64, &'static str)>,
+    timeout: Duration,
+    /// A call failed: the learner is not to be trusted with another.
+    failed: bool,
+}
+
+impl std::fmt::Debug for Session {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Session")
+            .field("next_seq", &self.next_seq)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The protocol's name of a call, for messages.
+pub fn call_name(call: &Call) -> &'static str {
+    match call {
+        Call::Start(_) => "start",
+        Call::NewFold(_) => "new_fold",
+        Call::Reset(_) => "reset",
+        Call::Update(_) => "update",
+        Call::Predict(_) => "predict",
+        Call::SetTraining(_) => "set_training",
+        Call::SetTarget(_) => "set_target",
+        Call::Act(_) => "act",
+        Call::GetStats(_) => "get_stats",
+        Call::Bye(_) => "bye",
+    }
+}
+
+/// The protocol's name of an answer, for messages.
+fn answer_name(answer: &Answer) -> &'static str {
+    match answer {
+        Answer::Hello(_) => "hello",
+        Answer::Prediction(_) => "prediction",
+        Answer::Action(_) => "action",
+        Answer::Target(_) => "target",
+        Answer::Stats(_) => "stats",
+        Answer::Error(_) => "error",
+    }
+}
+
+/// The answer each answered call expects; `None` for one-way calls.
+fn expected_answer(call: &Call) -> Option<&'static str> {
+    match call {
+        Call::Start(_) => Some("hello"),
+        Call::Predict(_) => Some("prediction"),
+        Call::SetTarget(_) => Some("target"),
+        Call::Act(_) => Some("action"),
+        Call::GetStats(_) => Some("stats"),
+        Call::NewFold(_)
+        | Call::Reset(_)
+        | Call::Update(_)
+        | Call::SetTraining(_)
+        | Call::Bye(_) => None,
+    }
+}
+
+/// Reads frames until the stream ends or stops being frames.
+fn read_replies(mut input: impl Read, events: &mpsc::Sender<Event>) {
+    let mut decoder = FrameDecoder::<Reply>::new();
+    let mut buffer = BytesMut::with_capacity(4096);
+    let mut chunk = [0_u8; 4096];
+    loop {
+        loop {
+            match decoder.decode(&mut buffer) {
+                Ok(Some(reply)) => {
+                    if events.send(Event::Reply(reply)).is_err() {
+                        return;
+                    }
+                }
+                Ok(None) => break,
+                Err(err) => {
+                    let _ = events.send(Event::Garbage(err));
+                    return;
+                }
+            }
+        }
+        match input.read(&mut chunk) {
+            Ok(0) | Err(_) => {
+                let event = if buffer.is_empty() {
+                    Event::Closed
+                } else {
+                    Event::Garbage(WireError::Truncated {
+                        buffered: buffer.len(),
+                    })
+                };
+                let _ = events.send(event);
+                return;
+            }
+            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
+        }
+    }
+}
+
+impl Session {
+    /// Starts the learner (a child, or a connection to a daemon).
+    ///
+    /// # Errors
+    /// The command cannot be started or the daemon cannot be reached.
+    pub fn open(source: &Source, timeout: Duration) -> Result<Self, LearnerError> {
+        let (sender, events) = mpsc::channel();
+        let transport = match source {
+            Source::Command(command) => {
+                let mut child = Command::new("sh")
+                    .arg("-c")
+                    .arg(command)
+                    // Its own process group, so that a learner the shell
+                    // started as its child is stopped with it (`kill_group`).
+                    .process_group(0)
+                    .stdin(Stdio::piped())
+                    .stdout(Stdio::piped())
+                    .stderr(Stdio::inherit())
+                    .spawn()
+                    .map_err(|e| LearnerError::Start(format!("cannot run {source}: {e}")))?;
+                let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
+                    kill_group(&mut child);
+                    return Err(LearnerError::Start(format!("{source} has no pipes")));
+                };
+                std::thread::spawn(move || read_replies(stdout, &sender));
+                Transport::Child {
+                    child,
+                    stdin: Some(stdin),
+                }
+            }
+            Source::Connect(addr) => {
+                let stream = TcpStream::connect(addr).map_err(|e| {
+                    LearnerError::Start(format!(
+                        "cannot connect to {source}: {e} (is the learner daemon running?)"
+                    ))
+                })?;
+                // Requests are small and each waits for its answer.
+                let _ = stream.set_nodelay(true);
+                let reader = stream
+                    .try_clone()
+                    .map_err(|e| LearnerError::Start(format!("{source}: {e}")))?;
+                std::thread::spawn(move || read_replies(reader, &sender));
+                Transport::Socket(stream)
+            }
+        };
+        Ok(Self {
+            transport,
+            events,
+            next_seq: 1,
+            pending: Vec::new(),
+            unanswered: VecDeque::new(),
+            timeout,
+            failed: false,
+        })
+    }
+
+    /// Sends `call`. A one-way call is only queued (`Ok(None)`); an answered
+    /// one is sent with everything queued and its answer awaited.
+    ///
+    /// # Errors
+    /// The learner failed, hung, exited, answered garbage or the wrong kind,
+    /// or reported an error on this or an earlier one-way call.
+    pub fn call(&mut self, call: Call) -> Result<Option<Answer>, LearnerError> {
+        let result = self.exchange(call);
+        self.failed |= result.is_err();
+        result
+    }
+
+    /// The seq of the latest request.
+    pub fn last_seq(&self) -> u64 {
+        self.next_seq - 1
+    }
+
+    /// Whether a call failed.
+    pub fn has_failed(&self) -> bool {
+        self.failed
+    }
+
+    fn exchange(&mut self, call: Call) -> Result<Option<Answer>, LearnerError> {
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        let name = call_name(&call);
+        let expected = expected_answer(&call);
+        let frame = encode_frame(&Request {
+            seq,
+            call: Some(call),
+        })
+        .map_err(|e| LearnerError::Protocol {
+            seq,
+            call: name,
+            what: format!("cannot encode the request: {e}"),
+        })?;
+        self.pending.extend_from_slice(&frame);
+        let Some(expected) = expected else {
+            self.unanswered.push_back((seq, name));
+            // A learner that failed on an earlier one-way call may have
+            // said so already; stop at once rather than at the next answer.
+            return match self.events.try_recv() {
+                Ok(event) => Err(self.unexpected(event, seq, name)),
+                Err(_) => Ok(None),
+            };
+        };
+        self.flush(seq, name)?;
+        let deadline = Instant::now() + self.timeout;
+        let event = self
+            .events
+            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
+            .map_err(|_| LearnerError::Timeout {
+                seq,
+                call: name,
+                after: self.timeout,
+            })?;
+        let Event::Reply(reply) = event else {
+            return Err(self.unexpected(event, seq, name));
+        };
+        match reply.answer {
+            Some(Answer::Error(error)) => Err(self.reported(reply.seq, seq, name, error.message)),
+            Some(answer) if reply.seq == seq && answer_name(&answer) == expected => {
+                self.unanswered.clear();
+                Ok(Some(answer))
+            }
+            Some(answer) => Err(LearnerError::Protocol {
+                seq,
+                call: name,
+                what: format!(
+                    "answered with a {} reply for message {} (expected a {expected} reply for message {seq})",
+                    answer_name(&answer),
+                    reply.seq
+                ),
+            }),
+            None => Err(LearnerError::Protocol {
+                seq,
+                call: name,
+                what: format!("sent a reply without an answer for message {}", reply.seq),
+            }),
+        }
+    }
+
+    /// Writes what is queued.
+    fn flush(&mut self, seq: u64, name: &'static str) -> Result<(), LearnerError> {
+        let bytes = std::mem::take(&mut self.pending);
+        if self.transport.write_all(&bytes).is_err() {
+            // A broken pipe: the learner is gone. Why is for the reader to
+            // tell (it may have sent an Error first).
+            let event = self
+                .events
+                .recv_timeout(Duration::from_millis(500))
+                .unwrap_or(Event::Closed);
+            return Err(self.unexpected(event, seq, name));
+        }
+        Ok(())
+    }
+
+    /// The error for an event that is not the awaited answer.
+    fn unexpected(&mut self, event: Event, seq: u64, name: &'static str) -> LearnerError {
+        match event {
+            Event::Reply(Reply {
+                seq: failed,
+                answer: Some(Answer::Error(error)),
+            }) => self.reported(failed, seq, name, error.message),
+            Event::Reply(reply) => LearnerError::Protocol {
+                seq,
+                call: name,
+                what: format!(
+                    "sent a {} reply for message {}, which needs no answer",
+                    reply.answer.as_ref().map_or("empty", answer_name),
+                    reply.seq
+                ),
+            },
+            Event::Garbage(err) => LearnerError::Garbage {
+                seq,
+                call: name,
+                what: describe_garbage(&err),
+            },
+            Event::Closed => LearnerError::Exited {
+                seq,
+                call: name,
+                status: self.exit_status(),
+            },
+        }
+    }
+
+    /// The error for the learner's own Error reply about message `failed`.
+    fn reported(&self, failed: u64, seq: u64, name: &'static str, message: String) -> LearnerError {
+        let call = if failed == seq {
+            name
+        } else {
+            self.unanswered
+                .iter()
+                .find(|(s, _)| *s == failed)
+                .map_or("an earlier message", |(_, n)| *n)
+        };
+        LearnerError::Reported {
+            seq: failed,
+            call,
+            message,
+        }
+    }
+
+    /// How the child ended, once it has (waits briefly).
+    fn exit_status(&mut self) -> String {
+        let Transport::Child { child, .. } = &mut self.transport else {
+            return "the daemon closed the connection".to_owned();
+        };
+        let deadline = Instant::now() + Duration::from_secs(1);
+        loop {
+            match child.try_wait() {
+                Ok(Some(status)) => return format!("it exited ({status})"),
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                _ => return "it closed its output".to_owned(),
+            }
+        }
+    }
+}
+
+/// What a stream that stopped being frames looked like.
+fn describe_garbage(err: &WireError) -> String {
+    match err {
+        WireError::FrameTooLarge { len, .. } => {
+            let prefix = u32::try_from(*len).unwrap_or(u32::MAX).to_be_bytes();
+            let text: String = prefix
+                .iter()
+                .map(|&b| {
+                    if b.is_ascii_graphic() || b == b' ' {
+                        char::from(b)
+                    } else {
+                        '.'
+                    }
+                })
+                .collect();
+            format!(
+                "wrote something that is not a frame (a length prefix of {len} bytes, \"{text}\" as text): \
+                 does it print to stdout? Its output must be protocol frames only; logs go to stderr"
+            )
+        }
+        other => format!("wrote something that is not a frame: {other}"),
+    }
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        // A healthy learner is told to go and given a second; one that
+        // failed (it may hang) is killed at once.
+        if !self.failed {
+            let bye = Call::Bye(pushlearn::wire::pb::learner::Bye {});
+            if let Ok(frame) = encode_frame(&Request {
+                seq: self.next_seq,
+                call: Some(bye),
+            }) {
+                self.pending.extend_from_slice(&frame);
+            }
+            let bytes = std::mem::take(&mut self.pending);
+            let _ = self.transport.write_all(&bytes);
+        }
+        match &mut self.transport {
+            Transport::Child { child, stdin } => {
+                drop(stdin.take());
+                let deadline = Instant::now() + Duration::from_secs(1);
+                loop {
+                    match child.try_wait() {
+                        Ok(None) if !self.failed && Instant::now() < deadline => {
+                            std::thread::sleep(Duration::from_millis(5));
+                        }
+                        Ok(Some(_)) => break,
+                        _ => {
+                            kill_group(child);
+                            break;
+                        }
+                    }
+                }
+            }
+            Transport::Socket(stream) => {
+                let _ = stream.shutdown(Shutdown::Both);
+            }
+        }
+    }
+}
+
+/// Kills the learner's process group (the shell and whatever it started),
+/// then reaps the shell. Without `unsafe` there is no `killpg` here, so the
+/// system's `kill` does it; the shell itself is killed directly in any case.
+fn kill_group(child: &mut Child) {
+    let _ = Command::new("kill")
+        .args(["-KILL", "--", &format!("-{}", child.id())])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status();
+    let _ = child.kill();
+    let _ = child.wait();
+}
