@@ -30,7 +30,7 @@ impl TempDir {
         Self(dir)
     }
 
-    fn file(&self, name: &str) -> String {
+    pub(crate) fn file(&self, name: &str) -> String {
         self.0.join(name).to_string_lossy().into_owned()
     }
 }
@@ -48,7 +48,7 @@ fn pushlearn(args: &[&str]) -> Output {
 }
 
 /// `pushlearn experiment …` with the daemon of this build.
-fn experiment(args: &[&str]) -> Output {
+pub(crate) fn experiment(args: &[&str]) -> Output {
     let sim = binary();
     let sim = sim.to_str().expect("UTF-8 target path");
     let mut all = vec!["experiment"];
@@ -57,7 +57,7 @@ fn experiment(args: &[&str]) -> Output {
     pushlearn(&all)
 }
 
-fn succeeded(output: &Output) -> String {
+pub(crate) fn succeeded(output: &Output) -> String {
     assert!(
         output.status.success(),
         "pushlearn failed with {:?}\nstdout:\n{}\nstderr:\n{}",
@@ -68,7 +68,7 @@ fn succeeded(output: &Output) -> String {
     text(&output.stdout)
 }
 
-fn read_json(path: &str) -> Value {
+pub(crate) fn read_json(path: &str) -> Value {
     let bytes = std::fs::read(Path::new(path)).unwrap_or_else(|e| panic!("{path}: {e}"));
     serde_json::from_slice(&bytes).expect("valid JSON")
 }
@@ -585,7 +585,7 @@ impl WithModel for SharedPush<'_> {
 }
 
 /// A report without what depends on the machine and on reuse.
-fn without_run_time(mut report: Value) -> String {
+pub(crate) fn without_run_time(mut report: Value) -> String {
     let run = report["run"].as_object_mut().expect("a run section");
     for key in [
         "wall_seconds",

@@ -27,6 +27,7 @@ enum Command {
     View(cli::view::ViewArgs),
     Report(cli::report::ReportArgs),
     Reproduce(cli::reproduce::ReproduceArgs),
+    ServeLearner(cli::serve_learner::ServeLearnerArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +45,7 @@ fn main() -> ExitCode {
         Command::View(args) => cli::view::run(args),
         Command::Report(args) => cli::report::run(args),
         Command::Reproduce(args) => cli::reproduce::run(args),
+        Command::ServeLearner(args) => cli::serve_learner::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

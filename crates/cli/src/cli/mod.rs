@@ -5,6 +5,7 @@ pub mod experiment;
 pub mod learn;
 pub mod report;
 pub mod reproduce;
+pub mod serve_learner;
 pub mod view;
 
 /// Whether `err` comes from writing to a closed stdout pipe.

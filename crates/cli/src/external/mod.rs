@@ -13,6 +13,7 @@
 //! sends `NewFold` with the fold's seed. A connection goes back to the idle
 //! list when its fold ends, so there are never more learners than workers.
 
+pub mod server;
 pub mod session;
 
 use std::cell::{Cell, RefCell};
@@ -99,6 +100,8 @@ pub struct LearnerInfo {
     pub name: String,
     pub version: String,
     pub inverse: bool,
+    /// The driver reads the actuator's yaw as 0 (`Hello.ignores_actuator_yaw`).
+    pub ignores_actuator_yaw: bool,
 }
 
 /// State shared by every handle of one external learner.
@@ -156,6 +159,7 @@ impl Shared {
             name: hello.name,
             version: hello.version,
             inverse: has(lp::Capability::Inverse),
+            ignores_actuator_yaw: hello.ignores_actuator_yaw,
         };
         Ok((session, info))
     }
@@ -403,7 +407,10 @@ fn state_of(frame: &Frame) -> lp::State {
 }
 
 fn action(a: Action) -> lp::Action {
-    lp::Action { vx: a.vx, vy: a.vy }
+    lp::Action {
+        vx: Some(a.vx),
+        vy: Some(a.vy),
+    }
 }
 
 /// A prediction's poses, checked: the actuator and exactly the blocks of
@@ -412,13 +419,14 @@ fn predicted_poses(prediction: &lp::Prediction, from: &Poses) -> Result<Poses, S
     let mut actuator = None;
     let mut blocks = std::collections::BTreeMap::new();
     for body in &prediction.bodies {
-        let state = ObjectState::new(body.x, body.y, body.theta);
-        if ![body.x, body.y, body.theta].iter().all(|v| v.is_finite()) {
+        let (x, y, theta) = (body.x(), body.y(), body.theta());
+        if ![x, y, theta].iter().all(|v| v.is_finite()) {
             return Err(format!(
-                "predicted a non-finite pose for body {}: ({}, {}, {})",
-                body.id, body.x, body.y, body.theta
+                "predicted a non-finite pose for body {}: ({x}, {y}, {theta})",
+                body.id
             ));
         }
+        let state = ObjectState::new(x, y, theta);
         let duplicate = if body.id == learner::ACTUATOR_ID {
             actuator.replace(state).is_some()
         } else if from.blocks.contains_key(&body.id) {
@@ -470,7 +478,14 @@ impl Model for ExternalModel {
 
     fn parse(&self, frame: &Frame) -> Result<ExternalWorld, ParseError> {
         Ok(ExternalWorld {
-            poses: parse_frame(frame, ActuatorYaw::Keep)?,
+            poses: parse_frame(
+                frame,
+                if self.shared.info.ignores_actuator_yaw {
+                    ActuatorYaw::ForceZero
+                } else {
+                    ActuatorYaw::Keep
+                },
+            )?,
             serial: self.next_serial(),
             origin: Origin::Observed(Arc::new(frame.clone())),
         })
@@ -542,9 +557,9 @@ impl Model for ExternalModel {
                 lp::SetTarget {
                     clear: false,
                     id: t.id,
-                    x: t.pose.x,
-                    y: t.pose.y,
-                    theta: t.pose.theta,
+                    x: Some(t.pose.x),
+                    y: Some(t.pose.y),
+                    theta: Some(t.pose.theta),
                 }
             }
             None => lp::SetTarget {
@@ -581,14 +596,12 @@ impl Model for ExternalModel {
         match self.call(Call::Act(lp::Act {})) {
             Some(Answer::Action(reply)) => {
                 let a = reply.action.unwrap_or_default();
-                if a.vx.is_finite() && a.vy.is_finite() {
+                let (vx, vy) = (a.vx(), a.vy());
+                if vx.is_finite() && vy.is_finite() {
                     self.has_target = reply.has_target;
-                    Action::new(a.vx, a.vy)
+                    Action::new(vx, vy)
                 } else {
-                    self.reject(
-                        "act",
-                        format!("chose a non-finite action ({}, {})", a.vx, a.vy),
-                    );
+                    self.reject("act", format!("chose a non-finite action ({vx}, {vy})"));
                     Action::ZERO
                 }
             }

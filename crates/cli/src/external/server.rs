@@ -1,0 +1,350 @@
+//! The learner side of the learner protocol for any [`learner::Model`]:
+//! `pushlearn serve-learner` serves the built-in models with it, so that
+//! another harness can run them, and so that the protocol path can be
+//! checked against the in-process one (the same model must give the same
+//! report either way).
+//!
+//! The world states a request refers to by name (`LAST_OBSERVED`,
+//! `LAST_PREDICTION`) are kept as the model's own parsed and predicted
+//! worlds, never rebuilt from poses: the gate model's block records depend on
+//! the identity of what it parsed (`docs/spec/gate-model.md` §4.1).
+
+use std::io::{Read, Write};
+
+use bytes::BytesMut;
+use learner::{Action, Frame, Model, ObjectState, Observation, Target};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use tokio_util::codec::Decoder;
+
+use pushlearn::wire::pb::learner::{
+    self as lp, reply::Answer, request::Call, state_ref::State, Reply, Request,
+};
+use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
+
+/// Why serving ended early.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    #[error("reading requests: {0}")]
+    Read(#[from] WireError),
+    #[error("writing replies: {0}")]
+    Write(std::io::Error),
+    #[error("message {seq}: {why}")]
+    Request { seq: u64, why: String },
+}
+
+/// What a served model says in its hello.
+#[derive(Clone, Debug)]
+pub struct Identity {
+    pub name: String,
+    pub version: String,
+    /// `Hello.ignores_actuator_yaw`: true for a model that parses the
+    /// actuator's yaw as 0 (the gate model).
+    pub ignores_actuator_yaw: bool,
+}
+
+/// One connection's learner.
+struct Served<M: Model> {
+    untrained: M,
+    model: M,
+    rng: ChaCha8Rng,
+    observed: Option<M::World>,
+    prediction: Option<M::World>,
+}
+
+fn frame_of(state: &lp::State) -> Frame {
+    Frame {
+        objects: state
+            .bodies
+            .iter()
+            .map(|b| {
+                let pose = b.pose.unwrap_or_default();
+                let p = pose.position.unwrap_or_default();
+                let q = pose.orientation.unwrap_or_default();
+                Observation {
+                    name: b.name.clone(),
+                    id: b.id,
+                    position: [p.x, p.y, p.z],
+                    orientation: [q.x, q.y, q.z, q.w],
+                }
+            })
+            .collect(),
+    }
+}
+
+fn action_of(a: Option<lp::Action>) -> Action {
+    let a = a.unwrap_or_default();
+    Action::new(a.vx(), a.vy())
+}
+
+impl<M: Model> Served<M> {
+    /// The world `state` names: parsed when sent, else the one kept.
+    fn resolve(&mut self, state: Option<lp::StateRef>) -> Result<M::World, String> {
+        match state.and_then(|s| s.state) {
+            Some(State::Observed(observed)) => {
+                let world = self
+                    .model
+                    .parse(&frame_of(&observed))
+                    .map_err(|e| format!("the state cannot be parsed: {e}"))?;
+                self.observed = Some(world.clone());
+                Ok(world)
+            }
+            Some(State::Recent(r)) if r == lp::Recent::LastObserved as i32 => self
+                .observed
+                .clone()
+                .ok_or_else(|| "LAST_OBSERVED before any state was sent".to_owned()),
+            Some(State::Recent(r)) if r == lp::Recent::LastPrediction as i32 => self
+                .prediction
+                .clone()
+                .ok_or_else(|| "LAST_PREDICTION before any prediction".to_owned()),
+            _ => Err("a call without a state".to_owned()),
+        }
+    }
+
+    /// Handles one call; `Some` is the answer to send.
+    fn handle(&mut self, call: Call) -> Result<Option<Answer>, String> {
+        Ok(match call {
+            Call::Start(_) => return Err("a second start".into()),
+            Call::NewFold(fold) => {
+                self.model = self.untrained.clone();
+                self.rng = ChaCha8Rng::seed_from_u64(fold.seed);
+                self.observed = None;
+                self.prediction = None;
+                None
+            }
+            Call::Reset(reset) => {
+                let world = self.resolve(reset.state)?;
+                self.model.reset_objects(&world);
+                None
+            }
+            Call::Update(update) => {
+                let world = self.resolve(update.state)?;
+                self.model.update(&world, action_of(update.action));
+                None
+            }
+            Call::Predict(predict) => {
+                let world = self.resolve(predict.from)?;
+                let next = self.model.predict(&world, action_of(predict.action));
+                let poses = M::poses(&next);
+                self.prediction = Some(next);
+                let body = |id, s: ObjectState| lp::BodyPose {
+                    id,
+                    x: Some(s.x),
+                    y: Some(s.y),
+                    theta: Some(s.theta),
+                };
+                Some(Answer::Prediction(lp::Prediction {
+                    bodies: std::iter::once(body(learner::ACTUATOR_ID, poses.actuator))
+                        .chain(poses.blocks.iter().map(|(&id, &s)| body(id, s)))
+                        .collect(),
+                }))
+            }
+            Call::SetTraining(training) => {
+                self.model.set_training(training.on);
+                None
+            }
+            Call::SetTarget(target) => {
+                let wanted = (!target.clear).then(|| {
+                    Target::new(
+                        target.id,
+                        ObjectState::new(target.x(), target.y(), target.theta()),
+                    )
+                });
+                let reply = match self.model.set_target(wanted) {
+                    Ok(()) => lp::TargetReply {
+                        accepted: true,
+                        refusal: String::new(),
+                    },
+                    Err(e) => lp::TargetReply {
+                        accepted: false,
+                        refusal: e.to_string(),
+                    },
+                };
+                Some(Answer::Target(reply))
+            }
+            Call::Act(_) => {
+                let a = self.model.act(&mut self.rng);
+                Some(Answer::Action(lp::ActionReply {
+                    action: Some(lp::Action {
+                        vx: Some(a.vx),
+                        vy: Some(a.vy),
+                    }),
+                    has_target: self.model.has_target(),
+                }))
+            }
+            Call::GetStats(_) => Some(Answer::Stats(stats_message(&self.model.stats())?)),
+            Call::Bye(_) => None,
+        })
+    }
+}
+
+/// The reports' serialised statistics as the protocol's message.
+fn stats_message(stats: &learner::ModelStats) -> Result<lp::Stats, String> {
+    #[derive(serde::Deserialize)]
+    struct Wire {
+        maps: std::collections::BTreeMap<String, learner::aitm::MapStats>,
+        extra: std::collections::BTreeMap<String, f64>,
+        labels: std::collections::BTreeMap<String, String>,
+    }
+    let wire: Wire = serde_json::to_value(stats)
+        .and_then(serde_json::from_value)
+        .map_err(|e| format!("statistics: {e}"))?;
+    Ok(lp::Stats {
+        maps: wire
+            .maps
+            .into_iter()
+            .map(|(name, m)| {
+                (
+                    name,
+                    lp::MapStats {
+                        update_calls: m.update_calls,
+                        inserts: m.inserts,
+                        nodes: m.nodes as u64,
+                    },
+                )
+            })
+            .collect(),
+        extra: wire.extra.into_iter().collect(),
+        labels: wire.labels.into_iter().collect(),
+    })
+}
+
+fn send(output: &mut impl Write, seq: u64, answer: Answer) -> Result<(), ServeError> {
+    let frame = encode_frame(&Reply {
+        seq,
+        answer: Some(answer),
+    })?;
+    output
+        .write_all(&frame)
+        .and_then(|()| output.flush())
+        .map_err(ServeError::Write)
+}
+
+/// The requests of one driver, read frame by frame.
+pub struct Requests<R> {
+    input: R,
+    decoder: FrameDecoder<Request>,
+    buffer: BytesMut,
+}
+
+impl<R: Read> Requests<R> {
+    pub fn new(input: R) -> Self {
+        Self {
+            input,
+            decoder: FrameDecoder::new(),
+            buffer: BytesMut::with_capacity(4096),
+        }
+    }
+
+    /// The next request; `None` when the driver closed its end between
+    /// requests.
+    ///
+    /// # Errors
+    /// The input is not frames of requests, or ends inside one.
+    pub fn next_request(&mut self) -> Result<Option<Request>, ServeError> {
+        let mut chunk = [0_u8; 4096];
+        loop {
+            if let Some(request) = self.decoder.decode(&mut self.buffer)? {
+                return Ok(Some(request));
+            }
+            let n = self
+                .input
+                .read(&mut chunk)
+                .map_err(|e| ServeError::Read(WireError::Io(e)))?;
+            if n == 0 {
+                return if self.buffer.is_empty() {
+                    Ok(None)
+                } else {
+                    Err(WireError::Truncated {
+                        buffered: self.buffer.len(),
+                    }
+                    .into())
+                };
+            }
+            self.buffer.extend_from_slice(&chunk[..n]);
+        }
+    }
+
+    /// The first request, which must be a Start: its seq and content
+    /// (which the model to serve may depend on: the publish rate).
+    ///
+    /// # Errors
+    /// Anything else first, or no request at all.
+    pub fn start(&mut self) -> Result<(u64, lp::Start), ServeError> {
+        match self.next_request()? {
+            Some(Request {
+                seq,
+                call: Some(Call::Start(start)),
+            }) => Ok((seq, start)),
+            Some(other) => Err(ServeError::Request {
+                seq: other.seq,
+                why: "the first request must be a start".into(),
+            }),
+            None => Err(ServeError::Request {
+                seq: 0,
+                why: "the driver closed the connection before its start".into(),
+            }),
+        }
+    }
+}
+
+/// Serves `untrained` (a fresh clone per fold) to one driver whose Start
+/// (`start_seq`) was read already, until it says bye or closes its end. A
+/// request the model cannot handle is answered with an Error reply and ends
+/// serving.
+///
+/// # Errors
+/// The transport failed, or a request could not be handled (after the Error
+/// reply was sent).
+pub fn serve<M: Model>(
+    untrained: M,
+    identity: &Identity,
+    start_seq: u64,
+    mut requests: Requests<impl Read>,
+    mut output: impl Write,
+) -> Result<(), ServeError> {
+    let mut served = Served {
+        model: untrained.clone(),
+        untrained,
+        rng: ChaCha8Rng::seed_from_u64(0),
+        observed: None,
+        prediction: None,
+    };
+    send(
+        &mut output,
+        start_seq,
+        Answer::Hello(lp::Hello {
+            protocol_version: lp::ProtocolVersion::ProtocolVersion as i32,
+            name: identity.name.clone(),
+            version: identity.version.clone(),
+            capabilities: vec![
+                lp::Capability::Forward as i32,
+                lp::Capability::Inverse as i32,
+            ],
+            ignores_actuator_yaw: identity.ignores_actuator_yaw,
+        }),
+    )?;
+    while let Some(request) = requests.next_request()? {
+        let seq = request.seq;
+        let result = match request.call {
+            Some(Call::Bye(_)) => return Ok(()),
+            Some(call) => served.handle(call),
+            None => Err("a request without a call".to_owned()),
+        };
+        match result {
+            Ok(Some(answer)) => send(&mut output, seq, answer)?,
+            Ok(None) => {}
+            Err(why) => {
+                send(
+                    &mut output,
+                    seq,
+                    Answer::Error(lp::Error {
+                        message: why.clone(),
+                    }),
+                )?;
+                return Err(ServeError::Request { seq, why });
+            }
+        }
+    }
+    Ok(())
+}
