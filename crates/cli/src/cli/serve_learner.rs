@@ -6,7 +6,7 @@ use std::net::{TcpListener, TcpStream};
 
 use anyhow::{Context, Result};
 use clap::Args;
-use pushlearn_cli::external::server::{serve, Identity, Requests, ServeError};
+use pushlearn_cli::external::server::{serve, stdout_file, Identity, Requests, ServeError};
 use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
 
 /// Serve a built-in model over the learner protocol, so that any driver
@@ -34,7 +34,7 @@ pub struct ServeLearnerArgs {
 pub fn run(args: ServeLearnerArgs) -> Result<()> {
     match &args.listen {
         None => {
-            let stdout = std::io::stdout().lock();
+            let stdout = stdout_file().context("standard output")?;
             serve_one(&args, std::io::stdin().lock(), BufWriter::new(stdout))
                 .context("serving the learner protocol on stdin/stdout")
         }

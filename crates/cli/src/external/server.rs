@@ -220,6 +220,20 @@ fn send(output: &mut impl Write, seq: u64, answer: Answer) -> Result<(), ServeEr
         .map_err(ServeError::Write)
 }
 
+/// Standard output as a plain file, for writing frames: `std::io::stdout()`
+/// is line-buffered, which splits a frame at every 0x0a byte (a common
+/// protobuf tag) into separate writes, each waking the reader. Wrap the file
+/// in a `BufWriter`: [`serve`] flushes once per reply.
+///
+/// # Errors
+/// The descriptor cannot be duplicated.
+pub fn stdout_file() -> std::io::Result<std::fs::File> {
+    use std::os::fd::AsFd;
+    Ok(std::fs::File::from(
+        std::io::stdout().as_fd().try_clone_to_owned()?,
+    ))
+}
+
 /// The requests of one driver, read frame by frame.
 pub struct Requests<R> {
     input: R,

@@ -1,0 +1,152 @@
+//! The learner protocol's cost per world message (docs/performance.md §9):
+//! one Update and one Predict, the driver's calls on every training message,
+//! on a trivial learner (the actuator moves by the action, blocks stay), once
+//! in-process and once behind the protocol — a child on stdin/stdout (this
+//! benchmark's own executable, started as the learner) and a learner daemon
+//! on loopback TCP. The difference is what the protocol adds.
+
+use std::hint::black_box;
+use std::net::TcpListener;
+use std::time::Duration;
+
+use criterion::Criterion;
+use learner::features::{parse_frame, ActuatorYaw, ParseError};
+use learner::{Action, Frame, Model, ModelStats, Observation, Poses, Target, TargetError};
+use pushlearn_cli::external::server::{serve, Identity, Requests};
+use pushlearn_cli::external::{ExternalModel, LearnerSpec, Source};
+use serde::{Deserialize, Serialize};
+
+/// Set in the child this benchmark starts as its learner.
+const AS_LEARNER: &str = "PUSHLEARN_BENCH_AS_LEARNER";
+
+/// The trivial learner: no memory, one addition per prediction.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Still {
+    training: bool,
+}
+
+impl Model for Still {
+    type World = Poses;
+    fn parse(&self, frame: &Frame) -> Result<Poses, ParseError> {
+        parse_frame(frame, ActuatorYaw::Keep)
+    }
+    fn poses(world: &Poses) -> Poses {
+        world.clone()
+    }
+    fn reset_objects(&mut self, _: &Poses) {}
+    fn update(&mut self, _: &Poses, _: Action) {}
+    fn predict(&self, world: &Poses, action: Action) -> Poses {
+        let mut next = world.clone();
+        next.actuator.x += action.vx * 0.01;
+        next.actuator.y += action.vy * 0.01;
+        next
+    }
+    fn set_training(&mut self, on: bool) {
+        self.training = on;
+    }
+    fn is_training(&self) -> bool {
+        self.training
+    }
+    fn set_target(&mut self, _: Option<Target>) -> Result<(), TargetError> {
+        Ok(())
+    }
+    fn has_target(&self) -> bool {
+        false
+    }
+    fn act(&mut self, _: &mut dyn rand::Rng) -> Action {
+        Action::ZERO
+    }
+    fn stats(&self) -> ModelStats {
+        ModelStats::default()
+    }
+}
+
+fn identity() -> Identity {
+    Identity {
+        name: "still".into(),
+        version: "bench".into(),
+        ignores_actuator_yaw: false,
+    }
+}
+
+/// Serves [`Still`] to one driver on `input`/`output`.
+fn serve_still(input: impl std::io::Read, output: impl std::io::Write) {
+    let mut requests = Requests::new(input);
+    if let Ok((seq, _)) = requests.start() {
+        let _ = serve(Still::default(), &identity(), seq, requests, output);
+    }
+}
+
+/// A world message as the world sends it: the actuator and the blue block.
+fn frame(y: f64) -> Frame {
+    let body = |name: &str, id, x, y, z| Observation {
+        name: name.into(),
+        id,
+        position: [x, y, z],
+        orientation: [0.0, 0.0, 0.0, 1.0],
+    };
+    Frame {
+        objects: vec![
+            body("actuator", 8, 0.0, y, 0.03),
+            body("blockA", 15, 0.0, 0.25, 0.05),
+        ],
+    }
+}
+
+/// One training message: parse, update, predict.
+fn message<M: Model>(model: &mut M, frame: &Frame) -> M::World {
+    let world = model.parse(frame).expect("parses");
+    model.update(&world, Action::new(0.0, 0.5));
+    model.predict(&world, Action::new(0.0, 0.5))
+}
+
+fn bench_external(c: &mut Criterion, name: &str, source: Source) {
+    let spec = LearnerSpec {
+        source,
+        timeout: Duration::from_secs(10),
+    };
+    let mut model = ExternalModel::connect(&spec, "push-task", 100).expect("the learner starts");
+    model.start_fold(1);
+    let f = frame(0.1);
+    model.reset_objects(&model.parse(&f).expect("parses"));
+    c.bench_function(name, |b| {
+        b.iter(|| black_box(message(&mut model, &f)));
+    });
+    assert!(model.failure().is_none(), "{:?}", model.failure());
+}
+
+fn main() {
+    if std::env::var_os(AS_LEARNER).is_some() {
+        let stdout = pushlearn_cli::external::server::stdout_file().expect("stdout");
+        serve_still(std::io::stdin().lock(), std::io::BufWriter::new(stdout));
+        return;
+    }
+    // Without plots: criterion's plotters backend needs a system font.
+    let mut c = Criterion::default().without_plots().configure_from_args();
+    let f = frame(0.1);
+    let mut still = Still::default();
+    c.bench_function("message/in-process", |b| {
+        b.iter(|| black_box(message(&mut still, &f)));
+    });
+
+    let exe = std::env::current_exe().expect("the benchmark's own path");
+    let command = format!("{AS_LEARNER}=1 '{}'", exe.display());
+    bench_external(
+        &mut c,
+        "message/child stdin-stdout",
+        Source::Command(command),
+    );
+
+    let listener = TcpListener::bind("127.0.0.1:0").expect("a loopback port");
+    let addr = listener.local_addr().expect("bound").to_string();
+    std::thread::spawn(move || {
+        for stream in listener.incoming().flatten() {
+            let _ = stream.set_nodelay(true);
+            if let Ok(reader) = stream.try_clone() {
+                std::thread::spawn(move || serve_still(reader, std::io::BufWriter::new(stream)));
+            }
+        }
+    });
+    bench_external(&mut c, "message/daemon tcp", Source::Connect(addr));
+    c.final_summary();
+}
