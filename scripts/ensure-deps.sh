@@ -3,8 +3,10 @@
 # toolchain, and nothing that is already there. Safe to run any number of times.
 #
 #   scripts/ensure-deps.sh            system packages for building and running
-#   scripts/ensure-deps.sh --test     also what the test suite needs (Python client,
-#                                     Debian's chromium for the viewer's browser test)
+#   scripts/ensure-deps.sh --test     also what the test suite needs: Debian's chromium
+#                                     (the viewer's browser test) and the Python package's
+#                                     virtual environment .venv (maturin, pytest, numpy,
+#                                     scikit-learn, protobuf, ruff, mypy)
 set -euo pipefail
 
 want_test=0
@@ -24,6 +26,11 @@ if ! ls /usr/lib/llvm-*/lib/libclang.so* /usr/lib/x86_64-linux-gnu/libclang*.so*
   missing+=(libclang-dev)
 fi
 command -v cc >/dev/null 2>&1 || missing+=(gcc)
+# The Python package (python/, built by maturin) and its tests.
+if [ "$want_test" = 1 ]; then
+  command -v python3 >/dev/null 2>&1 || missing+=(python3)
+  if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1; then missing+=(python3-venv); fi
+fi
 
 # The viewer's end-to-end test drives headless Chromium (tests/e2e/browser.rs).
 if [ "$want_test" = 1 ] && [ -z "${PUSHLEARN_CHROMIUM:-}" ] && ! command -v chromium >/dev/null 2>&1; then
@@ -44,9 +51,16 @@ if [ "$(pkg-config --variable=precision ode)" != "dDOUBLE" ]; then
   exit 1
 fi
 
+# The Python side lives in a virtual environment of its own, so nothing is
+# installed into the system's Python: .venv at the repository's root.
 if [ "$want_test" = 1 ]; then
-  if ! python3 -c 'import google.protobuf' >/dev/null 2>&1; then
-    echo "ensure-deps: installing the Python 'protobuf' package for examples/python"
-    python3 -m pip install --quiet -r examples/python/requirements.txt
+  if [ ! -x .venv/bin/python ]; then
+    echo "ensure-deps: creating the Python virtual environment .venv"
+    python3 -m venv .venv
+  fi
+  if ! .venv/bin/python -c 'import maturin, pytest, numpy, sklearn, google.protobuf, ruff, mypy' >/dev/null 2>&1; then
+    echo "ensure-deps: installing the Python test packages into .venv"
+    .venv/bin/python -m pip install --quiet --upgrade pip
+    .venv/bin/python -m pip install --quiet -r python/requirements-test.txt
   fi
 fi

@@ -47,10 +47,16 @@ impl std::fmt::Display for LearnerChoice {
         use crate::external::Source;
         match self {
             LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
-            LearnerChoice::External(spec) => match &spec.source {
-                Source::Command(command) => write!(f, "--learner '{command}'"),
-                Source::Connect(addr) => write!(f, "--learner-connect {addr}"),
-            },
+            LearnerChoice::External(spec) => {
+                match &spec.source {
+                    Source::Command(command) => write!(f, "--learner '{command}'")?,
+                    Source::Connect(addr) => write!(f, "--learner-connect {addr}")?,
+                }
+                if spec.timeout != crate::external::DEFAULT_TIMEOUT {
+                    write!(f, " --learner-timeout {}", spec.timeout.as_secs_f64())?;
+                }
+                Ok(())
+            }
         }
     }
 }

@@ -68,6 +68,25 @@ pub struct ReproduceArgs {
 }
 
 /// Runs `pushlearn reproduce`.
+/// The baselines are Python learners (`manifest::BASELINES`): with the
+/// repository's virtual environment (`.venv`, made by
+/// `scripts/ensure-deps.sh --test`, the package installed into it) first on
+/// PATH, their `python3` is the one that has the package. Called before any
+/// thread starts.
+fn use_repository_python(root: &std::path::Path) {
+    let bin = root.join(".venv").join("bin");
+    if !bin.join("python3").is_file() {
+        return;
+    }
+    let mut paths = vec![bin];
+    if let Some(old) = std::env::var_os("PATH") {
+        paths.extend(std::env::split_paths(&old));
+    }
+    if let Ok(joined) = std::env::join_paths(paths) {
+        std::env::set_var("PATH", joined);
+    }
+}
+
 pub fn run(args: ReproduceArgs) -> Result<()> {
     super::experiment::end_worlds_on_signal();
     let root = &args.root;
@@ -94,6 +113,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         manifest::full()
     };
     let dir = root.join(if args.quick { QUICK_DIR } else { RESULTS_DIR });
+    if !args.page_only {
+        use_repository_python(root);
+    }
     let results = if args.page_only {
         reproduce::load(&entries, &dir)?
     } else {

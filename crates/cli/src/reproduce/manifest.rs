@@ -183,6 +183,26 @@ fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
     }
 }
 
+/// The baselines a reviewer asks for (`python/pushlearn/baselines.py`):
+/// (document name, learner class, seconds its slowest answer may take),
+/// served from the Python package. A GP's fit when training ends takes tens
+/// of seconds (`baselines.py`: at most 600 samples, O(n³)).
+pub const BASELINES: [(&str, &str, u64); 2] = [
+    ("baseline-knn", "pushlearn.baselines:KnnLearner", 60),
+    ("baseline-gp", "pushlearn.baselines:GpLearner", 600),
+];
+
+/// The numbers of training runs of the baseline table.
+pub const BASELINE_RUNS: [usize; 4] = [1, 3, 10, 30];
+
+/// The command that serves a learner class of the Python package on
+/// stdin/stdout (`python -m pushlearn.serve`); `python3` is the one on
+/// PATH, which `pushlearn reproduce` starts with the repository's `.venv`.
+#[must_use]
+pub fn python_learner(class: &str) -> String {
+    format!("python3 -m pushlearn.serve {class}")
+}
+
 /// Every experiment behind `docs/results.md`, in the order they run:
 /// experiments that share a world (scene, mode, latency) are adjacent, so
 /// that both models' runs are simulated once.
@@ -200,6 +220,26 @@ pub fn full() -> Vec<Entry> {
             .latency_max(latency);
             // Only the default setting's figures go on the page.
             entries.push(entry.with_figures(suffix.is_empty()));
+        }
+        if suffix.is_empty() {
+            // Beside the default curves: the same world, so the baselines'
+            // runs are the curves' recorded ones.
+            for (name, class, timeout) in BASELINES {
+                let learner = crate::external::LearnerSpec {
+                    source: crate::external::Source::Command(python_learner(class)),
+                    timeout: std::time::Duration::from_secs(timeout),
+                };
+                entries.push(Entry::new(
+                    name,
+                    Spec::PushTask {
+                        model: crate::models::LearnerChoice::External(learner),
+                        options: ModelOptions::default(),
+                        variant: Variant::Random,
+                        train_runs: BASELINE_RUNS.to_vec(),
+                        folds: 20,
+                    },
+                ));
+            }
         }
     }
     for seed in SPREAD_SEEDS {

@@ -56,6 +56,8 @@ enum Block<'a> {
     ActuatorFolds(&'a str),
     /// `selectors`: the interaction model's selectors on the draft protocol.
     Selectors,
+    /// The baselines beside the built-in models (`manifest::BASELINES`).
+    Baselines,
     /// `commands`: every experiment's stand-alone command.
     Commands,
 }
@@ -83,6 +85,7 @@ impl<'a> Block<'a> {
             "latency" => Block::Latency,
             "actuator-folds" => Block::ActuatorFolds(name(arg)?),
             "selectors" => Block::Selectors,
+            "baselines" => Block::Baselines,
             "commands" => Block::Commands,
             other => return Err(format!("unknown block `{other}`")),
         };
@@ -211,6 +214,7 @@ fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
         Block::Latency => latency(results),
         Block::ActuatorFolds(name) => actuator_folds(push_doc(results, name)?),
         Block::Selectors => selectors(results),
+        Block::Baselines => baselines(results),
         Block::Commands => Ok(commands(results.produced.iter().map(|p| &p.entry))),
     }
 }
@@ -491,6 +495,42 @@ fn curves(results: &Reproduction, model: ModelKind) -> Result<String, String> {
             out.push_str(&line);
         }
         out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Gate, interaction, kNN and GP at the baseline table's training runs, all
+/// 21 positions: one row per learner and N.
+fn baselines(results: &Reproduction) -> Result<String, String> {
+    let mut learners = vec![
+        "push-task-gate".to_owned(),
+        "push-task-interaction".to_owned(),
+    ];
+    learners.extend(
+        super::manifest::BASELINES
+            .iter()
+            .map(|(name, ..)| (*name).to_owned()),
+    );
+    let mut out = String::from(
+        "| learner | N | block position [m] | block orientation [rad] | actuator [m] | folds |\n|---|---|---|---|---|---|\n",
+    );
+    for name in &learners {
+        let report = push_doc(results, name)?;
+        let label = match &report.setup.learner {
+            Some(l) => format!("{} {} (Python)", report.setup.model, l.version),
+            None => format!("{} (thesis model, Rust)", report.setup.model),
+        };
+        for n in super::manifest::BASELINE_RUNS {
+            let e = entry_at(report, name, n)?;
+            let _ = writeln!(
+                out,
+                "| {label} | {n} | {} | {} | {} | {} |",
+                ms(e.blue.block_pos_err),
+                ms(e.blue.block_ori_err),
+                ms(e.blue.actuator_pos_err),
+                report.folds
+            );
+        }
     }
     Ok(out)
 }
