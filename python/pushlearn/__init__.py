@@ -6,6 +6,8 @@ baselines, ``numpy`` and ``scikit-learn``):
 * :class:`Learner`, :func:`serve`, :func:`serve_tcp`: write a learner and
   serve it to the experiment driver over the learner protocol
   (``proto/learner.proto``; :mod:`pushlearn.learner`);
+* :class:`SimClient`: a blocking client for the world daemon
+  ``pushlearn-sim`` (:mod:`pushlearn.sim`);
 * :mod:`pushlearn.baselines`: k-nearest-neighbour and Gaussian-process
   forward models as learners;
 * :mod:`pushlearn.models`: the Rust gate and interaction models as learners.
@@ -34,6 +36,7 @@ from .learner import (
     serve,
     serve_tcp,
 )
+from .sim import SimClient, SimError, WorldHello
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._native import Aitm, GateModel, InteractionModel
@@ -51,9 +54,12 @@ __all__ = [
     "Pose",
     "Prediction",
     "ProtocolError",
+    "SimClient",
+    "SimError",
     "State",
     "Target",
     "TargetRefused",
+    "WorldHello",
     "__version__",
     "serve",
     "serve_tcp",

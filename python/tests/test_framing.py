@@ -23,7 +23,8 @@ def move(seq: int, vy: float) -> object:
     return pushlearn_pb2.ClientMessage(
         seq=seq,
         actuator=pushlearn_pb2.ActuatorCommand(
-            cmd=pushlearn_pb2.ActuatorCommand.MOVE, direction=pushlearn_pb2.Vector3d(y=vy)
+            cmd=pushlearn_pb2.ActuatorCommand.MOVE,
+            direction=pushlearn_pb2.Vector3d(y=vy),
         ),
     )
 
@@ -88,7 +89,10 @@ class Trickle(io.RawIOBase):
 
 def test_short_reads_are_completed() -> None:
     message = move(7, 0.5)
-    assert read_frame(Trickle(encode_frame(message)), pushlearn_pb2.ClientMessage) == message
+    assert (
+        read_frame(Trickle(encode_frame(message)), pushlearn_pb2.ClientMessage)
+        == message
+    )
 
 
 def test_a_truncated_prefix_is_an_error() -> None:
@@ -119,13 +123,18 @@ def test_the_largest_length_is_accepted() -> None:
 
 def test_text_from_another_protocol_is_named() -> None:
     with pytest.raises(ProtocolError, match="'HTTP'.*another protocol"):
-        read_frame(io.BytesIO(b"HTTP/1.1 400 Bad Request\r\n"), pushlearn_pb2.ServerMessage)
+        read_frame(
+            io.BytesIO(b"HTTP/1.1 400 Bad Request\r\n"), pushlearn_pb2.ServerMessage
+        )
 
 
 def test_an_undecodable_body_is_an_error() -> None:
     garbage = b"\xff\xff\xff\xff\xff"
     with pytest.raises(ProtocolError, match="5 bytes does not decode as ServerMessage"):
-        read_frame(io.BytesIO(struct.pack(">I", len(garbage)) + garbage), pushlearn_pb2.ServerMessage)
+        read_frame(
+            io.BytesIO(struct.pack(">I", len(garbage)) + garbage),
+            pushlearn_pb2.ServerMessage,
+        )
 
 
 def test_an_oversized_message_is_not_written() -> None:
