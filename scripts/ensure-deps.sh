@@ -3,7 +3,7 @@
 # toolchain, and nothing that is already there. Safe to run any number of times.
 #
 #   scripts/ensure-deps.sh            system packages for building and running
-#   scripts/ensure-deps.sh --test     also what the test suite needs (Python client,
+#   scripts/ensure-deps.sh --test     also what the test suite needs (Python protobuf,
 #                                     Debian's chromium for the viewer's browser test)
 set -euo pipefail
 
@@ -46,7 +46,7 @@ fi
 
 if [ "$want_test" = 1 ]; then
   if ! python3 -c 'import google.protobuf' >/dev/null 2>&1; then
-    echo "ensure-deps: installing the Python 'protobuf' package for examples/python"
-    python3 -m pip install --quiet -r examples/python/requirements.txt
+    echo "ensure-deps: installing the Python 'protobuf' package for the Python package (python/)"
+    python3 -m pip install --quiet 'protobuf>=4.21'
   fi
 fi
