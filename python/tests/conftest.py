@@ -10,6 +10,7 @@ the skip into a failure.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -168,3 +169,16 @@ def start_sim(sim_bin: Path, tmp_path: Path) -> Iterator[Callable[..., Daemon]]:
     for daemon in started:
         daemon.child.stop()
         sys.stderr.write(daemon.child.log()[-4000:])
+
+
+def sweep_centre(sim_bin: Path) -> list[str]:
+    """The calibration sweep's run from x0 = 0, to 4 decimals."""
+    done = subprocess.run(
+        [str(sim_bin), "sweep", "--json"],
+        capture_output=True,
+        timeout=LIMIT,
+        check=True,
+    )
+    rows = json.loads(done.stdout)
+    centre = next(row for row in rows if row["x0"] == 0.0)
+    return [f"{centre[key]:.4f}" for key in ("block_x", "block_y", "block_yaw")]

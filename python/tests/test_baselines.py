@@ -18,6 +18,7 @@ from driver import (
     observed,
     recent,
 )
+from synthetic import MESSAGES, PUSH, synthetic_run, synthetic_state
 
 from pushlearn import Prediction, State
 from pushlearn._pb import learner_pb2
@@ -30,46 +31,7 @@ from pushlearn.baselines import (
     block_features,
     wrap_angle,
 )
-from pushlearn.learner import Body, Pose, _stats_to_proto
-
-PUSH = (0.0, 0.5)
-STEP = 0.005  # 0.5 m/s for 1/100 s
-MESSAGES = 150
-
-
-def synthetic_state(
-    actuator: tuple[float, float], block: tuple[float, float, float]
-) -> State:
-    """A world state with the actuator and the blue block (and a ghost to ignore)."""
-
-    def q(theta: float) -> tuple[float, float, float, float]:
-        return (0.0, 0.0, math.sin(theta / 2), math.cos(theta / 2))
-
-    return State(
-        [
-            Body("actuator", 8, (*actuator, 0.03), q(0.0)),
-            Body("blockA", 15, (block[0], block[1], 0.05), q(block[2])),
-            Body("blockAShadow", 15, (5.0, 5.0, 0.05), q(0.0)),
-        ]
-    )
-
-
-def synthetic_run(x0: float, messages: int = MESSAGES) -> list[State]:
-    """A straight push from (x0, 0): the block moves with the actuator while in contact.
-
-    Contact: the actuator within 0.06 of the block's centre line and its
-    front 0.05 behind the block's centre. Then the block's Δy equals the
-    actuator's; it never turns.
-    """
-    ax, ay = x0, 0.0
-    bx, by = 0.0, 0.25
-    states = [synthetic_state((ax, ay), (bx, by, 0.0))]
-    for _ in range(messages):
-        ay += STEP
-        if abs(ax - bx) < 0.06 and by - ay <= 0.05:
-            by = ay + 0.05
-        states.append(synthetic_state((ax, ay), (bx, by, 0.0)))
-    return states
+from pushlearn.learner import Pose, _stats_to_proto
 
 
 def train(learner: BaselineLearner, starts: list[float], seed: int = 7) -> None:

@@ -8,8 +8,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from conftest import LIMIT, REPO_ROOT, Daemon, python_env
-from test_sim import sweep_centre
+from conftest import LIMIT, REPO_ROOT, Daemon, python_env, sweep_centre
 
 EXAMPLE = REPO_ROOT / "examples" / "python" / "push.py"
 

@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import itertools
-import json
 import socket
-import subprocess
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from conftest import LIMIT, Daemon
+from conftest import Daemon, sweep_centre
 
 from pushlearn import ProtocolError, SimClient, SimError, State
 
@@ -33,19 +31,6 @@ def push_from_start_line(world: SimClient, x0: float = 0.0) -> State:
 def blue_pose(state: State) -> list[str]:
     x, y, theta = state.blocks[15]
     return [f"{x:.4f}", f"{y:.4f}", f"{theta:.4f}"]
-
-
-def sweep_centre(sim_bin: Path) -> list[str]:
-    """The calibration sweep's run from x0 = 0, to 4 decimals."""
-    done = subprocess.run(
-        [str(sim_bin), "sweep", "--json"],
-        capture_output=True,
-        timeout=LIMIT,
-        check=True,
-    )
-    rows = json.loads(done.stdout)
-    centre = next(row for row in rows if row["x0"] == 0.0)
-    return [f"{centre[key]:.4f}" for key in ("block_x", "block_y", "block_yaw")]
 
 
 def test_a_lockstep_push_reproduces_the_calibration_sweep(
