@@ -616,7 +616,6 @@ class _Stop(Exception):
         self.status = status
 
 
-_ONE_WAY = {"new_fold", "reset", "update", "set_training"}
 _CALL_NAMES = {
     "start": "Start",
     "new_fold": "NewFold",
@@ -736,14 +735,9 @@ def _check_act(result: Any) -> Any:
         raise ValueError(
             f"act() returned {result!r}, expected ((vx, vy), has_target)"
         ) from None
-    if not isinstance(has_target, bool):
-        try:
-            import numpy
-
-            if isinstance(has_target, numpy.bool_):
-                has_target = bool(has_target)
-        except ImportError:  # pragma: no cover - numpy is optional here
-            pass
+    numpy = sys.modules.get("numpy")  # a numpy bool can only come from a loaded numpy
+    if numpy is not None and isinstance(has_target, numpy.bool_):
+        has_target = bool(has_target)
     if not isinstance(has_target, bool):
         raise TypeError(f"act() returned has_target = {has_target!r}, expected a bool")
     return learner_pb2.ActionReply(
@@ -841,8 +835,8 @@ class _Session:
         if seq <= self._last_seq:
             raise self._fail(
                 seq,
-                f"ProtocolError: request seq {seq} does not increase (the previous was "
-                f"{self._last_seq})",
+                f"ProtocolError: request seq {seq} is not greater than the previous one "
+                f"({self._last_seq}): seqs start at 1 and increase",
             )
         self._last_seq = seq
         if call is None:

@@ -312,7 +312,10 @@ def test_a_seq_that_does_not_increase_is_refused() -> None:
     ) + encode_frame(learner_pb2.Request(seq=5, act=learner_pb2.Act()))
     out = io.BytesIO()
     assert serve_recorder(data, out) == 1
-    assert "seq 5 does not increase" in error_of(decode_replies(out.getvalue()))[1]
+    assert (
+        "seq 5 is not greater than the previous one (5)"
+        in error_of(decode_replies(out.getvalue()))[1]
+    )
 
 
 def serve_recorder(data: bytes, out: io.BytesIO) -> int:
@@ -652,3 +655,31 @@ def test_a_learner_server_runs_sessions_concurrently() -> None:
 def test_a_learner_server_needs_a_factory() -> None:
     with pytest.raises(TypeError, match="not a learner instance"):
         LearnerServer(Recorder())  # type: ignore[arg-type]
+
+
+class NumpyReplies(Recorder):
+    """Returns numpy scalars, as learners built on numpy naturally do."""
+
+    def act(self) -> Any:
+        import numpy as np
+
+        return (np.float64(0.25), np.float32(-0.5)), np.bool_(True)
+
+    def stats(self) -> Any:
+        import numpy as np
+
+        return {"maps": {"m": {"nodes": np.int64(3)}}, "extra": {"x": np.float64(1.5)}}
+
+
+def test_numpy_scalars_are_accepted_in_replies() -> None:
+    script = Script()
+    script.start()
+    act = script.add(act=learner_pb2.Act())
+    stats = script.add(get_stats=learner_pb2.GetStats())
+    status, replies = run(NumpyReplies(), script)
+    assert status == 0
+    by_seq = {r.seq: r for r in replies}
+    assert by_seq[act].action.action.vx == 0.25 and by_seq[act].action.action.vy == -0.5
+    assert by_seq[act].action.has_target is True
+    assert by_seq[stats].stats.maps["m"].nodes == 3
+    assert by_seq[stats].stats.extra["x"] == 1.5
