@@ -683,3 +683,84 @@ def test_numpy_scalars_are_accepted_in_replies() -> None:
     assert by_seq[act].action.has_target is True
     assert by_seq[stats].stats.maps["m"].nodes == 3
     assert by_seq[stats].stats.extra["x"] == 1.5
+
+
+def read_reply_within(stream: Any, seconds: float = LIMIT) -> Any:
+    """The next Reply, failing the test instead of hanging if none comes."""
+    result: list[Any] = []
+    reader = threading.Thread(
+        target=lambda: result.append(read_frame(stream, learner_pb2.Reply))
+    )
+    reader.daemon = True
+    reader.start()
+    reader.join(seconds)
+    assert result, f"no reply within {seconds} s (was it flushed?)"
+    return result[0]
+
+
+def test_replies_are_flushed_before_the_next_request_over_pipes() -> None:
+    """The driver waits for each answer: serve() must not wait for more input first."""
+    import os
+
+    from pushlearn import serve
+    from pushlearn.framing import write_frame
+
+    to_learner_r, to_learner_w = os.pipe()
+    to_driver_r, to_driver_w = os.pipe()
+    with (
+        os.fdopen(to_learner_r, "rb") as learner_in,
+        os.fdopen(to_driver_w, "wb") as learner_out,
+        os.fdopen(to_learner_w, "wb") as driver_out,
+        os.fdopen(to_driver_r, "rb") as driver_in,
+    ):
+        status: list[int] = []
+        server = threading.Thread(
+            target=lambda: status.append(
+                serve(Recorder(), stdin=learner_in, stdout=learner_out)
+            )
+        )
+        server.start()
+        write_frame(driver_out, request_of(1, **start_call()))
+        assert read_reply_within(driver_in).hello.name == "recorder"
+        predict = learner_pb2.Predict(
+            **{"from": observed(world((0.0, 0.0))), "action": action(0, 0.5)}
+        )
+        write_frame(driver_out, request_of(2, predict=predict))
+        assert read_reply_within(driver_in).seq == 2
+        write_frame(driver_out, request_of(3, bye=learner_pb2.Bye()))
+        server.join(LIMIT)
+        assert status == [0]
+
+
+def request_of(seq: int, **call: Any) -> Any:
+    return learner_pb2.Request(seq=seq, **call)
+
+
+def test_replies_are_flushed_by_the_served_process() -> None:
+    from pushlearn.framing import write_frame
+
+    process = subprocess.Popen(
+        [sys.executable, "-m", "pushlearn.serve", "sample_learners:Printer"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        env=python_env(),
+        cwd=TESTS_DIR,
+    )
+    assert process.stdin is not None and process.stdout is not None
+    try:
+        write_frame(process.stdin, request_of(1, **start_call()))
+        assert read_reply_within(process.stdout).hello.name == "printer"
+        predict = learner_pb2.Predict(
+            **{"from": observed(world((0.0, 0.0))), "action": action(0, 0.5)}
+        )
+        write_frame(process.stdin, request_of(2, predict=predict))
+        assert read_reply_within(process.stdout).prediction.bodies[
+            0
+        ].y == pytest.approx(0.005)
+        process.stdin.close()  # end of input: the learner exits normally
+        assert process.wait(LIMIT) == 0
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
