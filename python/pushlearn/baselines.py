@@ -57,7 +57,7 @@ deviation (scikit-learn's ``StandardScaler``; a constant input is left
 unscaled). Hyper-parameters are chosen on the training samples only, never
 on test positions:
 
-* **kNN**: ``k`` in 1 … ``max_k`` (default 20, at most the smallest training
+* **kNN**: ``k`` in 1 … ``max_k`` (default 50, at most the smallest training
   fold) and ``weights`` ``"uniform"`` or ``"distance"`` by cross-validation,
   minimising the mean squared error of the outputs scaled by their training
   standard deviation. The folds are :class:`~sklearn.model_selection.GroupKFold`
@@ -205,6 +205,7 @@ class BaselineLearner(Learner):
         self._samples: dict[int, _BlockSamples] = {}
         self._actuator_steps: list[tuple[float, float, float, float]] = []  # u, Δp
         self._updates = 0
+        self._training_runs: set[int] = set()
         self._dirty = False
         self._models: dict[int, Any] = {}
         self._used: dict[int, int] = {}
@@ -278,7 +279,7 @@ class BaselineLearner(Learner):
             }
         extra: dict[str, float] = {
             "actuator_gain": self._gain,
-            "runs": float(self._run + 1),
+            "training_runs": float(len(self._training_runs)),
         }
         labels: dict[str, str] = {}
         self._describe_fit(extra, labels)
@@ -289,6 +290,7 @@ class BaselineLearner(Learner):
     def _record(self, before: StateLike, after: StateLike, action: Action) -> None:
         old, new = before.poses(), after.poses()
         self._updates += 1
+        self._training_runs.add(self._run)
         a0, a1 = old[ACTUATOR_ID], new[ACTUATOR_ID]
         dt = 1.0 / self.publish_rate_hz
         self._actuator_steps.append(
@@ -360,7 +362,7 @@ class KnnLearner(BaselineLearner):
 
     name: ClassVar[str] = "knn"
 
-    def __init__(self, max_k: int = 20) -> None:
+    def __init__(self, max_k: int = 50) -> None:
         if max_k < 1:
             raise ValueError(f"max_k must be at least 1, got {max_k}")
         self.max_k = max_k
@@ -374,7 +376,7 @@ class KnnLearner(BaselineLearner):
         """``[--max-k K]``."""
         parser = ArgumentParser(prog="knn", description="k-nearest-neighbour baseline")
         parser.add_argument(
-            "--max-k", type=int, default=20, help="largest k tried (default 20)"
+            "--max-k", type=int, default=50, help="largest k tried (default 50)"
         )
         args = parser.parse_args(argv)
         try:
