@@ -22,6 +22,7 @@ import importlib
 import importlib.util
 import os
 import sys
+import traceback
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -77,8 +78,8 @@ def _import(module_name: str) -> Any:
 def load_factory(spec: str, argv: list[str]) -> Callable[[], Learner]:
     """Imports ``MODULE:CLASS`` and returns a function making the learner from ``argv``.
 
-    The import and the argument parsing happen here, once, so that a wrong
-    name or option fails before anything is served.
+    A wrong name raises :class:`UsageError` here; the options are parsed
+    (and can raise it) each time the function makes a learner.
     """
     module_name, sep, attribute = spec.partition(":")
     if not sep or not module_name or not attribute:
@@ -94,7 +95,6 @@ def load_factory(spec: str, argv: list[str]) -> Callable[[], Learner]:
             ) from None
     if isinstance(target, type) and issubclass(target, Learner):
         cls = target
-        cls.from_args(list(argv))  # fail now on a bad command line
         return lambda: cls.from_args(list(argv))
     if isinstance(target, type):
         raise UsageError(
@@ -164,8 +164,22 @@ def _help() -> int:
     return 0
 
 
+def _raising(error: BaseException) -> Callable[[], Learner]:
+    def make() -> Learner:
+        raise error
+
+    return make
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Runs the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status."""
+    """Runs the command line ``argv`` (default ``sys.argv[1:]``); returns the exit status.
+
+    The learner is made once before serving, so that a wrong option exits at
+    once with status 2. On stdin/stdout that learner is the one served; if
+    making it fails otherwise, the error is logged and also sent to the
+    driver as the answer to its Start (status 1). With ``--listen`` it is
+    only a trial: every connection gets a fresh learner.
+    """
     args = list(sys.argv[1:] if argv is None else argv)
     try:
         spec, listen, rest = _split(args)
@@ -176,8 +190,26 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as err:
         print(f"pushlearn.serve: {err}\n{USAGE}", file=sys.stderr)
         return 2
+    except Exception:  # noqa: BLE001  (the user's module failed: show where)
+        print(f"pushlearn.serve: importing {spec} failed:", file=sys.stderr)
+        traceback.print_exc(file=sys.stderr)
+        return 1
+    try:
+        learner = factory()
+    except UsageError as err:
+        print(f"pushlearn.serve: {err}\n{USAGE}", file=sys.stderr)
+        return 2
+    except Exception as err:  # noqa: BLE001  (reported, and sent to the driver)
+        print(
+            f"pushlearn.serve: cannot make the learner {spec}: {type(err).__name__}: {err}",
+            file=sys.stderr,
+        )
+        if address is not None:
+            return 1
+        serve(_raising(err))  # the driver learns why, in the answer to its Start
+        return 1
     if address is None:
-        return serve(factory)
+        return serve(learner)
     try:
         serve_tcp(factory, *address)
     except OSError as err:

@@ -107,3 +107,13 @@ class Broken(Recorder):
 def make_recorder() -> Recorder:
     """A factory function (not a class)."""
     return Recorder(step=2.0)
+
+
+class Unbuildable(Learner):
+    """Cannot be made (a missing model file, a missing extension, ...)."""
+
+    def __init__(self) -> None:
+        raise RuntimeError("no model file at /nowhere")
+
+    def new_fold(self, seed: int) -> None:
+        pass

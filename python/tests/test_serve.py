@@ -764,3 +764,46 @@ def test_replies_are_flushed_by_the_served_process() -> None:
         if process.poll() is None:
             process.kill()
             process.wait()
+
+
+def test_a_learner_that_cannot_be_made_is_reported_to_the_driver() -> None:
+    script = Script()
+    script.start()
+    done = serve_in_subprocess(["sample_learners:Unbuildable"], script)
+    assert done.returncode == 1
+    assert error_of(decode_replies(done.stdout)) == (
+        1,
+        "RuntimeError: no model file at /nowhere",
+    )
+    first_line = done.stderr.decode().splitlines()[0]
+    assert first_line == (
+        "pushlearn.serve: cannot make the learner sample_learners:Unbuildable: "
+        "RuntimeError: no model file at /nowhere"
+    )
+
+
+def test_a_learner_that_cannot_be_made_fails_even_without_a_driver() -> None:
+    done = serve_in_subprocess(
+        ["sample_learners:Unbuildable"], Script()
+    )  # no Start at all
+    assert done.returncode == 1
+    assert b"cannot make the learner" in done.stderr
+
+
+def test_a_daemon_whose_learner_cannot_be_made_does_not_start() -> None:
+    done = serve_in_subprocess(
+        ["sample_learners:Unbuildable", "--listen", "127.0.0.1:0"], Script()
+    )
+    assert done.returncode == 1
+    assert b"listening on" not in done.stdout
+    assert b"cannot make the learner" in done.stderr
+
+
+def test_a_module_that_fails_to_import_shows_where(tmp_path: Path) -> None:
+    source = tmp_path / "broken_module.py"
+    source.write_text("import no_such_dependency_here\n")
+    done = serve_in_subprocess([f"{source}:X"], Script())
+    stderr = done.stderr.decode()
+    assert done.returncode == 1
+    assert f"importing {source}:X failed" in stderr
+    assert "No module named 'no_such_dependency_here'" in stderr
