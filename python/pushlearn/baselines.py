@@ -82,6 +82,18 @@ on test positions:
   30 training runs would cost (4470 / 600)³ ≈ 400 times as much per
   evaluation, hours per fit.
 
+Because of this, a GP fit can take longer than the experiment driver's
+default ``--learner-timeout`` (30 s) for one answer: run the GP with, e.g.,
+``pushlearn experiment push-task --learner-timeout 300 --learner "python -m
+pushlearn.baselines gp"``, or lower ``--max-samples``.
+
+Statistics and logs
+-------------------
+``stats()`` reports the samples as maps, ``actuator_steps`` and
+``block/ID`` (``inserts``: samples recorded, ``nodes``: samples the last fit
+used). The chosen hyper-parameters are in :meth:`BaselineLearner.describe_fit`
+and, with ``--verbose``, logged to stderr at every fit.
+
 Everything is deterministic given the fold seed.
 """
 
@@ -193,9 +205,11 @@ class BaselineLearner(Learner):
     capabilities: ClassVar[frozenset[Capability]] = frozenset({Capability.FORWARD})
     version: ClassVar[str] = "0.1.0"
 
-    def __init__(self) -> None:
+    def __init__(self, *, verbose: bool = False) -> None:
         self.seed = 0
         """The fold's seed (from :meth:`new_fold`)."""
+        self.verbose = verbose
+        """Whether every fit logs its choices (:meth:`describe_fit`) to stderr."""
         self._clear()
 
     def _clear(self) -> None:
@@ -263,9 +277,15 @@ class BaselineLearner(Learner):
         return Prediction(out)
 
     def stats(self) -> dict[str, Any]:
-        """Sample counts per map (``actuator``, ``block/ID``) and the last fit's choices."""
+        """Sample counts as maps: ``actuator_steps`` and ``block/ID``.
+
+        ``update_calls`` counts the training updates, ``inserts`` the samples
+        recorded, ``nodes`` the samples the last fit used. No extras or
+        labels: the driver accepts those only in the built-in models' forms;
+        the fit's choices are in :meth:`describe_fit` (logged with ``verbose``).
+        """
         maps: dict[str, dict[str, int]] = {
-            "actuator": {
+            "actuator_steps": {
                 "update_calls": self._updates,
                 "inserts": len(self._actuator_steps),
                 "nodes": len(self._actuator_steps),
@@ -277,13 +297,21 @@ class BaselineLearner(Learner):
                 "inserts": len(samples.inputs),
                 "nodes": self._used.get(id_, 0),
             }
-        extra: dict[str, float] = {
-            "actuator_gain": self._gain,
-            "training_runs": float(len(self._training_runs)),
-        }
-        labels: dict[str, str] = {}
-        self._describe_fit(extra, labels)
-        return {"maps": maps, "extra": extra, "labels": labels}
+        return {"maps": maps}
+
+    @property
+    def actuator_gain(self) -> float:
+        """The fitted gain of the actuator's step (1 before any fit)."""
+        return self._gain
+
+    @property
+    def training_runs(self) -> int:
+        """How many runs (segments between resets) gave training samples this fold."""
+        return len(self._training_runs)
+
+    def describe_fit(self) -> list[str]:
+        """The last fit's choices, one line per block (empty before any fit)."""
+        return []
 
     # -- samples and fitting ---------------------------------------------------
 
@@ -321,6 +349,11 @@ class BaselineLearner(Learner):
             runs = np.asarray(samples.runs, dtype=np.int64)
             self._models[id_], self._used[id_] = self._fit_block(id_, x, y, runs)
         self._dirty = False
+        if self.verbose:
+            lines = [f"actuator gain {self._gain:.6f}", *self.describe_fit()]
+            for line in lines:
+                sys.stderr.write(f"{self.display_name} (seed {self.seed}): {line}\n")
+            sys.stderr.flush()
 
     def _fit_block(
         self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
@@ -328,8 +361,11 @@ class BaselineLearner(Learner):
         """A fitted predictor (``predict(x) -> changes``) and the number of samples it used."""
         raise NotImplementedError
 
-    def _describe_fit(self, extra: dict[str, float], labels: dict[str, str]) -> None:
-        """Adds the last fit's hyper-parameters to the statistics."""
+
+def _verbose_option(parser: ArgumentParser) -> None:
+    parser.add_argument(
+        "--verbose", action="store_true", help="log every fit's choices to stderr"
+    )
 
 
 def _scaler(x: Array) -> Any:
@@ -362,25 +398,26 @@ class KnnLearner(BaselineLearner):
 
     name: ClassVar[str] = "knn"
 
-    def __init__(self, max_k: int = 50) -> None:
+    def __init__(self, max_k: int = 50, *, verbose: bool = False) -> None:
         if max_k < 1:
             raise ValueError(f"max_k must be at least 1, got {max_k}")
         self.max_k = max_k
         """The largest ``k`` tried."""
         self.choices: dict[int, CvChoice] = {}
         """The last fit's cross-validation per block id."""
-        super().__init__()
+        super().__init__(verbose=verbose)
 
     @classmethod
     def from_args(cls, argv: list[str]) -> KnnLearner:
-        """``[--max-k K]``."""
+        """``[--max-k K] [--verbose]``."""
         parser = ArgumentParser(prog="knn", description="k-nearest-neighbour baseline")
         parser.add_argument(
             "--max-k", type=int, default=50, help="largest k tried (default 50)"
         )
+        _verbose_option(parser)
         args = parser.parse_args(argv)
         try:
-            return cls(max_k=args.max_k)
+            return cls(max_k=args.max_k, verbose=args.verbose)
         except ValueError as err:
             raise UsageError(f"knn: {err}") from None
 
@@ -447,11 +484,13 @@ class KnnLearner(BaselineLearner):
         ).fit(x, y)
         return model, len(x)
 
-    def _describe_fit(self, extra: dict[str, float], labels: dict[str, str]) -> None:
-        for id_, choice in sorted(self.choices.items()):
-            extra[f"k/{id_}"] = float(choice.k)
-            labels[f"weights/{id_}"] = choice.weights
-            labels[f"cv/{id_}"] = f"{choice.method} ({len(choice.splits)} folds)"
+    def describe_fit(self) -> list[str]:
+        """``block ID: k=… weights=… (method, folds, runs)`` per block of the last fit."""
+        return [
+            f"block {id_}: k={c.k} weights={c.weights} ({c.method}, {len(c.splits)} folds, "
+            f"{len(set(c.groups))} runs, {len(c.groups)} samples)"
+            for id_, c in sorted(self.choices.items())
+        ]
 
 
 class GpLearner(BaselineLearner):
@@ -461,7 +500,7 @@ class GpLearner(BaselineLearner):
 
     name: ClassVar[str] = "gp"
 
-    def __init__(self, max_samples: int = 600) -> None:
+    def __init__(self, max_samples: int = 600, *, verbose: bool = False) -> None:
         if max_samples < 1:
             raise ValueError(f"max_samples must be at least 1, got {max_samples}")
         self.max_samples = max_samples
@@ -470,11 +509,11 @@ class GpLearner(BaselineLearner):
         """The last fit's optimised kernel per block id."""
         self.subsamples: dict[int, list[int]] = {}
         """The sample indices the last fit used per block id."""
-        super().__init__()
+        super().__init__(verbose=verbose)
 
     @classmethod
     def from_args(cls, argv: list[str]) -> GpLearner:
-        """``[--max-samples N]``."""
+        """``[--max-samples N] [--verbose]``."""
         parser = ArgumentParser(prog="gp", description="Gaussian-process baseline")
         parser.add_argument(
             "--max-samples",
@@ -482,9 +521,10 @@ class GpLearner(BaselineLearner):
             default=600,
             help="samples per block a fit uses at most (default 600; the fit is O(n³))",
         )
+        _verbose_option(parser)
         args = parser.parse_args(argv)
         try:
-            return cls(max_samples=args.max_samples)
+            return cls(max_samples=args.max_samples, verbose=args.verbose)
         except ValueError as err:
             raise UsageError(f"gp: {err}") from None
 
@@ -535,10 +575,12 @@ class GpLearner(BaselineLearner):
         self.kernels[block_id] = str(gp.kernel_)
         return model, len(chosen)
 
-    def _describe_fit(self, extra: dict[str, float], labels: dict[str, str]) -> None:
-        for id_, kernel in sorted(self.kernels.items()):
-            labels[f"kernel/{id_}"] = kernel
-            extra[f"samples_used/{id_}"] = float(len(self.subsamples.get(id_, [])))
+    def describe_fit(self) -> list[str]:
+        """``block ID: N samples, kernel …`` per block of the last fit."""
+        return [
+            f"block {id_}: {len(self.subsamples.get(id_, []))} samples, kernel {kernel}"
+            for id_, kernel in sorted(self.kernels.items())
+        ]
 
 
 BASELINES: dict[str, type[BaselineLearner]] = {"knn": KnnLearner, "gp": GpLearner}

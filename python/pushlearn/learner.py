@@ -60,7 +60,8 @@ Rules :func:`serve` enforces
 * Replies are validated before they are sent: a prediction must hold a
   finite pose for exactly the actuator and the blocks of the state it was
   predicted from, an action two finite numbers, statistics the documented
-  shape. A violation is sent as an ``Error`` naming the problem (for a
+  shape. Every computed number is sent with presence (the schema's
+  ``optional double``), so a −0.0 keeps its sign. A violation is sent as an ``Error`` naming the problem (for a
   prediction, the body), so the driver never receives a malformed reply.
 * While serving on the process's own stdout, nothing but frames may reach
   it: :func:`serve` points file descriptor 1 at stderr for the duration (and
@@ -477,6 +478,10 @@ class Learner:
     """The learner's version, recorded in reports."""
     capabilities: ClassVar[frozenset[Capability]] = frozenset({Capability.FORWARD})
     """``{FORWARD}``, or ``{FORWARD, INVERSE}`` for a learner that implements :meth:`act`."""
+    ignores_actuator_yaw: ClassVar[bool] = False
+    """Whether the driver should read the actuator's yaw as 0 in its start-position
+    check and the poses it records (``Hello.ignores_actuator_yaw``), as the
+    thesis's gate model does; by default it uses the reported yaw."""
 
     task: str = ""
     """The task of the driver's Start (``"push-task"``, ``"constant-feedback"``,
@@ -575,6 +580,13 @@ class Learner:
         ``{"maps": {name: {"update_calls": int, "inserts": int, "nodes": int}},
         "extra": {name: float}, "labels": {name: str}}``; every part may be
         missing. The default reports nothing.
+
+        The driver reads them as a model's statistics: the map names of the
+        built-in models (``actuator``, ``gate``, ``predictor/ID``, ``acs``,
+        ``ac/ID``) mean their maps and bring those models' rules along, and
+        ``extra`` and ``labels`` exist only in their forms. Any other learner
+        reports its own map names and neither extras nor labels, or the
+        driver refuses the statistics ("not a model's").
         """
         return {"maps": {}, "extra": {}, "labels": {}}
 
@@ -941,6 +953,7 @@ class _Session:
                 name=learner.display_name,
                 version=str(learner.version),
                 capabilities=capabilities,
+                ignores_actuator_yaw=bool(learner.ignores_actuator_yaw),
             )
         }
 

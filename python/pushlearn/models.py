@@ -205,6 +205,9 @@ class GateLearner(NativeLearner):
 
     name: ClassVar[str] = "gate"
     version: ClassVar[str] = _version()
+    ignores_actuator_yaw: ClassVar[bool] = True
+    """The gate model forces the actuator's yaw to 0 when it parses a state, so the
+    driver must read it so too (start-position check, recorded poses)."""
 
     def __init__(
         self,

@@ -138,6 +138,7 @@ def test_knn_cross_validates_over_the_training_runs_only() -> None:
     learner = KnnLearner()
     train(learner, [-0.04, 0.0, 0.04])
     samples_after_training = learner.stats()["maps"]["block/15"]["inserts"]
+    assert learner.training_runs == 3
     assert samples_after_training == 3 * MESSAGES
     chained_test_run(
         learner, 0.3
@@ -194,7 +195,7 @@ def test_new_fold_forgets_everything() -> None:
     chained_test_run(learner, 0.0)
     learner.new_fold(3)
     assert learner.training
-    assert learner.stats()["maps"]["actuator"]["inserts"] == 0
+    assert learner.stats()["maps"]["actuator_steps"]["inserts"] == 0
     p, _ = chained_test_run(learner, 0.0)
     assert p.blocks[15].y == pytest.approx(0.25)  # the prior again
 
@@ -206,8 +207,13 @@ def test_stats_are_in_the_reports_form(make: type[BaselineLearner]) -> None:
     chained_test_run(learner, 0.0)
     message = _stats_to_proto(learner.stats())  # raises if malformed
     assert message.maps["block/15"].inserts == 2 * MESSAGES
-    assert message.extra["actuator_gain"] == pytest.approx(1.0)
-    assert message.extra["training_runs"] == 2  # the test run's reset is not one
+    assert sorted(message.maps) == ["actuator_steps", "block/15"]
+    assert (
+        not message.extra and not message.labels
+    )  # the driver takes those only from its models
+    assert learner.actuator_gain == pytest.approx(1.0)
+    assert learner.training_runs == 2  # the test run's reset is not one
+    assert learner.describe_fit()[0].startswith("block 15: ")
 
 
 @pytest.mark.parametrize(
@@ -287,3 +293,13 @@ def test_an_unknown_baseline_is_a_usage_error() -> None:
     )
     assert done.returncode == 2
     assert b"unknown baseline 'svm'" in done.stderr
+
+
+def test_verbose_fits_log_their_choices(capsys: pytest.CaptureFixture[str]) -> None:
+    learner = KnnLearner.from_args(["--verbose", "--max-k", "5"])
+    assert learner.max_k == 5
+    train(learner, [-0.02, 0.02])
+    chained_test_run(learner, 0.0)
+    err = capsys.readouterr().err
+    assert "knn (seed 7): actuator gain 1.000000" in err
+    assert "knn (seed 7): block 15: k=" in err and "GroupKFold, 2 folds, 2 runs" in err

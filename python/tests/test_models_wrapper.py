@@ -195,6 +195,20 @@ def test_targets_and_actions() -> None:
         learner_pb2.INVERSE,
     ]
     assert replies[0].hello.name == "gate"
+    assert replies[
+        0
+    ].hello.ignores_actuator_yaw  # the gate model zeroes the actuator's yaw
+
+
+def test_the_interaction_model_keeps_the_actuator_yaw() -> None:
+    from pushlearn.models import InteractionLearner
+
+    s = Script()
+    s.start()
+    status, replies = run(InteractionLearner(), s)
+    assert status == 0
+    assert replies[0].hello.name == "interaction"
+    assert not replies[0].hello.ignores_actuator_yaw
 
 
 def test_a_foreign_prediction_is_refused() -> None:

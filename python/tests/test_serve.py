@@ -46,6 +46,9 @@ def test_start_is_answered_by_hello() -> None:
     assert hello.protocol_version == learner_pb2.PROTOCOL_VERSION
     assert (hello.name, hello.version) == ("recorder", "1.2")
     assert list(hello.capabilities) == [learner_pb2.FORWARD, learner_pb2.INVERSE]
+    assert (
+        not hello.ignores_actuator_yaw
+    )  # the default: the driver uses the reported yaw
     assert learner.calls == [("start", "move-to-target", 10)]
     assert learner.publish_rate_hz == 10
 
@@ -807,3 +810,43 @@ def test_a_module_that_fails_to_import_shows_where(tmp_path: Path) -> None:
     assert done.returncode == 1
     assert f"importing {source}:X failed" in stderr
     assert "No module named 'no_such_dependency_here'" in stderr
+
+
+class SignedZeros(Recorder):
+    """Predicts and acts with −0.0, as the built-in models do after rounding."""
+
+    ignores_actuator_yaw = True
+
+    def predict(self, state: StateLike, action: tuple[float, float]) -> Prediction:
+        self.calls.append(("predict", state, action))
+        return Prediction({id_: (-0.0, 0.0, -0.0) for id_ in state.poses()})
+
+    def act(self) -> Any:
+        return (-0.0, 0.0), False
+
+
+def test_signed_zeros_survive_both_ways() -> None:
+    import math
+
+    learner = SignedZeros()
+    script = Script()
+    script.start()
+    predict = script.add(
+        predict=learner_pb2.Predict(
+            **{"from": observed(world((0.0, 0.0))), "action": action(-0.0, 0.5)}
+        )
+    )
+    act = script.add(act=learner_pb2.Act())
+    status, replies = run(learner, script)
+    assert status == 0
+    by_seq = {r.seq: r for r in replies}
+    assert by_seq[1].hello.ignores_actuator_yaw
+    # The driver's −0.0 arrives as −0.0 ...
+    assert math.copysign(1.0, learner.calls[-1][2][0]) == -1.0
+    # ... and the learner's −0.0 leaves as −0.0, every number present on the wire.
+    for body in by_seq[predict].prediction.bodies:
+        assert body.HasField("x") and body.HasField("y") and body.HasField("theta")
+        assert math.copysign(1.0, body.x) == -1.0 and math.copysign(1.0, body.y) == 1.0
+    reply = by_seq[act].action.action
+    assert reply.HasField("vx") and reply.HasField("vy")
+    assert math.copysign(1.0, reply.vx) == -1.0
