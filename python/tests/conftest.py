@@ -48,6 +48,36 @@ def sim_binary() -> Path | None:
     return None
 
 
+def pushlearn_binary() -> Path | None:
+    """The ``pushlearn`` binary (the experiment driver), or ``None``."""
+    explicit = os.environ.get("PUSHLEARN_BIN")
+    if explicit:
+        return Path(explicit)
+    sim = sim_binary()
+    candidates = [sim.parent / "pushlearn"] if sim is not None else []
+    candidates.append(REPO_ROOT / "target" / "release" / "pushlearn")
+    return next((c for c in candidates if c.is_file()), None)
+
+
+def _missing(message: str) -> None:
+    if os.environ.get("PUSHLEARN_REQUIRE_SIM") == "1":
+        pytest.fail(message)
+    pytest.skip(message)
+
+
+@pytest.fixture(scope="session")
+def driver_bin(sim_bin: Path) -> Path:
+    """The ``pushlearn`` binary next to ``pushlearn-sim`` (or PUSHLEARN_BIN); skips like sim_bin."""
+    path = pushlearn_binary()
+    if path is None or not path.is_file():
+        _missing(
+            "pushlearn (the experiment driver) not found: build it with "
+            "`cargo build --release -p pushlearn-cli --bins` or set PUSHLEARN_BIN"
+        )
+    assert path is not None
+    return path
+
+
 @pytest.fixture(scope="session")
 def sim_bin() -> Path:
     """The ``pushlearn-sim`` binary (skips, or fails with PUSHLEARN_REQUIRE_SIM=1, if missing)."""
@@ -57,9 +87,8 @@ def sim_bin() -> Path:
             f"pushlearn-sim not found ({path or 'target/release/pushlearn-sim'}): build it with "
             "`cargo build --release -p sim-plugin --bins` or set PUSHLEARN_SIM_BIN"
         )
-        if os.environ.get("PUSHLEARN_REQUIRE_SIM") == "1":
-            pytest.fail(message)
-        pytest.skip(message)
+        _missing(message)
+    assert path is not None
     return path
 
 
