@@ -69,10 +69,3 @@ impl Daemon {
         self.process.stop()
     }
 }
-
-/// `pushlearn-sim ARGS...` to completion.
-pub fn run(args: &[&str]) -> std::process::Output {
-    let mut command = Command::new(binary());
-    command.args(args);
-    crate::process::run(command)
-}

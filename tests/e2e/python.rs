@@ -1,17 +1,10 @@
-//! The Python example client: its generated module must match the schema,
-//! and the script must work against the real daemon.
+//! The Python package's generated message modules must match the schemas.
+//! (The package itself, its `SimClient` against the real daemon included, is
+//! tested by its own suite: `python/tests/`, run with pytest.)
 
 use std::path::PathBuf;
-use std::process::Command;
 
 use pushlearn::wire::pb;
-
-use crate::daemon::{self, Daemon};
-use crate::process::{run, text};
-
-fn example_dir() -> PathBuf {
-    crate::process::repo_root().join("examples").join("python")
-}
 
 /// The generated modules of the Python package: one per schema file.
 struct Generated {
@@ -108,93 +101,4 @@ fn generated_modules_match_the_schema() {
             generated.schema
         );
     }
-}
-
-/// `python3` if it can be started, else `None` (the test is then skipped).
-fn python3() -> Option<Command> {
-    let probe = Command::new("python3").arg("--version").output();
-    match probe {
-        Ok(out) if out.status.success() => {
-            let mut command = Command::new("python3");
-            // Keep __pycache__ out of the source tree.
-            command.env("PYTHONDONTWRITEBYTECODE", "1");
-            Some(command)
-        }
-        _ => None,
-    }
-}
-
-/// Runs `client.py` against a daemon started with `args`; returns the
-/// blue block's final `(x, y, yaw)` as printed (4 decimals).
-fn run_client_against(args: &[&str]) -> Option<[String; 3]> {
-    let Some(mut python) = python3() else {
-        eprintln!("SKIPPED: python3 is not installed, so examples/python/client.py was not run");
-        return None;
-    };
-    let daemon = Daemon::start(args);
-    python
-        .arg(example_dir().join("client.py"))
-        .arg("--port")
-        .arg(daemon.addr.port().to_string());
-    let output = run(python);
-    let stderr = text(&output.stderr);
-    assert!(
-        !stderr.contains("No module named 'google'"),
-        "the Python protobuf package is missing: run `python3 -m pip install -r examples/python/requirements.txt` \
-         (scripts/ensure-deps.sh --test does)\n{stderr}"
-    );
-    let stdout = text(&output.stdout);
-    assert!(
-        output.status.success(),
-        "client.py failed ({:?})\nstdout:\n{stdout}\nstderr:\n{stderr}",
-        output.status
-    );
-    let last = stdout.lines().last().unwrap_or_default();
-    let pose = last
-        .strip_prefix("blockA (blue block) after 150 states: ")
-        .unwrap_or_else(|| panic!("unexpected output:\n{stdout}"));
-    let value = |key: &str| {
-        pose.split_whitespace()
-            .find_map(|field| field.strip_prefix(key))
-            .unwrap_or_else(|| panic!("no {key} in {last}"))
-            .to_owned()
-    };
-    Some([value("x="), value("y="), value("yaw=")])
-}
-
-#[test]
-fn client_py_in_lockstep_reproduces_the_calibration_push() {
-    let Some(printed) = run_client_against(&["--mode", "lockstep"]) else {
-        return;
-    };
-    // The script's run (reset, actuator at x0 = 0, Move (0, 0.5), 150
-    // states at 100 Hz) is the sweep's run from x0 = 0, bit for bit.
-    let sweep = daemon::run(&["sweep", "--json"]);
-    assert!(sweep.status.success(), "{}", text(&sweep.stderr));
-    let rows: Vec<serde_json::Value> =
-        serde_json::from_slice(&sweep.stdout).expect("the sweep's JSON");
-    let centre = rows
-        .iter()
-        .find(|row| row["x0"] == 0.0)
-        .expect("a run from x0 = 0");
-    let expected = ["block_x", "block_y", "block_yaw"]
-        .map(|key| format!("{:.4}", centre[key].as_f64().expect("a number")));
-    assert_eq!(printed, expected);
-}
-
-#[test]
-fn client_py_in_realtime_pushes_the_block() {
-    let Some([x, y, _]) = run_client_against(&["--mode", "realtime", "--real-time-rate", "2000"])
-    else {
-        return;
-    };
-    let (x, y): (f64, f64) = (
-        x.parse().expect("x is a number"),
-        y.parse().expect("y is a number"),
-    );
-    // Where exactly depends on when the commands arrived, within an interval.
-    assert!(
-        x.abs() < 0.05 && y > 0.55,
-        "pushed forward from (0, 0.25): ({x}, {y})"
-    );
 }

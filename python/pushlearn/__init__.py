@@ -1,0 +1,109 @@
+"""pushlearn: memory-based online learning of object manipulation, from Python.
+
+The pure-Python part of the package needs only ``protobuf`` (and, for the
+baselines, ``numpy`` and ``scikit-learn``):
+
+* :class:`Learner`, :func:`serve`, :func:`serve_tcp`: write a learner and
+  serve it to the experiment driver over the learner protocol
+  (``proto/learner.proto``; :mod:`pushlearn.learner`);
+* :class:`SimClient`: a blocking client for the world daemon
+  ``pushlearn-sim`` (:mod:`pushlearn.sim`);
+* :mod:`pushlearn.baselines`: k-nearest-neighbour and Gaussian-process
+  forward models as learners;
+* :mod:`pushlearn.models`: the Rust gate and interaction models as learners.
+
+``GateModel``, ``InteractionModel`` and ``Aitm`` are the Rust models
+themselves, from the native extension ``pushlearn._native``; they are
+imported only when first used, so everything else works without it.
+"""
+
+from __future__ import annotations
+
+import sys
+import types
+from typing import TYPE_CHECKING, Any
+
+from .framing import ProtocolError
+from .learner import (
+    Body,
+    Capability,
+    Learner,
+    Pose,
+    Prediction,
+    State,
+    Target,
+    TargetRefused,
+    serve,
+    serve_tcp,
+)
+from .sim import SimClient, SimError, WorldHello
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ._native import Aitm, GateModel, InteractionModel
+
+__version__ = "0.1.0"
+"""The package's version."""
+
+__all__ = [
+    "Aitm",
+    "Body",
+    "Capability",
+    "GateModel",
+    "InteractionModel",
+    "Learner",
+    "Pose",
+    "Prediction",
+    "ProtocolError",
+    "SimClient",
+    "SimError",
+    "State",
+    "Target",
+    "TargetRefused",
+    "WorldHello",
+    "__version__",
+    "serve",
+    "serve_tcp",
+]
+
+_NATIVE = ("GateModel", "InteractionModel", "Aitm")
+
+
+def native() -> Any:
+    """The native extension module ``pushlearn._native``, with a helpful error if it is missing."""
+    try:
+        from . import _native
+    except ImportError as err:
+        raise ImportError(
+            "pushlearn's native extension (pushlearn._native, the Rust models) is not built: "
+            "install the package with `pip install .` from the repository root, or run "
+            f"`maturin develop` there ({err})"
+        ) from err
+    return _native
+
+
+class _Package(types.ModuleType):
+    """The package's module type: keeps ``pushlearn.serve`` the function.
+
+    Importing the submodule ``pushlearn.serve`` (the ``python -m
+    pushlearn.serve`` command line) would otherwise rebind the package's
+    attribute ``serve`` to that module, and ``pushlearn.serve(MyLearner)``
+    would stop working in any program that imported it. The submodule stays
+    importable by name (``from pushlearn.serve import main``).
+    """
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        if name == "serve" and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def __getattr__(name: str) -> Any:
+    """Imports the native classes on first use (``pushlearn.GateModel``, …)."""
+    if name in _NATIVE:
+        value = getattr(native(), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'pushlearn' has no attribute {name!r}")

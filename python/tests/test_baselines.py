@@ -1,0 +1,305 @@
+"""The kNN and GP baselines on synthetic pushes: they learn, chain, and stay honest."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from conftest import LIMIT, TESTS_DIR, python_env
+from driver import (
+    LAST_OBSERVED,
+    LAST_PREDICTION,
+    Script,
+    action,
+    decode_replies,
+    observed,
+    recent,
+)
+from synthetic import MESSAGES, PUSH, synthetic_run, synthetic_state
+
+from pushlearn import Prediction, State
+from pushlearn._pb import learner_pb2
+from pushlearn.baselines import (
+    BaselineLearner,
+    GpLearner,
+    KnnLearner,
+    apply_change,
+    block_change,
+    block_features,
+    wrap_angle,
+)
+from pushlearn.learner import Pose, _stats_to_proto
+
+
+def train(learner: BaselineLearner, starts: list[float], seed: int = 7) -> None:
+    """A fold's training as the driver runs it: reset, then update + predict per message."""
+    learner.start("push-task", 100)
+    learner.new_fold(seed)
+    for x0 in starts:
+        run = synthetic_run(x0)
+        learner.reset(run[0])
+        learner.predict(run[0], PUSH)  # the display-only prediction of train_step
+        for state in run[1:]:
+            learner.update(state, PUSH)
+            learner.predict(state, PUSH)
+    learner.set_training(False)
+
+
+def chained_test_run(learner: BaselineLearner, x0: float) -> tuple[Prediction, State]:
+    """A push-task test run: 150 chained predictions from the run's first state."""
+    run = synthetic_run(x0)
+    learner.reset(run[0])
+    learner.update(run[0], PUSH)
+    p = learner.predict(run[0], PUSH)
+    for _ in range(MESSAGES - 1):
+        learner.update(p, PUSH)
+        p = learner.predict(p, PUSH)
+    return p, run[MESSAGES]
+
+
+def test_features_are_in_the_block_frame() -> None:
+    block = Pose(1.0, 2.0, math.pi / 2)  # turned a quarter: its x axis is the world's y
+    f = block_features(Pose(1.0, 2.5, 0.0), block, (0.0, 0.5))
+    assert f == pytest.approx([0.5, 0.0, 0.5, 0.0])
+    after = apply_change(block, [0.1, 0.0, 0.2])
+    assert after == pytest.approx((1.0, 2.1, math.pi / 2 + 0.2))
+    assert block_change(block, after) == pytest.approx([0.1, 0.0, 0.2])
+    assert wrap_angle(math.pi + 0.5) == pytest.approx(-math.pi + 0.5)
+    assert wrap_angle(-math.pi) == math.pi
+
+
+@pytest.mark.parametrize("make", [KnnLearner, lambda: GpLearner(max_samples=100)])
+def test_before_any_sample_only_the_actuator_moves(make: type[BaselineLearner]) -> None:
+    learner = make()
+    learner.start("push-task", 10)
+    learner.new_fold(1)
+    state = synthetic_state((0.0, 0.1), (0.0, 0.25, 0.3))
+    p = learner.predict(state, (0.2, 0.5))
+    assert p.actuator == pytest.approx((0.02, 0.15, 0.0))
+    assert p.blocks == {15: pytest.approx((0.0, 0.25, 0.3))}
+
+
+def test_knn_learns_the_push_and_chains_predictions() -> None:
+    learner = KnnLearner()
+    train(learner, [-0.2, -0.04, 0.0, 0.04, 0.2])
+    p, truth = chained_test_run(learner, 0.02)
+    assert truth.blocks[15].y > 0.8  # the synthetic world pushed the block 0.55 m
+    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.02)
+    assert p.blocks[15].x == pytest.approx(0.0, abs=0.01)
+    assert tuple(p.actuator) == pytest.approx(
+        tuple(truth.actuator), abs=1e-9
+    )  # gain 1: exactly a / rate
+    # A push that misses the block leaves it where it is.
+    p, truth = chained_test_run(learner, 0.21)
+    assert tuple(p.blocks[15]) == pytest.approx(tuple(truth.blocks[15]), abs=1e-6)
+
+
+def test_gp_learns_the_push_and_chains_predictions() -> None:
+    learner = GpLearner(max_samples=200)
+    train(learner, [-0.04, 0.0, 0.04])
+    p, truth = chained_test_run(learner, 0.02)
+    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.03)
+    assert abs(p.blocks[15].theta) < 0.05
+    assert len(learner.subsamples[15]) == 200
+    assert "RBF" in learner.kernels[15] and "WhiteKernel" in learner.kernels[15]
+
+
+def chained_ys(learner: BaselineLearner) -> list[float]:
+    p, _ = chained_test_run(learner, 0.01)
+    return [p.blocks[15].y, p.blocks[15].x, p.blocks[15].theta]
+
+
+def test_gp_is_deterministic_given_the_fold_seed() -> None:
+    a, b, c = (
+        GpLearner(max_samples=150),
+        GpLearner(max_samples=150),
+        GpLearner(max_samples=150),
+    )
+    train(a, [-0.03, 0.03], seed=11)
+    train(b, [-0.03, 0.03], seed=11)
+    train(c, [-0.03, 0.03], seed=12)
+    assert chained_ys(a) == chained_ys(b)
+    chained_ys(c)
+    assert a.subsamples == b.subsamples
+    assert a.subsamples[15] != c.subsamples[15]  # another fold, another subsample
+
+
+def test_knn_is_deterministic() -> None:
+    a, b = KnnLearner(), KnnLearner()
+    train(a, [-0.03, 0.0, 0.03])
+    train(b, [-0.03, 0.0, 0.03])
+    assert chained_ys(a) == chained_ys(b)
+
+
+def test_knn_cross_validates_over_the_training_runs_only() -> None:
+    learner = KnnLearner()
+    train(learner, [-0.04, 0.0, 0.04])
+    samples_after_training = learner.stats()["maps"]["block/15"]["inserts"]
+    assert learner.training_runs == 3
+    assert samples_after_training == 3 * MESSAGES
+    chained_test_run(
+        learner, 0.3
+    )  # the test run's updates, with training off, add nothing
+    assert learner.stats()["maps"]["block/15"]["inserts"] == samples_after_training
+    choice = learner.choices[15]
+    assert choice.method == "GroupKFold"
+    assert sorted(set(choice.groups)) == [0, 1, 2]  # the three runs between resets
+    assert len(choice.groups) == samples_after_training
+    assert len(choice.splits) == 3
+    groups = np.asarray(choice.groups)
+    for train_idx, val_idx in choice.splits:
+        # No run is both trained on and validated on.
+        assert not set(groups[train_idx]) & set(groups[val_idx])
+        assert len(set(groups[val_idx])) == 1
+    assert 1 <= choice.k <= 50 and choice.weights in ("uniform", "distance")
+    assert (choice.k, choice.weights) == min(
+        choice.scores, key=lambda key: choice.scores[key]
+    )
+
+
+def test_knn_with_one_run_validates_on_contiguous_segments() -> None:
+    learner = KnnLearner()
+    train(learner, [0.0])
+    p, _ = chained_test_run(learner, 0.0)
+    choice = learner.choices[15]
+    assert choice.method == "KFold" and len(choice.splits) == 5
+    for _, val_idx in choice.splits:
+        assert val_idx == list(
+            range(val_idx[0], val_idx[-1] + 1)
+        )  # one segment of the run
+    assert p.blocks[15].y > 0.7  # and it still learned the push
+
+
+def test_the_fit_is_renewed_when_new_samples_arrived() -> None:
+    learner = KnnLearner()
+    train(learner, [0.2])  # only a miss: it learns that the block stays
+    p, _ = chained_test_run(learner, 0.0)
+    assert p.blocks[15].y == pytest.approx(0.25, abs=1e-6)
+    learner.set_training(True)
+    for x0 in (-0.03, 0.0, 0.03):
+        run = synthetic_run(x0)
+        learner.reset(run[0])
+        for state in run[1:]:
+            learner.update(state, PUSH)
+    learner.set_training(False)
+    p, truth = chained_test_run(learner, 0.0)
+    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.02)
+
+
+def test_new_fold_forgets_everything() -> None:
+    learner = KnnLearner()
+    train(learner, [0.0])
+    chained_test_run(learner, 0.0)
+    learner.new_fold(3)
+    assert learner.training
+    assert learner.stats()["maps"]["actuator_steps"]["inserts"] == 0
+    p, _ = chained_test_run(learner, 0.0)
+    assert p.blocks[15].y == pytest.approx(0.25)  # the prior again
+
+
+@pytest.mark.parametrize("make", [KnnLearner, lambda: GpLearner(max_samples=100)])
+def test_stats_are_in_the_reports_form(make: type[BaselineLearner]) -> None:
+    learner = make()
+    train(learner, [-0.02, 0.02])
+    chained_test_run(learner, 0.0)
+    message = _stats_to_proto(learner.stats())  # raises if malformed
+    assert message.maps["block/15"].inserts == 2 * MESSAGES
+    assert sorted(message.maps) == ["actuator_steps", "block/15"]
+    assert (
+        not message.extra and not message.labels
+    )  # the driver takes those only from its models
+    assert learner.actuator_gain == pytest.approx(1.0)
+    assert learner.training_runs == 2  # the test run's reset is not one
+    assert learner.describe_fit()[0].startswith("block 15: ")
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: KnnLearner(max_k=0), "max_k"),
+        (lambda: GpLearner(max_samples=0), "max_samples"),
+    ],
+)
+def test_bad_parameters_are_refused(make: type[BaselineLearner], message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
+def test_the_baselines_are_served_by_their_command_line() -> None:
+    script = Script()
+    script.start()
+    script.add(new_fold=learner_pb2.NewFold(seed=5))
+    for x0 in (-0.03, 0.03):
+        run = synthetic_run(x0, 40)
+        script.add(reset=learner_pb2.Reset(state=observed(run[0].to_proto())))
+        for state in run[1:]:
+            script.add(
+                update=learner_pb2.Update(
+                    state=observed(state.to_proto()), action=action(*PUSH)
+                )
+            )
+    script.add(set_training=learner_pb2.SetTraining(on=False))
+    first = synthetic_run(0.0, 1)[0]
+    script.add(reset=learner_pb2.Reset(state=observed(first.to_proto())))
+    script.add(
+        update=learner_pb2.Update(state=recent(LAST_OBSERVED), action=action(*PUSH))
+    )
+    script.add(
+        predict=learner_pb2.Predict(
+            **{"from": recent(LAST_OBSERVED), "action": action(*PUSH)}
+        )
+    )
+    script.add(
+        predict=learner_pb2.Predict(
+            **{"from": recent(LAST_PREDICTION), "action": action(*PUSH)}
+        )
+    )
+    script.add(get_stats=learner_pb2.GetStats())
+    for name in ("knn", "gp"):
+        done = subprocess.run(
+            [sys.executable, "-m", "pushlearn.baselines", name],
+            input=script.bytes(),
+            capture_output=True,
+            env=python_env(),
+            cwd=TESTS_DIR,
+            timeout=LIMIT,
+            check=False,
+        )
+        assert done.returncode == 0, done.stderr.decode()
+        replies = decode_replies(done.stdout)
+        assert [r.WhichOneof("answer") for r in replies] == [
+            "hello",
+            "prediction",
+            "prediction",
+            "stats",
+        ]
+        assert replies[0].hello.name == name
+        assert list(replies[0].hello.capabilities) == [learner_pb2.FORWARD]
+        second = {b.id: b for b in replies[2].prediction.bodies}
+        assert second[8].y == pytest.approx(0.010)
+        assert replies[3].stats.maps["block/15"].inserts == 80
+
+
+def test_an_unknown_baseline_is_a_usage_error() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "pushlearn.baselines", "svm"],
+        capture_output=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 2
+    assert b"unknown baseline 'svm'" in done.stderr
+
+
+def test_verbose_fits_log_their_choices(capsys: pytest.CaptureFixture[str]) -> None:
+    learner = KnnLearner.from_args(["--verbose", "--max-k", "5"])
+    assert learner.max_k == 5
+    train(learner, [-0.02, 0.02])
+    chained_test_run(learner, 0.0)
+    err = capsys.readouterr().err
+    assert "knn (seed 7): actuator gain 1.000000" in err
+    assert "knn (seed 7): block 15: k=" in err and "GroupKFold, 2 folds, 2 runs" in err

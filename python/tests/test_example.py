@@ -1,0 +1,66 @@
+"""examples/python/push.py against the real world daemon."""
+
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+from conftest import LIMIT, REPO_ROOT, Daemon, python_env, sweep_centre
+
+EXAMPLE = REPO_ROOT / "examples" / "python" / "push.py"
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def test_the_push_example_prints_the_calibration_push(
+    start_sim: Callable[..., Daemon], sim_bin: Path
+) -> None:
+    daemon = start_sim("--mode", "lockstep")
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(EXAMPLE),
+            "--port",
+            str(daemon.port),
+        ],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    first, last = done.stdout.strip().splitlines()
+    assert first == "scene one_block, lockstep mode, 100 Hz, bodies: actuator, blockA"
+    prefix = "blockA (blue block) after 150 states: "
+    assert last.startswith(prefix), last
+    fields = dict(f.split("=") for f in last[len(prefix) :].split() if "=" in f)
+    assert [fields["x"], fields["y"], fields["yaw"]] == sweep_centre(sim_bin)
+
+
+def test_the_push_example_reports_a_missing_world() -> None:
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(EXAMPLE),
+            "--port",
+            str(free_port()),
+        ],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 1
+    assert (
+        "is pushlearn-sim running there?" in done.stderr
+        and "Traceback" not in done.stderr
+    )
