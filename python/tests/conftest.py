@@ -95,7 +95,12 @@ def sim_bin() -> Path:
 def python_env() -> dict[str, str]:
     """The environment for a child Python that must import this checkout's package."""
     env = dict(os.environ)
-    paths = [str(PYTHON_DIR), str(TESTS_DIR)]
+    import pushlearn
+
+    # The package the tests import: the installed one (with its native
+    # module) or, run from the source tree, python/ itself.
+    package_root = Path(pushlearn.__file__).resolve().parents[1]
+    paths = [str(package_root), str(TESTS_DIR)]
     if env.get("PYTHONPATH"):
         paths.append(env["PYTHONPATH"])
     env["PYTHONPATH"] = os.pathsep.join(paths)
