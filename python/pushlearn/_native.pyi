@@ -9,13 +9,15 @@ Every class may be used from any thread. No method releases the GIL, so calls
 on one object from several threads run one after another.
 """
 
-from typing import Any, Optional, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import TypeAlias
 
 # One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
-_Body = tuple[str, int, Sequence[float], Sequence[float]]
+_Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]
 
 class GateWorld:
     """A world state of the gate model, parsed or predicted (returned by
@@ -31,7 +33,6 @@ class GateWorld:
         """The world's bodies as a float64 array of shape (n, 4), one row
         ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
         blocks in ascending id order (``Model::poses``)."""
-    def __repr__(self) -> str: ...
 
 class GateModel:
     """The object-state model with gating function (docs/spec/gate-model.md).
@@ -132,7 +133,6 @@ class GateModel:
         """A deep copy: the learned memory, the stored state, the target and
         the generator's state, shared with nothing (e.g. a fresh model for
         each fold from an untrained template)."""
-    def __repr__(self) -> str: ...
 
 class InteractionWorld:
     """A world state of the interaction model, parsed or predicted (returned
@@ -145,7 +145,6 @@ class InteractionWorld:
         ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
         blocks in ascending id order (``Model::poses``; for predictions the
         finalised objects, the actuator's yaw 0)."""
-    def __repr__(self) -> str: ...
 
 class InteractionModel:
     """The pairwise interaction-state model with Abstract Collections
@@ -193,7 +192,9 @@ class InteractionModel:
 
         Raises ValueError if vx or vy is not finite.
         """
-    def predict(self, world: InteractionWorld, vx: float, vy: float) -> InteractionWorld:
+    def predict(
+        self, world: InteractionWorld, vx: float, vy: float
+    ) -> InteractionWorld:
         """The predicted world one message after ``world`` (parsed or itself a
         prediction) if the action (vx, vy) is in force (``Model::predict``).
         Learns nothing.
@@ -239,7 +240,6 @@ class InteractionModel:
     def copy(self) -> InteractionModel:
         """A deep copy: the learned memory, the stored state, the target and
         the generator's state, shared with nothing."""
-    def __repr__(self) -> str: ...
 
 class Aitm:
     """The Adapted Instantaneous Topological Map (docs/spec/aitm.md): a
@@ -300,7 +300,7 @@ class Aitm:
         (n, output_dim)). Raises ValueError for another shape or a non-finite
         element.
         """
-    def classify(self, x: npt.ArrayLike) -> Optional[int]:
+    def classify(self, x: npt.ArrayLike) -> int | None:
         """The classifier's answer (docs/spec/aitm.md §6): the winner's label
         for the 1-D input ``x``, or None if the map was never trained or has
         no output. ``x`` as for update."""
@@ -318,4 +318,3 @@ class Aitm:
         ever inserted), "nodes": int (current nodes)}``."""
     def copy(self) -> Aitm:
         """A deep copy of the map."""
-    def __repr__(self) -> str: ...
