@@ -479,8 +479,18 @@ def test_aitm_accepts_array_likes_and_any_float_dtype():
     )
     a.update(np.arange(6.0)[::2], [0, 0])  # a strided, non-contiguous view
     np.testing.assert_array_equal(a.predict(np.array([1.0, 2.0, 3.0])), [0.5, -0.5])
-    batch = a.predict(np.asfortranarray([[1.0, 2.0, 3.0], [1.0, 2.0, 4.0]]))
-    np.testing.assert_array_equal(batch, [[0.5, -0.5], [1.0, 2.0]])
+    rows = np.array([[1.0, 2.0, 3.0], [1.0, 2.0, 4.0], [0.0, 2.0, 4.0]])
+    expected = [[0.5, -0.5], [1.0, 2.0], [0.0, 0.0]]
+    strided = np.repeat(rows, 2, axis=1)[:, ::2]  # neither C- nor F-contiguous
+    assert not (strided.flags.c_contiguous or strided.flags.f_contiguous)
+    for layout, want in [
+        (rows, expected),
+        (np.asfortranarray(rows), expected),
+        (strided, expected),
+        (rows[::-1], expected[::-1]),
+    ]:
+        np.testing.assert_array_equal(a.predict(layout), want)
+    np.testing.assert_array_equal(a.predict(rows.tolist()), expected)
     assert a.predict(np.empty((0, 3))).shape == (0, 2)
 
 

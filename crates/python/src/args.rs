@@ -107,12 +107,16 @@ pub fn shape_text(shape: &[usize]) -> String {
     }
 }
 
-/// The array's elements in row-major order, borrowed when it is contiguous.
+/// The array's elements in row-major order, borrowed when they are stored
+/// so. (`as_slice` alone is not enough: it also hands out a column-major
+/// array's memory, in column-major order.)
 pub fn elements<'a>(array: &'a PyArrayLikeDyn<'_, f64, AllowTypeChange>) -> Cow<'a, [f64]> {
-    match array.as_slice() {
-        Ok(s) => Cow::Borrowed(s),
-        Err(_) => Cow::Owned(array.as_array().iter().copied().collect()),
+    if array.is_c_contiguous() {
+        if let Ok(s) = array.as_slice() {
+            return Cow::Borrowed(s);
+        }
     }
+    Cow::Owned(array.as_array().iter().copied().collect())
 }
 
 /// Refuses the first non-finite element of `values`, an array of `shape`
