@@ -1,0 +1,320 @@
+"""The pushlearn models, implemented in Rust (crates/python, PyO3).
+
+GateModel and InteractionModel are the two learners, one method per method of
+the Rust ``learner::Model`` trait; GateWorld and InteractionWorld are their
+world states, returned by ``parse`` and ``predict``. Aitm is the memory-based
+regressor and classifier both learners are built from.
+
+Every class may be used from any thread. No method releases the GIL, so calls
+on one object from several threads run one after another.
+"""
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from typing_extensions import TypeAlias
+
+# One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
+_Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]
+
+class GateWorld:
+    """A world state of the gate model, parsed or predicted (returned by
+    GateModel.parse and GateModel.predict; not constructible).
+
+    It holds the model's own world unchanged, including the identity of its
+    block records (docs/spec/gate-model.md §4.1): a block the model adopted as
+    its record shows the model's current state whenever it is read, as in the
+    original. Never rebuild a world from its poses.
+    """
+
+    def poses(self) -> npt.NDArray[np.float64]:
+        """The world's bodies as a float64 array of shape (n, 4), one row
+        ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
+        blocks in ascending id order (``Model::poses``)."""
+
+class GateModel:
+    """The object-state model with gating function (docs/spec/gate-model.md).
+
+    ``config`` is the original's configuration number, the sum of its bits (1
+    USE_DYNS, 2 LOWFREQ, 4 and 8 driver-only, 16 HARDCODEDACT, 32
+    HARDCODEDGATE, 64 USINGPREDICTIONBOOST); ``eta`` the forward models'
+    learning rate (0 in the final thesis); ``publish_rate_hz`` the world's
+    rate (10 selects the LOWFREQ thresholds, as bit 2 does);
+    ``no_angular_velocity`` leaves the block's angular velocity out of the
+    USE_DYNS features. The checks and the texts of the ValueError they raise
+    are the command line's (``pushlearn learn --model gate``).
+
+    Thread safety: a GateModel may be used from any thread (it is Send and
+    Sync in Rust); every method holds the GIL throughout, so calls from
+    several threads on one model run one after another.
+    """
+
+    def __init__(
+        self,
+        config: int = 0,
+        eta: float = 0.0,
+        publish_rate_hz: int = 100,
+        no_angular_velocity: bool = False,
+    ) -> None:
+        """Raises ValueError for unknown configuration bits, a negative or
+        non-finite eta, no_angular_velocity without bit 1, or an integer out
+        of range."""
+    def parse(self, bodies: Sequence[_Body]) -> GateWorld:
+        """Parse one world-state message into a world of this model
+        (``Model::parse``).
+
+        ``bodies`` lists every body of the message as
+        ``(name, id, (x, y, z), (qx, qy, qz, qw))``: the model's name, its id,
+        its position in metres and its orientation quaternion in the order x,
+        y, z, w. The actuator is the body named "actuator" (id 8); blocks need
+        an id of the learner's shape table (15 "blockA", 27 "blockB"). Parsing
+        learns nothing.
+
+        Raises ValueError with the parser's reason when the message has no
+        actuator, an unknown or duplicate id, or a non-finite number.
+        """
+    def reset_objects(self, world: GateWorld) -> None:
+        """Re-synchronise with ``world`` at the first message of a run,
+        without learning (``Model::reset_objects``)."""
+    def update(self, world: GateWorld, vx: float, vy: float) -> None:
+        """Learn from the transition from the model's stored state into
+        ``world`` under the action (vx, vy) in m/s that was in force
+        meanwhile, then store ``world`` (``Model::update``). With training off
+        only the stored state moves on.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def predict(self, world: GateWorld, vx: float, vy: float) -> GateWorld:
+        """The predicted world one message after ``world`` (parsed or itself a
+        prediction) if the action (vx, vy) is in force (``Model::predict``).
+        Learns nothing.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def set_training(self, on: bool) -> None:
+        """Turn training on (a new model's default) or off
+        (``Model::set_training``)."""
+    @property
+    def is_training(self) -> bool:
+        """Whether ``update`` currently trains (``Model::is_training``)."""
+    def set_target(self, id: int, x: float, y: float, theta: float) -> None:
+        """Set the Move-to-Target goal: block ``id`` at (x, y) m with yaw
+        ``theta`` rad (``Model::set_target``).
+
+        Raises ValueError with the model's reason (the actuator, a non-finite
+        pose, an object the model cannot plan for); the previous target then
+        stays in place.
+        """
+    def clear_target(self) -> None:
+        """Clear the Move-to-Target goal (``Model::set_target(None)``)."""
+    @property
+    def has_target(self) -> bool:
+        """Whether a target is set; ``act`` clears it once it finds the target
+        reached (``Model::has_target``)."""
+    def seed(self, seed: int) -> None:
+        """Seed the exploration generator that ``act`` draws from: ChaCha8
+        seeded with ``seed_from_u64(seed)``, as the experiment driver seeds
+        each job's generator, so that ``act`` draws the same stream as an
+        in-process run with that seed. A model that was never seeded uses
+        seed 0. ``seed`` must be in 0 .. 2**64 - 1 (else ValueError)."""
+    def act(self) -> tuple[float, float]:
+        """The next action (vx, vy) in m/s towards the target from the model's
+        stored state (``Model::act``); (0.0, 0.0) without a target or once it
+        is reached, when the target is cleared. Its exploration fallback draws
+        from the generator of ``seed``."""
+    def stats(self) -> dict[str, Any]:
+        """The model's statistics (``Model::stats``) in their serialised form:
+        ``{"maps": {name: {"update_calls": int, "inserts": int, "nodes": int}},
+        "extra": {name: float}, "labels": {name: str}}``. The gate model's maps
+        are "actuator", "gate" and "predictor/<block id>"."""
+    def copy(self) -> GateModel:
+        """A deep copy: the learned memory, the stored state, the target and
+        the generator's state, shared with nothing (e.g. a fresh model for
+        each fold from an untrained template)."""
+
+class InteractionWorld:
+    """A world state of the interaction model, parsed or predicted (returned
+    by InteractionModel.parse and InteractionModel.predict; not
+    constructible): the object states and the interaction states computed
+    from them."""
+
+    def poses(self) -> npt.NDArray[np.float64]:
+        """The world's bodies as a float64 array of shape (n, 4), one row
+        ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
+        blocks in ascending id order (``Model::poses``; for predictions the
+        finalised objects, the actuator's yaw 0)."""
+
+class InteractionModel:
+    """The pairwise interaction-state model with Abstract Collections
+    (docs/spec/interaction-model.md).
+
+    ``config`` is the original's configuration number (only bit 2, LOWFREQ,
+    and the driver-only bits 4 and 8 apply); ``eta`` the Abstract
+    Collections' learning rate (0 in the final thesis); ``publish_rate_hz``
+    the world's rate (10 selects the LOWFREQ thresholds, as bit 2 does);
+    ``selector`` the Abstract Collection Selector: "aitm" (final thesis),
+    "tree", "incremental-tree" or "nearest" (the thesis draft's variants).
+    The checks and the texts of the ValueError they raise are the command
+    line's (``pushlearn learn --model interaction``).
+
+    Thread safety: an InteractionModel may be used from any thread (it is
+    Send and Sync in Rust); every method holds the GIL throughout, so calls
+    from several threads on one model run one after another.
+    """
+
+    def __init__(
+        self,
+        config: int = 0,
+        eta: float = 0.0,
+        publish_rate_hz: int = 100,
+        selector: str = "aitm",
+    ) -> None:
+        """Raises ValueError for configuration bits that do not apply, a
+        negative or non-finite eta, an unknown selector (the message lists
+        the valid names) or an integer out of range."""
+    def parse(self, bodies: Sequence[_Body]) -> InteractionWorld:
+        """Parse one world-state message into a world of this model
+        (``Model::parse``); ``bodies`` as for GateModel.parse.
+
+        Raises ValueError with the parser's reason when the message has no
+        actuator, an unknown or duplicate id, or a non-finite number.
+        """
+    def reset_objects(self, world: InteractionWorld) -> None:
+        """Re-synchronise with ``world`` at the first message of a run,
+        without learning (``Model::reset_objects``)."""
+    def update(self, world: InteractionWorld, vx: float, vy: float) -> None:
+        """Learn from the transition from the model's stored state into
+        ``world`` under the action (vx, vy) in m/s that was in force
+        meanwhile, then store ``world`` (``Model::update``). With training off
+        only the stored state moves on.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def predict(
+        self, world: InteractionWorld, vx: float, vy: float
+    ) -> InteractionWorld:
+        """The predicted world one message after ``world`` (parsed or itself a
+        prediction) if the action (vx, vy) is in force (``Model::predict``).
+        Learns nothing.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def set_training(self, on: bool) -> None:
+        """Turn training on (a new model's default) or off
+        (``Model::set_training``)."""
+    @property
+    def is_training(self) -> bool:
+        """Whether ``update`` currently trains (``Model::is_training``)."""
+    def set_target(self, id: int, x: float, y: float, theta: float) -> None:
+        """Set the Move-to-Target goal: block ``id`` at (x, y) m with yaw
+        ``theta`` rad (``Model::set_target``).
+
+        Raises ValueError with the model's reason (the actuator, a non-finite
+        pose, an object the model cannot plan for); the previous target then
+        stays in place.
+        """
+    def clear_target(self) -> None:
+        """Clear the Move-to-Target goal (``Model::set_target(None)``)."""
+    @property
+    def has_target(self) -> bool:
+        """Whether a target is set; ``act`` clears it once it finds the target
+        reached (``Model::has_target``)."""
+    def seed(self, seed: int) -> None:
+        """Seed the exploration generator that ``act`` draws from: ChaCha8
+        seeded with ``seed_from_u64(seed)``, as the experiment driver seeds
+        each job's generator. A model that was never seeded uses seed 0.
+        ``seed`` must be in 0 .. 2**64 - 1 (else ValueError)."""
+    def act(self) -> tuple[float, float]:
+        """The next action (vx, vy) in m/s towards the target from the model's
+        stored state (``Model::act``); (0.0, 0.0) without a target or once it
+        is reached, when the target is cleared. Its exploration fallback draws
+        from the generator of ``seed``."""
+    def stats(self) -> dict[str, Any]:
+        """The model's statistics (``Model::stats``) in their serialised form:
+        ``{"maps": {name: {"update_calls": int, "inserts": int, "nodes": int}},
+        "extra": {name: float}, "labels": {name: str}}``. The interaction
+        model's maps are "acs" and "ac/<k>"; "extra" has "ac_count" and the
+        largest AC's numbers."""
+    def copy(self) -> InteractionModel:
+        """A deep copy: the learned memory, the stored state, the target and
+        the generator's state, shared with nothing."""
+
+class Aitm:
+    """The Adapted Instantaneous Topological Map (docs/spec/aitm.md): a
+    growing graph of nodes in input space, each with an output vector and a
+    local linear map; nodes are inserted where the map's own answer to a
+    training sample is wrong.
+
+    ``mode`` is the query mode, used for queries and for the map's own
+    estimate during update: "winner", "besttwo" or "neighbour" (case does not
+    matter). ``sigma`` is the width of the Gaussian interpolation weights,
+    ``eps_max`` the distance below which no node is inserted, ``eta_in`` /
+    ``eta_out`` / ``eta_a`` the winner's learning rates (0 in every evaluated
+    instance), ``classifier`` whether outputs are integer class labels. The
+    defaults are the evaluated instances' (``AitmParams::regressor``); the
+    gate model's predictors use "besttwo", its classifiers and the
+    interaction model's maps "winner".
+
+    Arrays may be anything ``numpy.asarray`` turns into float64 numbers.
+    """
+
+    def __init__(
+        self,
+        input_dim: int,
+        output_dim: int,
+        *,
+        mode: str,
+        sigma: float = 0.05,
+        eps_max: float = 0.001,
+        eta_in: float = 0.0,
+        eta_out: float = 0.0,
+        eta_a: float = 0.0,
+        classifier: bool = False,
+    ) -> None:
+        """Raises ValueError with the Rust check's text for invalid
+        hyperparameters, for an unknown mode (listing the valid ones), and for
+        negative or absurdly large dimensions (input_dim × output_dim at most
+        2**24)."""
+    def update(self, x: npt.ArrayLike, y: npt.ArrayLike) -> None:
+        """One training step update(x, y) (docs/spec/aitm.md §4): ``x`` is a
+        1-D array of input_dim finite numbers, ``y`` one of output_dim.
+
+        Raises ValueError if either has the wrong shape or a non-finite
+        element (naming which).
+        """
+    def update_label(self, x: npt.ArrayLike, label: int) -> None:
+        """Train a one-output map with the integer class label ``label``
+        (update(x, [label])); ``x`` as for update.
+
+        Raises ValueError unless output_dim is 1, or for a bad x.
+        """
+    def predict(self, x: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The map's answer f(x, mode) (docs/spec/aitm.md §3); zeros for a map
+        that was never trained.
+
+        ``x`` is a 1-D array of input_dim finite numbers (the result is a 1-D
+        float64 array of output_dim numbers) or a 2-D array of shape
+        (n, input_dim), one input per row (the result has shape
+        (n, output_dim)). Raises ValueError for another shape or a non-finite
+        element.
+        """
+    def classify(self, x: npt.ArrayLike) -> int | None:
+        """The classifier's answer (docs/spec/aitm.md §6): the winner's label
+        for the 1-D input ``x``, or None if the map was never trained or has
+        no output. ``x`` as for update."""
+    @property
+    def node_count(self) -> int:
+        """The current number of nodes."""
+    @property
+    def input_dim(self) -> int:
+        """The input dimension."""
+    @property
+    def output_dim(self) -> int:
+        """The output dimension."""
+    def stats(self) -> dict[str, int]:
+        """The map's counters: ``{"update_calls": int, "inserts": int (nodes
+        ever inserted), "nodes": int (current nodes)}``."""
+    def copy(self) -> Aitm:
+        """A deep copy of the map."""
