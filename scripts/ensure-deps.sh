@@ -30,6 +30,10 @@ command -v cc >/dev/null 2>&1 || missing+=(gcc)
 if [ "$want_test" = 1 ]; then
   command -v python3 >/dev/null 2>&1 || missing+=(python3)
   if ! python3 -c 'import venv, ensurepip' >/dev/null 2>&1; then missing+=(python3-venv); fi
+  # The workspace's build of the bindings (crates/python) links libpython.
+  if ! python3 -c 'import os, sysconfig as s; exit(not os.path.exists(os.path.join(s.get_config_var("LIBDIR"), s.get_config_var("LDLIBRARY"))))' >/dev/null 2>&1; then
+    missing+=(python3-dev)
+  fi
 fi
 
 # The viewer's end-to-end test drives headless Chromium (tests/e2e/browser.rs).

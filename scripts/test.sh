@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite, exactly as CI runs it: installs what is missing, then
-# checks formatting and lints, runs every test of the workspace and checks
-# that the committed quick results are current.
+# checks formatting and lints, runs every test of the workspace, checks
+# that the committed quick results are current, and builds, lints and tests
+# the Python package.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-deps.sh --test
@@ -13,3 +14,13 @@ cargo test --workspace --locked
 cargo build --release --locked -p pushlearn-cli -p sim-plugin --bins
 target/release/pushlearn reproduce --quick --check
 target/release/pushlearn reproduce --page-only --check
+# The Python package (python/): installed into .venv exactly as the README
+# says (`pip install .`, maturin building the native part), then linted,
+# type-checked and tested against the binaries just built.
+# (maturin's build hook runs `maturin` from PATH: the venv's.)
+PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --no-build-isolation .
+.venv/bin/ruff format --check python examples/python
+.venv/bin/ruff check python examples/python
+(cd python && MYPYPATH=tests ../.venv/bin/mypy --strict --ignore-missing-imports pushlearn tests ../examples/python/push.py)
+PUSHLEARN_REQUIRE_SIM=1 PUSHLEARN_SIM_BIN="$PWD/target/release/pushlearn-sim" PUSHLEARN_BIN="$PWD/target/release/pushlearn" \
+  .venv/bin/python -m pytest -q python/tests

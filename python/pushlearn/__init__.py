@@ -20,6 +20,7 @@ imported only when first used, so everything else works without it.
 from __future__ import annotations
 
 import sys
+import importlib
 import types
 from typing import TYPE_CHECKING, Any
 
@@ -71,7 +72,9 @@ _NATIVE = ("GateModel", "InteractionModel", "Aitm")
 def native() -> Any:
     """The native extension module ``pushlearn._native``, with a helpful error if it is missing."""
     try:
-        from . import _native
+        # Through sys.modules, not the package's attribute: a test may stand
+        # a module in for the extension there.
+        _native = importlib.import_module("pushlearn._native")
     except ImportError as err:
         raise ImportError(
             "pushlearn's native extension (pushlearn._native, the Rust models) is not built: "

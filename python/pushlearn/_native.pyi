@@ -10,11 +10,10 @@ on one object from several threads run one after another.
 """
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TypeAlias
 
 import numpy as np
 import numpy.typing as npt
-from typing_extensions import TypeAlias
 
 # One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
 _Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]

@@ -18,8 +18,6 @@ from driver import (
     observed,
     recent,
 )
-from synthetic import MESSAGES, PUSH, synthetic_run, synthetic_state
-
 from pushlearn import Prediction, State
 from pushlearn._pb import learner_pb2
 from pushlearn.baselines import (
@@ -32,6 +30,7 @@ from pushlearn.baselines import (
     wrap_angle,
 )
 from pushlearn.learner import Pose, _stats_to_proto
+from synthetic import MESSAGES, PUSH, synthetic_run, synthetic_state
 
 
 def train(learner: BaselineLearner, starts: list[float], seed: int = 7) -> None:

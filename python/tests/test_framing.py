@@ -8,7 +8,6 @@ import struct
 import threading
 
 import pytest
-
 from pushlearn._pb import learner_pb2, pushlearn_pb2
 from pushlearn.framing import (
     MAX_FRAME_SIZE,

@@ -6,7 +6,6 @@ import math
 
 import pytest
 from driver import body, world
-
 from pushlearn import Body, Learner, Prediction, State, Target, TargetRefused
 from pushlearn._pb import learner_pb2
 from pushlearn.learner import quaternion_to_yaw

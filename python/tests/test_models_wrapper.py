@@ -23,7 +23,6 @@ from driver import (
     run,
     world,
 )
-
 from pushlearn._pb import learner_pb2
 from pushlearn.learner import UsageError
 

@@ -8,8 +8,11 @@ import ast
 import math
 import pathlib
 import threading
+from collections.abc import Callable
+from typing import Required, TypeAlias, TypedDict, TypeVar, overload
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 from pushlearn import _native
 from pushlearn._native import (
@@ -20,13 +23,44 @@ from pushlearn._native import (
     InteractionWorld,
 )
 
-MODELS = [GateModel, InteractionModel]
+Model = TypeVar("Model", GateModel, InteractionModel)
+"""Either learner; a test taking ``type[Model]`` is checked for each."""
+Body: TypeAlias = tuple[
+    str, int, tuple[float, float, float], tuple[float, float, float, float]
+]
+"""One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw))."""
+
+MODELS: list[type[GateModel] | type[InteractionModel]] = [GateModel, InteractionModel]
 STEP = 0.005  # the actuator's displacement per message under (0, 0.5) at 100 Hz
 ACTION = (0.0, 0.5)
 TARGET = (15, 0.45, 0.65, 0.6)
 
 
-def frame(actuator_y, block=(0.0, 0.25)):
+class GateKwargs(TypedDict, total=False):
+    config: int
+    eta: float
+    publish_rate_hz: int
+    no_angular_velocity: bool
+
+
+class InteractionKwargs(TypedDict, total=False):
+    config: int
+    eta: float
+    publish_rate_hz: int
+    selector: str
+
+
+class AitmKwargs(TypedDict, total=False):
+    mode: Required[str]
+    sigma: float
+    eps_max: float
+    eta_in: float
+    eta_out: float
+    eta_a: float
+    classifier: bool
+
+
+def frame(actuator_y: float, block: tuple[float, float] = (0.0, 0.25)) -> list[Body]:
     """A world-state message: the actuator and the blue block."""
     return [
         ("actuator", 8, (0.0, actuator_y, 0.03), (0.0, 0.0, 0.0, 1.0)),
@@ -34,7 +68,15 @@ def frame(actuator_y, block=(0.0, 0.25)):
     ]
 
 
-def drive(model, updates=5, start=0.1):
+@overload
+def drive(model: GateModel, updates: int = ..., start: float = ...) -> GateWorld: ...
+@overload
+def drive(
+    model: InteractionModel, updates: int = ..., start: float = ...
+) -> InteractionWorld: ...
+def drive(
+    model: Model, updates: int = 5, start: float = 0.1
+) -> GateWorld | InteractionWorld:
     """The driver's calling pattern: reset on the first message, then one
     update per message under ACTION with the actuator moving STEP each time.
     Returns the last parsed world."""
@@ -46,14 +88,16 @@ def drive(model, updates=5, start=0.1):
     return world
 
 
-def actions(model, count=8):
+def actions(
+    model: GateModel | InteractionModel, count: int = 8
+) -> list[tuple[float, float]]:
     return [model.act() for _ in range(count)]
 
 
 # --- construction and its refusals -------------------------------------------
 
 
-def test_defaults_and_repr():
+def test_defaults_and_repr() -> None:
     assert repr(GateModel()) == (
         "GateModel(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False)"
     )
@@ -85,7 +129,7 @@ def test_defaults_and_repr():
         ({"publish_rate_hz": -10}, "-10 is out of range"),
     ],
 )
-def test_gate_model_refusals(kwargs, message):
+def test_gate_model_refusals(kwargs: GateKwargs, message: str) -> None:
     with pytest.raises(ValueError) as e:
         GateModel(**kwargs)
     assert message in str(e.value)
@@ -109,13 +153,15 @@ def test_gate_model_refusals(kwargs, message):
         ),
     ],
 )
-def test_interaction_model_refusals(kwargs, message):
+def test_interaction_model_refusals(
+    kwargs: InteractionKwargs, message: str
+) -> None:
     with pytest.raises(ValueError) as e:
         InteractionModel(**kwargs)
     assert message in str(e.value)
 
 
-def test_wrong_argument_types_are_type_errors():
+def test_wrong_argument_types_are_type_errors() -> None:
     with pytest.raises(TypeError):
         GateModel(config="1")  # type: ignore[arg-type]
     with pytest.raises(TypeError):
@@ -128,7 +174,7 @@ def test_wrong_argument_types_are_type_errors():
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_parse_refusals_carry_the_parsers_text(model_class):
+def test_parse_refusals_carry_the_parsers_text(model_class: type[Model]) -> None:
     m = model_class()
     cases = [
         (frame(0.1)[1:], 'the frame has no model named "actuator"'),
@@ -157,7 +203,7 @@ def test_parse_refusals_carry_the_parsers_text(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_parse_accepts_any_sequences_of_numbers(model_class):
+def test_parse_accepts_any_sequences_of_numbers(model_class: type[Model]) -> None:
     m = model_class()
     bodies = (
         ("actuator", 8, np.array([0.0, 0.1, 0.03]), [0.0, 0.0, 0.0, 1.0]),
@@ -171,7 +217,7 @@ def test_parse_accepts_any_sequences_of_numbers(model_class):
         )  # a body is a tuple
 
 
-def test_parsed_poses_are_rounded_and_the_actuator_comes_first():
+def test_parsed_poses_are_rounded_and_the_actuator_comes_first() -> None:
     # A yaw of 0.3 rad about z, position off the 3-decimal grid; the block
     # listed before the actuator.
     q = (0.0, 0.0, math.sin(0.15), math.cos(0.15))
@@ -196,7 +242,7 @@ def test_parsed_poses_are_rounded_and_the_actuator_comes_first():
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_scripted_sequence(model_class):
+def test_scripted_sequence(model_class: type[Model]) -> None:
     m = model_class()
     updates = 6
     last = drive(m, updates)
@@ -231,7 +277,7 @@ def test_scripted_sequence(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_training_off_learns_nothing(model_class):
+def test_training_off_learns_nothing(model_class: type[Model]) -> None:
     m = model_class()
     drive(m, 3)
     before = m.stats()
@@ -244,7 +290,7 @@ def test_training_off_learns_nothing(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_non_finite_actions_are_refused(model_class):
+def test_non_finite_actions_are_refused(model_class: type[Model]) -> None:
     m = model_class()
     world = drive(m, 2)
     before = m.stats()
@@ -256,7 +302,7 @@ def test_non_finite_actions_are_refused(model_class):
     assert m.stats() == before
 
 
-def test_worlds_belong_to_their_model_kind():
+def test_worlds_belong_to_their_model_kind() -> None:
     gate_world = GateModel().parse(frame(0.1))
     with pytest.raises(TypeError):
         InteractionModel().reset_objects(gate_world)  # type: ignore[arg-type]
@@ -268,7 +314,7 @@ def test_worlds_belong_to_their_model_kind():
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_copy_is_independent(model_class):
+def test_copy_is_independent(model_class: type[Model]) -> None:
     template = model_class()
     trained = template.copy()
     last = drive(trained, 5)
@@ -299,7 +345,7 @@ def test_copy_is_independent(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_targets(model_class):
+def test_targets(model_class: type[Model]) -> None:
     m = model_class()
     assert m.act() == (0.0, 0.0)  # no target
     drive(m, 3)
@@ -322,7 +368,7 @@ def test_targets(model_class):
     assert m.act() == (0.0, 0.0)
 
 
-def test_gate_model_refuses_targets_for_unknown_blocks():
+def test_gate_model_refuses_targets_for_unknown_blocks() -> None:
     m = GateModel()
     drive(m, 2)
     with pytest.raises(ValueError, match="the model cannot plan for object 27"):
@@ -330,8 +376,8 @@ def test_gate_model_refuses_targets_for_unknown_blocks():
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_seeded_actions_are_reproducible(model_class):
-    def run(seed):
+def test_seeded_actions_are_reproducible(model_class: type[Model]) -> None:
+    def run(seed: int | None) -> list[tuple[float, float]]:
         m = model_class()
         drive(m, 4)
         m.set_target(*TARGET)
@@ -367,7 +413,7 @@ IN_PROCESS_ACTIONS = [
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_act_draws_the_experiment_drivers_stream(model_class):
+def test_act_draws_the_experiment_drivers_stream(model_class: type[Model]) -> None:
     m = model_class()
     drive(m, 5)
     m.set_target(*TARGET)
@@ -376,7 +422,7 @@ def test_act_draws_the_experiment_drivers_stream(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_seeding_resets_the_stream_and_copies_keep_it(model_class):
+def test_seeding_resets_the_stream_and_copies_keep_it(model_class: type[Model]) -> None:
     m = model_class()
     drive(m, 4)
     m.set_target(*TARGET)
@@ -392,11 +438,11 @@ def test_seeding_resets_the_stream_and_copies_keep_it(model_class):
 
 
 @pytest.mark.parametrize("model_class", MODELS)
-def test_a_model_is_usable_from_another_thread(model_class):
+def test_a_model_is_usable_from_another_thread(model_class: type[Model]) -> None:
     m = model_class()
     result = {}
 
-    def work():
+    def work() -> None:
         try:
             last = drive(m, 3)
             result["poses"] = m.predict(last, *ACTION).poses()
@@ -419,13 +465,13 @@ def test_a_model_is_usable_from_another_thread(model_class):
 # --- Aitm ------------------------------------------------------------------
 
 
-def linear(x):
+def linear(x: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """The function the map learns: y = 0.3 x0 - 0.2 x1 + 0.1, in [-0.1, 0.4]."""
     x = np.atleast_2d(x)
     return (0.3 * x[:, 0] - 0.2 * x[:, 1] + 0.1)[:, None]
 
 
-def grid_samples(n=20):
+def grid_samples(n: int = 20) -> npt.NDArray[np.float64]:
     """A deterministic scattered order over an n × n grid on [0, 1]²."""
     points = np.array([(i / (n - 1), j / (n - 1)) for i in range(n) for j in range(n)])
     order = [(k * 7919) % len(points) for k in range(len(points))]
@@ -433,7 +479,7 @@ def grid_samples(n=20):
 
 
 @pytest.mark.parametrize("mode", ["winner", "besttwo", "neighbour", "BESTTWO"])
-def test_aitm_learns_a_linear_function(mode):
+def test_aitm_learns_a_linear_function(mode: str) -> None:
     a = Aitm(2, 1, mode=mode)
     assert a.node_count == 0 and (a.input_dim, a.output_dim) == (2, 1)
     np.testing.assert_array_equal(a.predict([0.5, 0.5]), [0.0])  # untrained: zeros
@@ -463,7 +509,7 @@ def test_aitm_learns_a_linear_function(mode):
         np.testing.assert_array_equal(a.predict(x), row)
 
 
-def test_aitm_eta_a_learns_the_slope():
+def test_aitm_eta_a_learns_the_slope() -> None:
     a = Aitm(1, 1, mode="winner", eta_a=0.5)
     xs = [(k * 37 % 50) / 50 for k in range(200)]
     for x in xs:
@@ -471,7 +517,7 @@ def test_aitm_eta_a_learns_the_slope():
     assert abs(a.predict([0.31])[0] - 0.62) < 0.1
 
 
-def test_aitm_accepts_array_likes_and_any_float_dtype():
+def test_aitm_accepts_array_likes_and_any_float_dtype() -> None:
     a = Aitm(3, 2, mode="winner")
     a.update([1, 2, 3], (0.5, -0.5))  # ints and tuples
     a.update(
@@ -494,7 +540,7 @@ def test_aitm_accepts_array_likes_and_any_float_dtype():
     assert a.predict(np.empty((0, 3))).shape == (0, 2)
 
 
-def test_aitm_refusals():
+def test_aitm_refusals() -> None:
     a = Aitm(2, 1, mode="besttwo")
     cases = [
         (
@@ -563,12 +609,12 @@ def test_aitm_refusals():
         ),
     ],
 )
-def test_aitm_parameter_refusals(kwargs, message):
+def test_aitm_parameter_refusals(kwargs: AitmKwargs, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         Aitm(2, 1, **kwargs)
 
 
-def test_aitm_dimension_refusals():
+def test_aitm_dimension_refusals() -> None:
     with pytest.raises(TypeError):
         Aitm(2, 1)  # type: ignore[call-arg]  # mode has no default
     with pytest.raises(ValueError, match="out of range"):
@@ -578,7 +624,7 @@ def test_aitm_dimension_refusals():
     Aitm(0, 1, mode="winner").predict([])
 
 
-def test_aitm_classifier():
+def test_aitm_classifier() -> None:
     c = Aitm(2, 1, mode="winner", classifier=True)
     assert c.classify([0.0, 0.0]) is None  # never trained
     c.update_label([0.0, 0.0], 1)
@@ -592,7 +638,7 @@ def test_aitm_classifier():
     )
 
 
-def test_aitm_copy_is_independent():
+def test_aitm_copy_is_independent() -> None:
     a = Aitm(1, 1, mode="winner")
     a.update([0.0], [1.0])
     b = a.copy()
@@ -609,7 +655,7 @@ def test_aitm_copy_is_independent():
 STUB = pathlib.Path(__file__).resolve().parents[1] / "pushlearn" / "_native.pyi"
 
 
-def stub_classes():
+def stub_classes() -> dict[str, set[str]]:
     tree = ast.parse(STUB.read_text(encoding="utf-8"))
     return {
         node.name: {
@@ -620,7 +666,7 @@ def stub_classes():
     }
 
 
-def test_the_stub_matches_the_module():
+def test_the_stub_matches_the_module() -> None:
     stub = stub_classes()
     exported = {name for name in dir(_native) if not name.startswith("_")}
     assert set(stub) == exported
@@ -632,7 +678,7 @@ def test_the_stub_matches_the_module():
             assert hasattr(cls, m), (name, m)
 
 
-def test_every_class_and_method_is_documented():
+def test_every_class_and_method_is_documented() -> None:
     assert _native.__doc__
     for name in stub_classes():
         cls = getattr(_native, name)

@@ -19,7 +19,6 @@ from driver import (
     recent,
     world,
 )
-
 from pushlearn._pb import learner_pb2
 
 README = PYTHON_DIR / "README.md"

@@ -25,13 +25,12 @@ from driver import (
     run,
     world,
 )
-from sample_learners import Broken, Recorder
-
 from pushlearn import Prediction, State
 from pushlearn._pb import learner_pb2
 from pushlearn.framing import encode_frame, read_frame
 from pushlearn.learner import LearnerServer, StateLike
 from pushlearn.serve import main as serve_main
+from sample_learners import Broken, Recorder
 
 
 def test_start_is_answered_by_hello() -> None:

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import pytest
 from conftest import Daemon, sweep_centre
-
 from pushlearn import ProtocolError, SimClient, SimError, State
 
 STATES = 150
