@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
 
-from conftest import LIMIT, TESTS_DIR, python_env
+import pytest
+from conftest import LIMIT, PYTHON_DIR, TESTS_DIR, python_env
 
 
 def experiment(
@@ -71,3 +73,111 @@ def test_a_failing_python_learner_fails_the_job_with_its_error(
     assert done.returncode != 0
     assert "ZeroDivisionError: the model divided by zero" in done.stderr
     assert not report.exists()  # no report from a failed job
+
+
+# What depends on the machine or says who ran: left out of the comparison.
+RUN_TIME = {
+    "wall_seconds",
+    "too_slow",
+    "too_slow_fraction",
+    "mean_handling_ms",
+    "p50_handling_us",
+    "p99_handling_us",
+    "max_handling_ms",
+    "simulated_states",
+}
+
+
+def comparable(path: Path) -> str:
+    report = json.loads(path.read_text())
+    report.pop("model")
+    report.pop("learner", None)
+    for key in RUN_TIME:
+        report["run"].pop(key, None)
+    return json.dumps(report, sort_keys=True)
+
+
+def run_driver(driver_bin: Path, sim_bin: Path, *args: str) -> str:
+    done = subprocess.run(
+        [str(driver_bin), "experiment", *args, "--sim-bin", str(sim_bin)],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=TESTS_DIR,
+        timeout=8 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+@pytest.mark.parametrize(
+    "task",
+    [
+        ["push-task", "--train-runs", "1,3", "--folds", "2"],
+        [
+            "move-to-target",
+            "--target",
+            "0.6,0.7,0.75",
+            "--repetitions",
+            "2",
+            "--max-steps",
+            "400",
+        ],
+    ],
+    ids=["push-task", "move-to-target"],
+)
+def test_the_gate_model_served_from_python_is_the_in_process_one_bit_for_bit(
+    driver_bin: Path, sim_bin: Path, tmp_path: Path, task: list[str]
+) -> None:
+    """The cross-check of the whole path: bindings, SDK, protocol, driver."""
+    pytest.importorskip("pushlearn._native")
+    inside, outside = tmp_path / "inside.json", tmp_path / "outside.json"
+    run_driver(driver_bin, sim_bin, *task, "--model", "gate", "--json", str(inside))
+    served = f"{sys.executable} -m pushlearn.serve pushlearn.models:GateLearner"
+    table = run_driver(
+        driver_bin, sim_bin, *task, "--learner", served, "--json", str(outside)
+    )
+    assert "learner 'gate" in table
+    assert comparable(inside) == comparable(outside)
+
+
+def test_the_readme_learner_runs_through_the_driver(
+    driver_bin: Path, sim_bin: Path, tmp_path: Path
+) -> None:
+    """README.md's "Your own learner" example, as written."""
+    readme = (PYTHON_DIR.parent / "README.md").read_text()
+    blocks = re.findall(r"```python\n(# mylearner\.py.*?)```", readme, flags=re.DOTALL)
+    assert len(blocks) == 1, "README.md lost its mylearner.py example"
+    (tmp_path / "mylearner.py").write_text(blocks[0])
+    report = tmp_path / "still.json"
+    done = subprocess.run(
+        [
+            str(driver_bin),
+            "experiment",
+            "push-task",
+            "--train-runs",
+            "1",
+            "--folds",
+            "1",
+            "--workers",
+            "1",
+            "--learner",
+            f"{sys.executable} -m pushlearn.serve mylearner.py:Still",
+            "--json",
+            str(report),
+            "--sim-bin",
+            str(sim_bin),
+        ],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=tmp_path,
+        timeout=4 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    result = json.loads(report.read_text())
+    assert result["model"] == "still"
+    # Nothing but the actuator moves: the block's error is its whole travel.
+    assert result["results"][0]["actuator_pos_err"]["mean"] < 0.01

@@ -50,6 +50,11 @@ class InteractionKwargs(TypedDict, total=False):
     selector: str
 
 
+class ThreadResult(TypedDict, total=False):
+    poses: npt.NDArray[np.float64]
+    error: Exception
+
+
 class AitmKwargs(TypedDict, total=False):
     mode: Required[str]
     sigma: float
@@ -153,9 +158,7 @@ def test_gate_model_refusals(kwargs: GateKwargs, message: str) -> None:
         ),
     ],
 )
-def test_interaction_model_refusals(
-    kwargs: InteractionKwargs, message: str
-) -> None:
+def test_interaction_model_refusals(kwargs: InteractionKwargs, message: str) -> None:
     with pytest.raises(ValueError) as e:
         InteractionModel(**kwargs)
     assert message in str(e.value)
@@ -176,7 +179,7 @@ def test_wrong_argument_types_are_type_errors() -> None:
 @pytest.mark.parametrize("model_class", MODELS)
 def test_parse_refusals_carry_the_parsers_text(model_class: type[Model]) -> None:
     m = model_class()
-    cases = [
+    cases: list[tuple[list[Body], str]] = [
         (frame(0.1)[1:], 'the frame has no model named "actuator"'),
         (frame(0.1) + frame(0.1)[:1], 'more than one model named "actuator"'),
         (
@@ -209,11 +212,12 @@ def test_parse_accepts_any_sequences_of_numbers(model_class: type[Model]) -> Non
         ("actuator", 8, np.array([0.0, 0.1, 0.03]), [0.0, 0.0, 0.0, 1.0]),
         ("blockA", np.uint32(15), [0, 0.25, 0.05], np.array([0.0, 0.0, 0.0, 1.0])),
     )
-    poses = m.parse(bodies).poses()
+    # Wider than the stub's Sequence[float] positions and int ids, on purpose.
+    poses = m.parse(bodies).poses()  # type: ignore[arg-type]
     np.testing.assert_array_equal(poses, [[8, 0.0, 0.1, 0.0], [15, 0.0, 0.25, 0.0]])
     with pytest.raises(TypeError):
         m.parse(
-            [["actuator", 8, (0.0, 0.1, 0.03), (0.0, 0.0, 0.0, 1.0)]]
+            [["actuator", 8, (0.0, 0.1, 0.03), (0.0, 0.0, 0.0, 1.0)]]  # type: ignore[list-item]
         )  # a body is a tuple
 
 
@@ -440,7 +444,7 @@ def test_seeding_resets_the_stream_and_copies_keep_it(model_class: type[Model]) 
 @pytest.mark.parametrize("model_class", MODELS)
 def test_a_model_is_usable_from_another_thread(model_class: type[Model]) -> None:
     m = model_class()
-    result = {}
+    result: ThreadResult = {}
 
     def work() -> None:
         try:
@@ -542,7 +546,7 @@ def test_aitm_accepts_array_likes_and_any_float_dtype() -> None:
 
 def test_aitm_refusals() -> None:
     a = Aitm(2, 1, mode="besttwo")
-    cases = [
+    cases: list[tuple[Callable[[], object], str]] = [
         (
             lambda: a.update([1.0], [0.0]),
             "x has 1 components, but the map's input_dim is 2",
