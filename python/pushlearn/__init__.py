@@ -19,8 +19,8 @@ imported only when first used, so everything else works without it.
 
 from __future__ import annotations
 
-import sys
 import importlib
+import sys
 import types
 from typing import TYPE_CHECKING, Any
 
