@@ -217,6 +217,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
 /// Draws the figures of the experiments that have them and keeps those the
 /// page shows (`figures/NAME.png`) in docs/figures/, replacing the old ones;
 /// a figure the page shows that no experiment draws is an error.
+/// The baselines' learning curves beside the thesis's models.
+const BASELINE_FIGURE: &str = "baselines-curve";
+
 fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize> {
     let figure_dir = root.join(FIGURES_DIR);
     let scratch = figure_dir.join(".reproduce");
@@ -229,6 +232,11 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
         p.document
             .plot(&scratch)
             .with_context(|| format!("drawing the figures of {}", p.entry.name))?;
+    }
+    // Figures across documents: the baselines beside the thesis's models.
+    if let Ok(curves) = page::baseline_curves(results) {
+        pushlearn_cli::report::plot::learners(&curves, &scratch, BASELINE_FIGURE)
+            .context("drawing the baselines' figure")?;
     }
     let mut shown: Vec<&str> = page
         .match_indices("](figures/")

@@ -499,27 +499,35 @@ fn curves(results: &Reproduction, model: ModelKind) -> Result<String, String> {
     Ok(out)
 }
 
+/// The curves the baseline table and figure compare: the thesis's models'
+/// default curves and the baselines', each with its label.
+///
+/// # Errors
+/// A document the reproduction does not have.
+pub fn baseline_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)>, String> {
+    let names = ["push-task-gate", "push-task-interaction"]
+        .into_iter()
+        .chain(super::manifest::BASELINES.iter().map(|(name, ..)| *name));
+    names
+        .map(|name| {
+            let report = push_doc(results, name)?;
+            let label = match &report.setup.learner {
+                Some(l) => format!("{} {} (Python)", report.setup.model, l.version),
+                None => format!("{} (thesis model, Rust)", report.setup.model),
+            };
+            Ok((label, report))
+        })
+        .collect()
+}
+
 /// Gate, interaction, kNN and GP at the baseline table's training runs, all
 /// 21 positions: one row per learner and N.
 fn baselines(results: &Reproduction) -> Result<String, String> {
-    let mut learners = vec![
-        "push-task-gate".to_owned(),
-        "push-task-interaction".to_owned(),
-    ];
-    learners.extend(
-        super::manifest::BASELINES
-            .iter()
-            .map(|(name, ..)| (*name).to_owned()),
-    );
     let mut out = String::from(
         "| learner | N | block position [m] | block orientation [rad] | actuator [m] | folds |\n|---|---|---|---|---|---|\n",
     );
-    for name in &learners {
-        let report = push_doc(results, name)?;
-        let label = match &report.setup.learner {
-            Some(l) => format!("{} {} (Python)", report.setup.model, l.version),
-            None => format!("{} (thesis model, Rust)", report.setup.model),
-        };
+    for (label, report) in baseline_curves(results)? {
+        let name = &report.setup.model;
         for n in super::manifest::BASELINE_RUNS {
             let e = entry_at(report, name, n)?;
             let _ = writeln!(

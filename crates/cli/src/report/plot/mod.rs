@@ -20,6 +20,7 @@ mod cost;
 mod curves;
 mod draw;
 mod feedback;
+mod learners;
 mod move_to_target;
 mod positions;
 mod push;
@@ -32,6 +33,7 @@ use std::path::PathBuf;
 
 pub use cost::{cost_csv, cost_growth, CostPoint};
 pub use feedback::feedback;
+pub use learners::learners;
 pub use move_to_target::move_to_target;
 pub use push::push;
 pub use scaling::{aitm_scaling, parse_scaling_csv, ScalingRow};

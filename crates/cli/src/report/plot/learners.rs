@@ -1,0 +1,73 @@
+//! Learning curves of several learners on one figure (`docs/results.md`,
+//! "Baselines"): the same push task, one series per learner.
+
+use std::path::{Path, PathBuf};
+
+use learner::eval::MeanStd;
+
+use super::draw::{palette, prepare, write, Grid, Panel, Series};
+use super::PlotError;
+use crate::results::push_task::CurveEntry;
+use crate::results::PushReport;
+
+/// Draws `dir/{stem}.png` and `.svg`: block position, block orientation and
+/// actuator error over the training runs (all 21 test positions, mean ±
+/// mean per-position std), one series per `(label, report)`.
+///
+/// # Errors
+/// The directory cannot be created or the figure cannot be written.
+pub fn learners(
+    curves: &[(String, &PushReport)],
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    prepare(dir)?;
+    let n_max = curves
+        .iter()
+        .flat_map(|(_, r)| r.results.iter().map(|e| e.train_runs))
+        .max()
+        .unwrap_or(1) as f64;
+    let folds = curves.iter().map(|(_, r)| r.folds).max().unwrap_or(0);
+    let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd| Panel {
+        title: title.to_owned(),
+        x_desc: "training runs".to_owned(),
+        y_desc: y.to_owned(),
+        x_range: 0.0..n_max + 1.0,
+        offset: 0.3,
+        counts: true,
+        series: curves
+            .iter()
+            .enumerate()
+            .map(|(k, (label, report))| Series {
+                label: label.clone(),
+                colour: palette(k),
+                points: report
+                    .results
+                    .iter()
+                    .map(|e| {
+                        let m = get(e);
+                        (e.train_runs as f64, m.mean, m.std)
+                    })
+                    .collect(),
+                bars: true,
+            })
+            .collect(),
+    };
+    let grid = Grid {
+        title: format!(
+            "push task, all 21 test positions, {folds} folds: mean ± mean per-position std"
+        ),
+        columns: 3,
+        panel_size: (420, 340),
+        panels: vec![
+            panel("block position", "error [m]", |e| e.blue.block_pos_err),
+            panel("block orientation", "error [rad]", |e| e.blue.block_ori_err),
+            panel("actuator position", "error [m]", |e| {
+                e.blue.actuator_pos_err
+            }),
+        ],
+    };
+    let mut written = Vec::new();
+    write(&grid, dir, stem, &mut written)?;
+    Ok(written)
+}
