@@ -12,32 +12,39 @@ import pytest
 from conftest import LIMIT, PYTHON_DIR, TESTS_DIR, python_env
 
 
-def experiment(
-    driver_bin: Path, sim_bin: Path, learner: str, *extra: str
+def pushlearn(
+    driver_bin: Path, sim_bin: Path, *args: str, cwd: Path = TESTS_DIR
 ) -> subprocess.CompletedProcess[str]:
+    """``pushlearn experiment ARGS`` with this build's world."""
     return subprocess.run(
-        [
-            str(driver_bin),
-            "experiment",
-            "push-task",
-            "--learner",
-            learner,
-            "--train-runs",
-            "1",
-            "--folds",
-            "1",
-            "--workers",
-            "1",
-            "--sim-bin",
-            str(sim_bin),
-            *extra,
-        ],
+        [str(driver_bin), "experiment", *args, "--sim-bin", str(sim_bin)],
         capture_output=True,
         text=True,
         env=python_env(),
-        cwd=TESTS_DIR,
-        timeout=4 * LIMIT,
+        cwd=cwd,
+        timeout=8 * LIMIT,
         check=False,
+    )
+
+
+def experiment(
+    driver_bin: Path, sim_bin: Path, learner: str, *extra: str, cwd: Path = TESTS_DIR
+) -> subprocess.CompletedProcess[str]:
+    """A one-fold push task with one training run, on one worker."""
+    return pushlearn(
+        driver_bin,
+        sim_bin,
+        "push-task",
+        "--learner",
+        learner,
+        "--train-runs",
+        "1",
+        "--folds",
+        "1",
+        "--workers",
+        "1",
+        *extra,
+        cwd=cwd,
     )
 
 
@@ -98,15 +105,7 @@ def comparable(path: Path) -> str:
 
 
 def run_driver(driver_bin: Path, sim_bin: Path, *args: str) -> str:
-    done = subprocess.run(
-        [str(driver_bin), "experiment", *args, "--sim-bin", str(sim_bin)],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        cwd=TESTS_DIR,
-        timeout=8 * LIMIT,
-        check=False,
-    )
+    done = pushlearn(driver_bin, sim_bin, *args)
     assert done.returncode == 0, done.stderr
     return done.stdout
 
@@ -151,30 +150,13 @@ def test_the_readme_learner_runs_through_the_driver(
     assert len(blocks) == 1, "README.md lost its mylearner.py example"
     (tmp_path / "mylearner.py").write_text(blocks[0])
     report = tmp_path / "still.json"
-    done = subprocess.run(
-        [
-            str(driver_bin),
-            "experiment",
-            "push-task",
-            "--train-runs",
-            "1",
-            "--folds",
-            "1",
-            "--workers",
-            "1",
-            "--learner",
-            f"{sys.executable} -m pushlearn.serve mylearner.py:Still",
-            "--json",
-            str(report),
-            "--sim-bin",
-            str(sim_bin),
-        ],
-        capture_output=True,
-        text=True,
-        env=python_env(),
+    done = experiment(
+        driver_bin,
+        sim_bin,
+        f"{sys.executable} -m pushlearn.serve mylearner.py:Still",
+        "--json",
+        str(report),
         cwd=tmp_path,
-        timeout=4 * LIMIT,
-        check=False,
     )
     assert done.returncode == 0, done.stderr
     result = json.loads(report.read_text())

@@ -13,6 +13,7 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use futures::{SinkExt, StreamExt};
+use pushlearn_cli::process::kill_group;
 use serde_json::{json, Value};
 use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::Message;
@@ -238,18 +239,4 @@ fn devtools_url(child: &mut Child) -> Result<String, String> {
     });
     rx.recv_timeout(LIMIT)
         .map_err(|_| format!("no DevTools address within {LIMIT:?}"))?
-}
-
-/// Kills the browser's process group (renderers, GPU and zygote processes
-/// included), then reaps the browser.
-fn kill_group(child: &mut Child) {
-    // The group id is the browser's pid (`process_group(0)`); `kill` the
-    // program avoids unsafe code for the signal.
-    let _ = Command::new("kill")
-        .args(["-KILL", "--", &format!("-{}", child.id())])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status();
-    let _ = child.kill();
-    let _ = child.wait();
 }

@@ -24,6 +24,7 @@ pub mod latency;
 pub mod learn;
 pub mod load;
 pub mod models;
+pub mod process;
 pub mod report;
 pub mod reproduce;
 pub mod results;

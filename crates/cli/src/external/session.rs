@@ -20,6 +20,7 @@ use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request}
 use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
 
 use super::LearnerError;
+use crate::process::kill_group;
 
 /// Where a learner runs.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -451,17 +452,4 @@ impl Drop for Session {
             }
         }
     }
-}
-
-/// Kills the learner's process group (the shell and whatever it started),
-/// then reaps the shell. Without `unsafe` there is no `killpg` here, so the
-/// system's `kill` does it; the shell itself is killed directly in any case.
-fn kill_group(child: &mut Child) {
-    let _ = Command::new("kill")
-        .args(["-KILL", "--", &format!("-{}", child.id())])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status();
-    let _ = child.kill();
-    let _ = child.wait();
 }
