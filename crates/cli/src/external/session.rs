@@ -2,15 +2,21 @@
 //! child process spoken to on its stdin and stdout, or a learner daemon's
 //! TCP socket. Requests go out in the protocol's framing; one-way calls are
 //! buffered and leave with the next call that is answered, so a world
-//! message costs one round trip. A reader thread turns the learner's output
-//! into replies, so that every wait has a deadline even on a pipe.
+//! message costs one round trip.
+//!
+//! The child's stdin and stdout are the two directions of one Unix socket
+//! pair rather than two pipes: a socket has a read timeout, so the driver
+//! waits for a reply on its own thread with a deadline. (A reader thread
+//! would give pipes a deadline too, at the price of a second wake-up per
+//! reply, which on an idle machine doubled the protocol's cost.)
 
 use std::collections::VecDeque;
-use std::io::{Read, Write};
+use std::io::{ErrorKind, Read, Write};
 use std::net::{Shutdown, TcpStream};
+use std::os::fd::OwnedFd;
+use std::os::unix::net::UnixStream;
 use std::os::unix::process::CommandExt;
-use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc;
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use bytes::BytesMut;
@@ -48,12 +54,12 @@ enum Event {
     Closed,
 }
 
-/// The write side and what must be cleaned up.
+/// The connection and what must be cleaned up.
 enum Transport {
-    /// `stdin` is taken to close it when the session ends.
+    /// `stream` is the driver's end of the child's stdin and stdout.
     Child {
         child: Child,
-        stdin: Option<ChildStdin>,
+        stream: UnixStream,
     },
     Socket(TcpStream),
 }
@@ -61,11 +67,22 @@ enum Transport {
 impl Transport {
     fn write_all(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         match self {
-            Transport::Child {
-                stdin: Some(stdin), ..
-            } => stdin.write_all(bytes).and_then(|()| stdin.flush()),
-            Transport::Child { stdin: None, .. } => Err(std::io::ErrorKind::BrokenPipe.into()),
+            Transport::Child { stream, .. } => stream.write_all(bytes),
             Transport::Socket(stream) => stream.write_all(bytes),
+        }
+    }
+
+    /// Reads what is there, waiting at most `timeout` (not zero).
+    fn read(&mut self, chunk: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+        match self {
+            Transport::Child { stream, .. } => {
+                stream.set_read_timeout(Some(timeout))?;
+                stream.read(chunk)
+            }
+            Transport::Socket(stream) => {
+                stream.set_read_timeout(Some(timeout))?;
+                stream.read(chunk)
+            }
         }
     }
 }
@@ -73,7 +90,9 @@ impl Transport {
 /// One learner instance.
 pub struct Session {
     transport: Transport,
-    events: mpsc::Receiver<Event>,
+    decoder: FrameDecoder<Reply>,
+    /// Bytes read but not yet decoded.
+    buffer: BytesMut,
     next_seq: u64,
     /// Encoded one-way requests not yet written.
     pending: Vec<u8>,
@@ -137,71 +156,32 @@ fn expected_answer(call: &Call) -> Option<&'static str> {
     }
 }
 
-/// Reads frames until the stream ends or stops being frames.
-fn read_replies(mut input: impl Read, events: &mpsc::Sender<Event>) {
-    let mut decoder = FrameDecoder::<Reply>::new();
-    let mut buffer = BytesMut::with_capacity(4096);
-    let mut chunk = [0_u8; 4096];
-    loop {
-        loop {
-            match decoder.decode(&mut buffer) {
-                Ok(Some(reply)) => {
-                    if events.send(Event::Reply(reply)).is_err() {
-                        return;
-                    }
-                }
-                Ok(None) => break,
-                Err(err) => {
-                    let _ = events.send(Event::Garbage(err));
-                    return;
-                }
-            }
-        }
-        match input.read(&mut chunk) {
-            Ok(0) | Err(_) => {
-                let event = if buffer.is_empty() {
-                    Event::Closed
-                } else {
-                    Event::Garbage(WireError::Truncated {
-                        buffered: buffer.len(),
-                    })
-                };
-                let _ = events.send(event);
-                return;
-            }
-            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
-        }
-    }
-}
-
 impl Session {
     /// Starts the learner (a child, or a connection to a daemon).
     ///
     /// # Errors
     /// The command cannot be started or the daemon cannot be reached.
     pub fn open(source: &Source, timeout: Duration) -> Result<Self, LearnerError> {
-        let (sender, events) = mpsc::channel();
+        let start_error =
+            |e: std::io::Error| LearnerError::Start(format!("cannot run {source}: {e}"));
         let transport = match source {
             Source::Command(command) => {
-                let mut child = Command::new("sh")
+                let (ours, theirs) = UnixStream::pair().map_err(start_error)?;
+                let theirs_out = theirs.try_clone().map_err(start_error)?;
+                let child = Command::new("sh")
                     .arg("-c")
                     .arg(command)
                     // Its own process group, so that a learner the shell
                     // started as its child is stopped with it (`kill_group`).
                     .process_group(0)
-                    .stdin(Stdio::piped())
-                    .stdout(Stdio::piped())
+                    .stdin(Stdio::from(OwnedFd::from(theirs)))
+                    .stdout(Stdio::from(OwnedFd::from(theirs_out)))
                     .stderr(Stdio::inherit())
                     .spawn()
-                    .map_err(|e| LearnerError::Start(format!("cannot run {source}: {e}")))?;
-                let (Some(stdin), Some(stdout)) = (child.stdin.take(), child.stdout.take()) else {
-                    kill_group(&mut child);
-                    return Err(LearnerError::Start(format!("{source} has no pipes")));
-                };
-                std::thread::spawn(move || read_replies(stdout, &sender));
+                    .map_err(start_error)?;
                 Transport::Child {
                     child,
-                    stdin: Some(stdin),
+                    stream: ours,
                 }
             }
             Source::Connect(addr) => {
@@ -212,22 +192,48 @@ impl Session {
                 })?;
                 // Requests are small and each waits for its answer.
                 let _ = stream.set_nodelay(true);
-                let reader = stream
-                    .try_clone()
-                    .map_err(|e| LearnerError::Start(format!("{source}: {e}")))?;
-                std::thread::spawn(move || read_replies(reader, &sender));
                 Transport::Socket(stream)
             }
         };
         Ok(Self {
             transport,
-            events,
+            decoder: FrameDecoder::new(),
+            buffer: BytesMut::with_capacity(4096),
             next_seq: 1,
             pending: Vec::new(),
             unanswered: VecDeque::new(),
             timeout,
             failed: false,
         })
+    }
+
+    /// The learner's next reply, or why there is none by `deadline`
+    /// (`None`: the deadline passed).
+    fn next_event(&mut self, deadline: Instant) -> Option<Event> {
+        let mut chunk = [0_u8; 4096];
+        loop {
+            match self.decoder.decode(&mut self.buffer) {
+                Ok(Some(reply)) => return Some(Event::Reply(reply)),
+                Ok(None) => {}
+                Err(err) => return Some(Event::Garbage(err)),
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            if left.is_zero() {
+                return None;
+            }
+            match self.transport.read(&mut chunk, left) {
+                Ok(0) if self.buffer.is_empty() => return Some(Event::Closed),
+                Ok(0) => {
+                    return Some(Event::Garbage(WireError::Truncated {
+                        buffered: self.buffer.len(),
+                    }))
+                }
+                Ok(n) => self.buffer.extend_from_slice(&chunk[..n]),
+                Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {}
+                Err(e) if e.kind() == ErrorKind::Interrupted => {}
+                Err(_) => return Some(Event::Closed),
+            }
+        }
     }
 
     /// Sends `call`. A one-way call is only queued (`Ok(None)`); an answered
@@ -268,24 +274,19 @@ impl Session {
         })?;
         self.pending.extend_from_slice(&frame);
         let Some(expected) = expected else {
+            // An Error the learner sends about it is read with the next
+            // answer.
             self.unanswered.push_back((seq, name));
-            // A learner that failed on an earlier one-way call may have
-            // said so already; stop at once rather than at the next answer.
-            return match self.events.try_recv() {
-                Ok(event) => Err(self.unexpected(event, seq, name)),
-                Err(_) => Ok(None),
-            };
+            return Ok(None);
         };
         self.flush(seq, name)?;
-        let deadline = Instant::now() + self.timeout;
-        let event = self
-            .events
-            .recv_timeout(deadline.saturating_duration_since(Instant::now()))
-            .map_err(|_| LearnerError::Timeout {
-                seq,
-                call: name,
-                after: self.timeout,
-            })?;
+        let event =
+            self.next_event(Instant::now() + self.timeout)
+                .ok_or(LearnerError::Timeout {
+                    seq,
+                    call: name,
+                    after: self.timeout,
+                })?;
         let Event::Reply(reply) = event else {
             return Err(self.unexpected(event, seq, name));
         };
@@ -319,8 +320,7 @@ impl Session {
             // A broken pipe: the learner is gone. Why is for the reader to
             // tell (it may have sent an Error first).
             let event = self
-                .events
-                .recv_timeout(Duration::from_millis(500))
+                .next_event(Instant::now() + Duration::from_millis(500))
                 .unwrap_or(Event::Closed);
             return Err(self.unexpected(event, seq, name));
         }
@@ -431,8 +431,9 @@ impl Drop for Session {
             let _ = self.transport.write_all(&bytes);
         }
         match &mut self.transport {
-            Transport::Child { child, stdin } => {
-                drop(stdin.take());
+            Transport::Child { child, stream } => {
+                // The child reads the end of its input.
+                let _ = stream.shutdown(Shutdown::Write);
                 let deadline = Instant::now() + Duration::from_secs(1);
                 loop {
                     match child.try_wait() {
