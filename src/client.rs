@@ -38,6 +38,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 use tokio::net::{TcpStream, ToSocketAddrs};
 use tokio::time::Instant;
 
+use crate::duration;
 use crate::wire::pb::{self, client_message::Payload, server_message};
 use crate::wire::{validate, ClientConnection, InvalidCommand, WireError};
 
@@ -51,12 +52,24 @@ pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(10);
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     /// TCP connect failed.
-    #[error("cannot connect to the world at {addr}: {reason}")]
+    #[error(
+        "cannot connect to the world at {addr}: {reason}{}",
+        connect_hint(reason, addr)
+    )]
     Connect {
         /// The address as given.
         addr: String,
         /// The cause (in the message, not a `source`, so it is printed once).
         reason: std::io::Error,
+    },
+    /// Something answers at the address, but it is no world daemon: no
+    /// Hello came first.
+    #[error("{addr} is not a pushlearn-sim: {why}")]
+    NotAWorld {
+        /// The address as given.
+        addr: String,
+        /// What it did instead.
+        why: String,
     },
     /// Framing or transport failure.
     #[error(transparent)]
@@ -65,7 +78,7 @@ pub enum ClientError {
     #[error("the world closed the connection")]
     Closed,
     /// Nothing suitable arrived in time.
-    #[error("timed out after {after:?} waiting for {waiting_for}")]
+    #[error("timed out after {} waiting for {waiting_for}", duration::describe(*after))]
     Timeout {
         /// What was awaited.
         waiting_for: &'static str,
@@ -231,37 +244,63 @@ impl SimClient {
     ) -> Result<Self, ClientError> {
         let deadline = options.timeout.map(|t| Instant::now() + t);
         let addr_text = addr.to_string();
-        let stream = within(
+        let connect_error = |reason| ClientError::Connect {
+            addr: addr_text.clone(),
+            reason,
+        };
+        let stream = match within(
             deadline,
             options.timeout,
             "the TCP connection",
             TcpStream::connect(addr),
         )
-        .await?
-        .map_err(|reason| ClientError::Connect {
-            addr: addr_text.clone(),
-            reason,
-        })?;
+        .await
+        {
+            Ok(connected) => connected.map_err(connect_error)?,
+            Err(ClientError::Timeout { after, .. }) => {
+                return Err(connect_error(std::io::Error::new(
+                    std::io::ErrorKind::TimedOut,
+                    format!("no answer within {}", duration::describe(after)),
+                )))
+            }
+            Err(err) => return Err(err),
+        };
         let mut connection = ClientConnection::new(stream);
-        let first = within(
+        let not_a_world = |why: String| ClientError::NotAWorld {
+            addr: addr_text.clone(),
+            why,
+        };
+        let first = match within(
             deadline,
             options.timeout,
             "the Hello message",
             connection.read(),
         )
-        .await??;
+        .await
+        {
+            Ok(Ok(first)) => first,
+            Ok(Err(wire)) => {
+                return Err(not_a_world(format!(
+                    "what it sent first is no pushlearn frame ({wire})"
+                )))
+            }
+            Err(ClientError::Timeout { after, .. }) => {
+                return Err(not_a_world(format!(
+                    "it accepted the connection but sent no Hello within {}, and a world \
+                     greets every client at once{NOT_THE_VIEWER}",
+                    duration::describe(after)
+                )))
+            }
+            Err(err) => return Err(err),
+        };
         let hello = match first.map(|m| m.payload) {
             Some(Some(server_message::Payload::Hello(hello))) => hello,
             Some(Some(server_message::Payload::Error(error))) => return Err(world_error(error)),
-            Some(_) => {
-                return Err(ClientError::Protocol(
-                    "the first message was not Hello".into(),
-                ))
-            }
+            Some(_) => return Err(not_a_world("its first message was not a Hello".into())),
             None => {
-                return Err(ClientError::Protocol(
-                    "the connection ended before Hello".into(),
-                ))
+                return Err(not_a_world(format!(
+                    "it closed the connection without a Hello{NOT_THE_VIEWER}"
+                )))
             }
         };
         tracing::debug!(addr = %addr_text, scene = %hello.scene, mode = %hello.timing_mode, "connected");
@@ -487,6 +526,22 @@ fn second_hello() -> ClientError {
 }
 
 /// Runs `future` until `deadline` (forever if `None`).
+/// The likeliest wrong address: the viewer's page, an HTTP server that
+/// waits for a request in silence.
+const NOT_THE_VIEWER: &str =
+    " (the viewer's HTTP port, 11346 by default, answers that way; the world's is 11345)";
+
+/// What to try after a failed connect.
+fn connect_hint(reason: &std::io::Error, addr: &str) -> String {
+    match reason.kind() {
+        std::io::ErrorKind::ConnectionRefused => {
+            format!("; is pushlearn-sim running on {addr}? (`pushlearn-sim serve` starts one on 127.0.0.1:11345)")
+        }
+        std::io::ErrorKind::TimedOut => "; is the host up and the address right?".to_owned(),
+        _ => String::new(),
+    }
+}
+
 async fn within<T>(
     deadline: Option<Instant>,
     limit: Option<Duration>,

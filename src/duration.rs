@@ -42,6 +42,12 @@ pub fn parse_positive_seconds(text: &str) -> Result<Duration, SecondsError> {
     }
 }
 
+/// `d` as people read it: `10 s`, `0.25 s`.
+#[must_use]
+pub fn describe(d: Duration) -> String {
+    format!("{} s", d.as_secs_f64())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,11 +4,13 @@
 //!   connections and command validation, used by the world daemon and every
 //!   client alike;
 //! * [`client`]: an async client for the world daemon;
-//! * [`duration`]: the `SECONDS` of every binary's command line.
+//! * [`duration`]: the `SECONDS` of every binary's command line;
+//! * [`errors`]: how every binary reports a failure and colours its logs.
 //!
 //! The application (learner daemon, experiments, reports, viewer, `ctl`) is
 //! the `pushlearn-cli` crate in `crates/cli`; the world is `sim-plugin`.
 
 pub mod client;
 pub mod duration;
+pub mod errors;
 pub mod wire;

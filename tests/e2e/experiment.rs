@@ -41,7 +41,7 @@ impl Drop for TempDir {
     }
 }
 
-fn pushlearn(args: &[&str]) -> Output {
+pub(crate) fn pushlearn(args: &[&str]) -> Output {
     let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
     command.args(args);
     run(command)
@@ -304,7 +304,7 @@ fn learn_drives_a_lockstep_world_and_shows_its_predictions() {
     let addr = world.addr.to_string();
     let stdout = succeeded(&pushlearn(&[
         "learn",
-        "--connect",
+        "--sim",
         &addr,
         "--action",
         "0,0.5",
@@ -345,7 +345,7 @@ fn learn_in_realtime_reports_its_work_times() {
     let addr = world.addr.to_string();
     let stdout = succeeded(&pushlearn(&[
         "learn",
-        "--connect",
+        "--sim",
         &addr,
         "--model",
         "interaction",
@@ -366,6 +366,7 @@ fn a_world_in_the_wrong_mode_or_scene_is_refused_clearly() {
     let out = pushlearn(&[
         "experiment",
         "push-task",
+        // The old name of --sim, kept as a hidden alias.
         "--connect",
         &addr,
         "--mode",
@@ -382,7 +383,7 @@ fn a_world_in_the_wrong_mode_or_scene_is_refused_clearly() {
     let out = pushlearn(&[
         "experiment",
         "push-task",
-        "--connect",
+        "--sim",
         &addr,
         "--mode",
         "realtime",
@@ -406,7 +407,7 @@ fn a_world_with_another_latency_maximum_is_refused_and_the_matching_one_recorded
     let common = [
         "experiment",
         "push-task",
-        "--connect",
+        "--sim",
         &addr,
         "--train-runs",
         "1",

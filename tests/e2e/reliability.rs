@@ -160,6 +160,7 @@ fn settings() -> Settings {
         shadows: false,
         seed: 1,
         model_options: pushlearn_cli::models::ModelOptions::default().canonical(),
+        episodes: pushlearn_cli::learn::state::EpisodeSettings::default(),
     }
 }
 
@@ -176,7 +177,7 @@ fn uninterrupted(n: u64) -> Learner<GateModel> {
         let mut client = SimClient::connect(world.addr).await.expect("connect");
         let options = ServeOptions {
             max_messages: Some(n),
-            report_every: None,
+            ..ServeOptions::default()
         };
         serve(&mut client, &mut learner, options, |_| {})
             .await
@@ -206,6 +207,7 @@ fn a_learner_killed_mid_training_resumes_bit_identically_and_cuts_a_torn_tail() 
     let state = dir.0.join("memory");
     let state_arg = state.to_string_lossy().into_owned();
     let args = [
+        // The old name of --sim, kept as a hidden alias.
         "--connect",
         &addr,
         "--action",
@@ -309,7 +311,7 @@ fn a_restarted_world_is_reconnected_with_backoff_and_the_model_resynchronised() 
     let addr = world.addr.to_string();
     let mut learn = Learn::start(
         &[
-            "--connect",
+            "--sim",
             &addr,
             "--action",
             "0,0.5",

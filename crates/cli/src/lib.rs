@@ -5,6 +5,7 @@
 //! * [`learn`]: the learner daemon;
 //! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
 //! * [`models`]: the learners by name;
+//! * [`output`]: output paths checked before the work that fills them;
 //! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
 //!   and figures;
 //! * [`results`]: what the experiments measured, as plain data: filled by
@@ -24,6 +25,7 @@ pub mod latency;
 pub mod learn;
 pub mod load;
 pub mod models;
+pub mod output;
 pub mod process;
 pub mod report;
 pub mod reproduce;

@@ -11,7 +11,10 @@ use tracing_subscriber::EnvFilter;
 /// Memory-based online learning of object manipulation: tools around the
 /// pushlearn world daemon (`pushlearn-sim`).
 ///
-/// Logging goes to stderr and is controlled by RUST_LOG (e.g. RUST_LOG=debug).
+/// Logging goes to stderr and is controlled by RUST_LOG (e.g. RUST_LOG=debug);
+/// it is coloured only on a terminal and never with NO_COLOR set. A failure
+/// prints `error: …` (with a `caused by:` line per further cause) and exits
+/// with status 1; a command line clap cannot parse exits with status 2.
 #[derive(Debug, Parser)]
 #[command(name = "pushlearn", version, propagate_version = true)]
 struct Cli {
@@ -37,6 +40,7 @@ fn main() -> ExitCode {
             EnvFilter::try_from_default_env().unwrap_or_else(|_| EnvFilter::new("warn")),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(pushlearn::errors::colours())
         .init();
     let result = match cli.command {
         Command::Ctl(args) => cli::ctl::run(args),
@@ -52,7 +56,7 @@ fn main() -> ExitCode {
         // `pushlearn ctl watch | head` closing the pipe is a normal way to stop.
         Err(err) if cli::is_broken_pipe(&err) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err:#}");
+            eprintln!("{}", pushlearn::errors::describe(err.as_ref()));
             ExitCode::FAILURE
         }
     }

@@ -149,6 +149,7 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default_level)),
         )
         .with_writer(std::io::stderr)
+        .with_ansi(pushlearn::errors::colours())
         .init();
     let result = match cli.command {
         None => run_serve(&cli.serve),
@@ -158,7 +159,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("pushlearn-sim: {err:#}");
+            eprintln!("{}", pushlearn::errors::describe(err.as_ref()));
             ExitCode::FAILURE
         }
     }

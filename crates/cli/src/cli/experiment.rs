@@ -69,7 +69,7 @@ struct WorldArgs {
     /// With --mode lockstep-jitter: the largest delay of a Move, in physics
     /// steps, each delay uniform over 0…N. The default 2 is derived from the
     /// thesis's timing (docs/spec/world.md §8); 5 is the harsher setting
-    /// docs/results.md reports as a robustness row. With --connect, pass the
+    /// docs/results.md reports as a robustness row. With --sim, pass the
     /// value the world was started with (it is recorded in the report).
     #[arg(long, value_name = "N", default_value_t = LATENCY_MAX_STEPS)]
     latency_max: u32,
@@ -84,10 +84,11 @@ struct WorldArgs {
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
 
-    /// Use an already running world instead of starting one (one worker).
-    /// Its scene and timing mode must match the experiment.
-    #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["workers", "sim_bin"])]
-    connect: Option<String>,
+    /// Use the world already running at HOST:PORT instead of starting one
+    /// (one worker). Its scene and timing mode must match the experiment.
+    #[arg(long, value_name = "HOST:PORT", alias = "connect",
+          conflicts_with_all = ["workers", "sim_bin"])]
+    sim: Option<String>,
 
     /// In the lock-step modes, simulate every run afresh instead of reusing
     /// the states of an identical earlier run (same commands since the
@@ -261,7 +262,7 @@ impl WorldArgs {
         if self.mode != Mode::LockstepJitter && self.latency_max != LATENCY_MAX_STEPS {
             bail!("--latency-max sets the latency emulation of --mode lockstep-jitter; drop it or add --mode lockstep-jitter");
         }
-        let source = match &self.connect {
+        let source = match &self.sim {
             Some(addr) => WorldSource::Connect(addr.clone()),
             None => WorldSource::Spawn {
                 bin: find_sim_binary(self.sim_bin.as_deref())?,
@@ -291,17 +292,7 @@ impl WorldArgs {
                 .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
         }
         if let Some(path) = &self.json {
-            let parent = path
-                .parent()
-                .filter(|p| !p.as_os_str().is_empty())
-                .unwrap_or(std::path::Path::new("."));
-            if !parent.is_dir() {
-                bail!(
-                    "cannot write --json {}: the directory {} does not exist",
-                    path.display(),
-                    parent.display()
-                );
-            }
+            pushlearn_cli::output::check_file(path, "--json")?;
         }
         Ok(())
     }

@@ -8,9 +8,16 @@ use clap::Args;
 use learner::{Action, Model, ObjectState};
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
 use pushlearn::duration;
+use pushlearn_cli::experiment::move_to_target::MAX_STEPS;
+use pushlearn_cli::learn::pretrain::{pretrain, Pretrain};
 use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
-use pushlearn_cli::learn::state::{Durable, Opened, Settings, DEFAULT_SNAPSHOT_EVERY};
-use pushlearn_cli::learn::{Learner, OnState, Policy, ServeOptions, Stop, WorkSummary};
+use pushlearn_cli::learn::state::{
+    load_model, write_snapshot_file, Durable, EpisodeSettings, Opened, Settings,
+    DEFAULT_SNAPSHOT_EVERY, SNAPSHOT_FILE,
+};
+use pushlearn_cli::learn::{
+    EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop,
+};
 use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
 
 use super::experiment::{parse_numbers, parse_pose};
@@ -27,6 +34,15 @@ use super::experiment::{parse_numbers, parse_pose};
 /// realtime world the work per message is measured against the 2/f budget
 /// (20 ms at 100 Hz). Stop with Ctrl-C: a summary follows.
 ///
+/// An untrained model does not know yet what pushing does: with --pretrain
+/// thesis it first makes the thesis's eight fixed training pushes against
+/// the world (as Move to Target does before its test run), or it starts
+/// from a model kept earlier (--memory). With --target the daemon makes
+/// --episodes attempts (the world reset between them, the model learning
+/// across all), each ending when the model finds the target reached or
+/// after --max-steps, prints the distance to the target on the way and how
+/// each attempt ended, then stops.
+///
 /// With --state DIR the learner's memory is kept on disk (snapshots plus a
 /// checksummed journal of every state, docs/reliability.md): a daemon
 /// killed at any moment resumes where it left off. If the world goes away
@@ -35,14 +51,16 @@ use super::experiment::{parse_numbers, parse_pose};
 #[command(
     group = clap::ArgGroup::new("policy").required(true).args(["action", "target"]),
     after_help = "Examples:\n  \
-        pushlearn learn --action 0,0.5 --shadows\n  \
-        pushlearn learn --model interaction --target 0.6,0.7,-2.1 --report-every 5\n  \
+        pushlearn learn --pretrain thesis --target=-0.6,-0.7,0 --shadows\n  \
+        pushlearn learn --pretrain thesis --target=-0.6,-0.7,0 --episodes 5 --save-model gate.model\n  \
+        pushlearn learn --memory gate.model --target 0.6,-0.7,3.1416\n  \
         pushlearn learn --action 0,0.5 --state ~/.pushlearn/gate-memory"
 )]
 pub struct LearnArgs {
-    /// Address of the world daemon.
-    #[arg(long, value_name = "HOST:PORT", default_value = DEFAULT_ADDR)]
-    connect: String,
+    /// Address of the world daemon (pushlearn-sim).
+    #[arg(long, value_name = "HOST:PORT", default_value = DEFAULT_ADDR,
+          alias = "connect")]
+    sim: String,
 
     /// The learner.
     #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
@@ -68,6 +86,38 @@ pub struct LearnArgs {
     /// Stop after N world states.
     #[arg(long, value_name = "N")]
     messages: Option<u64>,
+
+    /// With --target: attempts to make; the world is reset between them and
+    /// the model keeps learning across all.
+    #[arg(long, value_name = "N", default_value_t = 1, requires = "target",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    episodes: u32,
+
+    /// With --target: the step limit of one attempt (the thesis's 3000).
+    #[arg(long, value_name = "N", default_value_t = MAX_STEPS, requires = "target",
+          value_parser = clap::value_parser!(u64).range(1..))]
+    max_steps: u64,
+
+    /// With --target: print the distance to the target every N world states
+    /// (0: never).
+    #[arg(long, value_name = "N", default_value_t = 100, requires = "target")]
+    progress_every: u64,
+
+    /// Train before pursuing the policy: `thesis` makes the thesis's eight
+    /// fixed training pushes of Move to Target against the world first.
+    #[arg(long, value_enum, value_name = "PROGRAMME")]
+    pretrain: Option<Pretrain>,
+
+    /// Start from the model kept in PATH: an earlier daemon's --state
+    /// directory or a --save-model file (read, never changed). It must have
+    /// been made with the same --model, model options and publish rate.
+    #[arg(long, value_name = "PATH")]
+    memory: Option<PathBuf>,
+
+    /// When the daemon stops, write its model to FILE (atomically), for a
+    /// later --memory FILE.
+    #[arg(long, value_name = "FILE")]
+    save_model: Option<PathBuf>,
 
     /// Seed of the planner's exploration.
     #[arg(long, default_value_t = 1)]
@@ -107,13 +157,14 @@ fn parse_seconds(text: &str) -> Result<Duration, String> {
 
 /// Runs `pushlearn learn`.
 pub fn run(args: LearnArgs) -> Result<()> {
+    check_outputs(&args)?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
         .context("cannot start the async runtime")?;
     runtime.block_on(async {
         let client =
-            SimClient::connect_with(args.connect.as_str(), ClientOptions::clock_seqs()).await?;
+            SimClient::connect_with(args.sim.as_str(), ClientOptions::clock_seqs()).await?;
         let rate = client.hello().publish_rate;
         if args.options.low_frequency() && rate != pushlearn_cli::experiment::LOW_RATE_HZ {
             anyhow::bail!(
@@ -135,6 +186,24 @@ pub fn run(args: LearnArgs) -> Result<()> {
     })
 }
 
+/// The files the daemon writes, checked before it connects: a typo must
+/// not cost a long run's model.
+fn check_outputs(args: &LearnArgs) -> Result<()> {
+    if let Some(file) = &args.save_model {
+        pushlearn_cli::output::check_file(file, "--save-model")?;
+    }
+    if let Some(dir) = &args.state {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the --state directory {}", dir.display()))?;
+    }
+    if let Some(path) = &args.memory {
+        if !path.exists() {
+            anyhow::bail!("--memory {}: no such file or directory", path.display());
+        }
+    }
+    Ok(())
+}
+
 struct Daemon<'a> {
     client: SimClient,
     policy: Policy,
@@ -146,7 +215,7 @@ impl<'a> WithModel for Daemon<'a> {
 
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
         let Daemon {
-            client,
+            mut client,
             policy,
             args,
         } = self;
@@ -156,12 +225,6 @@ impl<'a> WithModel for Daemon<'a> {
                 "pushlearn learn: {} model on scene {} ({} Hz, {}); Ctrl-C to stop",
                 args.model, hello.scene, hello.publish_rate, hello.timing_mode
             );
-            let fresh = || Learner::new(untrained, policy, args.shadows, args.seed);
-            let Some(dir) = &args.state else {
-                let mut learner = fresh();
-                attached(client, &mut learner, args).await?;
-                return finish(&learner, policy);
-            };
             let settings = Settings {
                 model: args.model.to_string(),
                 publish_rate_hz: hello.publish_rate,
@@ -169,6 +232,36 @@ impl<'a> WithModel for Daemon<'a> {
                 shadows: args.shadows,
                 seed: args.seed,
                 model_options: args.options.canonical(),
+                episodes: EpisodeSettings {
+                    episodes: args.episodes,
+                    max_steps: args.max_steps,
+                },
+            };
+            let resuming = args
+                .state
+                .as_ref()
+                .filter(|dir| dir.join(SNAPSHOT_FILE).exists());
+            let model = match resuming {
+                Some(dir) => {
+                    if args.pretrain.is_some() || args.memory.is_some() {
+                        eprintln!(
+                            "memory: {} already holds this learner's memory; resuming it instead of --pretrain/--memory",
+                            dir.display()
+                        );
+                    }
+                    untrained
+                }
+                None => experienced(&mut client, untrained, &settings, args).await?,
+            };
+            let fresh = || {
+                Learner::new(model, policy, args.shadows, args.seed)
+                    .with_episodes(args.episodes, args.max_steps)
+            };
+            let Some(dir) = &args.state else {
+                let mut learner = fresh();
+                attached(client, &mut learner, args).await?;
+                finish(&learner)?;
+                return save(&learner, &settings, args);
             };
             let (mut durable, opened) = Durable::open(dir, &settings, fresh, args.snapshot_every)
                 .with_context(|| {
@@ -181,7 +274,8 @@ impl<'a> WithModel for Daemon<'a> {
                 }
             }
             attached(client, &mut durable, args).await?;
-            finish(durable.learner(), policy)?;
+            finish(durable.learner())?;
+            save(durable.learner(), &settings, args)?;
             let stored = durable.close()?;
             println!("memory: {stored} records on disk in {}", dir.display());
             Ok(())
@@ -189,18 +283,63 @@ impl<'a> WithModel for Daemon<'a> {
     }
 }
 
+/// The model to start from: the one kept in --memory, then trained by
+/// --pretrain.
+async fn experienced<M: Model + 'static>(
+    client: &mut SimClient,
+    untrained: M,
+    settings: &Settings,
+    args: &LearnArgs,
+) -> Result<M> {
+    let mut model = untrained;
+    if let Some(path) = &args.memory {
+        let (kept, records) = load_model::<M>(path, settings)
+            .with_context(|| format!("cannot start from --memory {}", path.display()))?;
+        eprintln!(
+            "memory: starting from {} ({records} world states learned)",
+            path.display()
+        );
+        model = kept;
+    }
+    if let Some(programme) = args.pretrain {
+        eprintln!(
+            "pretraining: the thesis's {} fixed training pushes",
+            programme.pushes()
+        );
+        let (trained, done) = pretrain(client, model, programme)
+            .await
+            .context("pretraining failed")?;
+        eprintln!(
+            "pretrained on {} world states ({} start corrections)",
+            done.messages, done.corrections
+        );
+        model = trained;
+    }
+    Ok(model)
+}
+
 /// Serves until stopped, reconnecting as --reconnect-for allows.
 async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArgs) -> Result<()> {
     let options = ServeOptions {
         max_messages: args.messages,
         report_every: args.report_every,
+        progress_every: (args.progress_every > 0).then_some(args.progress_every),
     };
     let reconnect = Reconnect::new(
-        args.connect.clone(),
+        args.sim.clone(),
         (!args.reconnect_for.is_zero()).then_some(args.reconnect_for),
     );
-    let served = serve_resilient(client, learner, options, &reconnect, |s: &WorkSummary| {
-        eprintln!("{s}");
+    let served = serve_resilient(client, learner, options, &reconnect, |event| match event {
+        Event::Work(summary) => eprintln!("{summary}"),
+        Event::Progress(episodes) => eprintln!("{}", describe_progress(episodes)),
+        Event::EpisodeEnded(episodes) => {
+            if let Some(ended) = episodes.ended.last() {
+                println!(
+                    "{}",
+                    describe_episode(episodes.ended.len(), episodes.total, ended)
+                );
+            }
+        }
     })
     .await?;
     println!(
@@ -208,6 +347,7 @@ async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArg
         match served.stop {
             Stop::Interrupted => "interrupted",
             Stop::MessageLimit => "message limit",
+            Stop::EpisodesDone => "every attempt ended",
         },
         served.summary
     );
@@ -223,18 +363,57 @@ async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArg
     Ok(())
 }
 
+fn describe_progress(episodes: &Episodes) -> String {
+    let (pos, ori) = episodes.errors.unwrap_or((f64::NAN, f64::NAN));
+    format!(
+        "attempt {}, step {}: the block is {pos:.3} m and {ori:.3} rad from the target",
+        episodes.current(),
+        episodes.handled.saturating_sub(1)
+    )
+}
+
+fn describe_episode(number: usize, total: u32, ended: &EpisodeResult) -> String {
+    format!(
+        "attempt {number} of {total}: {} after {} steps, {:.3} m and {:.3} rad from the target",
+        if ended.reached {
+            "target reached"
+        } else {
+            "target not reached"
+        },
+        ended.steps,
+        ended.pos_err,
+        ended.ori_err
+    )
+}
+
 /// The end-of-run report.
-fn finish<M: Model>(learner: &Learner<M>, policy: Policy) -> Result<()> {
+fn finish<M: Model>(learner: &Learner<M>) -> Result<()> {
     if learner.parse_errors > 0 {
         println!("{} world states could not be parsed", learner.parse_errors);
     }
-    if matches!(policy, Policy::Target(_)) {
+    if let Some(episodes) = learner.episodes() {
+        let ended = episodes.ended.len();
+        if ended < episodes.total as usize {
+            let (pos, ori) = episodes.errors.unwrap_or((f64::NAN, f64::NAN));
+            println!(
+                "attempt {} stopped after {} steps, {pos:.3} m and {ori:.3} rad from the target",
+                ended + 1,
+                episodes.handled.saturating_sub(1)
+            );
+        }
         println!(
-            "target {}",
-            if learner.reached() {
+            "target {}: {} of {} attempts{}",
+            if episodes.reached() > 0 {
                 "reached"
             } else {
                 "not reached"
+            },
+            episodes.reached(),
+            episodes.total,
+            if ended < episodes.total as usize {
+                format!(", {} of them ended", ended)
+            } else {
+                String::new()
             }
         );
     }
@@ -242,5 +421,15 @@ fn finish<M: Model>(learner: &Learner<M>, policy: Policy) -> Result<()> {
         "model: {}",
         serde_json::to_string(&learner.model().stats())?
     );
+    Ok(())
+}
+
+/// --save-model: the learner as a snapshot file that --memory reads.
+fn save<M: Model>(learner: &Learner<M>, settings: &Settings, args: &LearnArgs) -> Result<()> {
+    if let Some(file) = &args.save_model {
+        write_snapshot_file(file, 0, settings, learner)
+            .with_context(|| format!("cannot write --save-model {}", file.display()))?;
+        println!("model saved to {}", file.display());
+    }
     Ok(())
 }

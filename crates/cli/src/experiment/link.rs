@@ -37,6 +37,15 @@ pub enum Pacing {
 }
 
 impl Pacing {
+    /// How to pace a world in `mode`.
+    #[must_use]
+    pub fn of(mode: TimingMode) -> Self {
+        match mode {
+            TimingMode::Lockstep => Pacing::Lockstep,
+            TimingMode::Realtime => Pacing::Realtime,
+        }
+    }
+
     fn timing_mode(self) -> TimingMode {
         match self {
             Pacing::Lockstep => TimingMode::Lockstep,
@@ -178,7 +187,12 @@ impl WorldLink {
     }
 }
 
-async fn drive<M: Model, T: Task<M>>(
+/// Runs `driver` against the world behind `client` until its job is done;
+/// `setup` goes first.
+///
+/// # Errors
+/// Socket errors, and any command the world refuses.
+pub async fn drive<M: Model, T: Task<M>>(
     client: &mut SimClient,
     pacing: Pacing,
     driver: &mut Driver<M, T>,

@@ -37,11 +37,14 @@ pub const TRAINING_RUNS: [((f64, f64), Action); 8] = [
 /// Where the test run starts.
 pub const TEST_START: (f64, f64) = (0.0, 0.0);
 
+/// The blue block's start in every run.
+const TEST_BLOCK_START: ObjectState = ObjectState::new(0.0, 0.25, 0.0);
+
 /// Expected block starts of every run (§4.3; the red block's entry, which
 /// differs from the push task's, only matters in a two-block scene).
 fn expected_blocks() -> BTreeMap<u32, ObjectState> {
     BTreeMap::from([
-        (BLUE_ID, ObjectState::new(0.0, 0.25, 0.0)),
+        (BLUE_ID, TEST_BLOCK_START),
         (RED_ID, ObjectState::new(-0.3, 0.35, 0.0)),
     ])
 }
@@ -106,7 +109,8 @@ impl MttJob {
 
 /// The block's distance to the target and `|wrap(θ − θ_t)|` (§7.6), NaN
 /// without a block.
-fn target_errors(block: Option<ObjectState>, target: ObjectState) -> (f64, f64) {
+#[must_use]
+pub fn target_errors(block: Option<ObjectState>, target: ObjectState) -> (f64, f64) {
     block.map_or((f64::NAN, f64::NAN), |b| {
         (
             (b.x - target.x).hypot(b.y - target.y),
@@ -130,6 +134,8 @@ pub struct MttTask {
     /// Why the job could not go on (a refused target).
     pub error: Option<learner::TargetError>,
     trace: ErrorTrace,
+    /// End after the training runs (`pushlearn learn --pretrain thesis`).
+    training_only: bool,
 }
 
 impl MttTask {
@@ -145,7 +151,31 @@ impl MttTask {
             nodes_after_test: None,
             error: None,
             trace: ErrorTrace::default(),
+            training_only: false,
         }
+    }
+
+    /// Only the eight training runs: the job ends with the world reset and
+    /// the actuator at the test run's start, the model trained.
+    #[must_use]
+    pub fn training_only() -> Self {
+        Self {
+            training_only: true,
+            ..Self::new(&MttJob {
+                target_index: 0,
+                target: TEST_BLOCK_START,
+                repetition: 0,
+                seed: 0,
+                latency_seed: 0,
+                max_steps: 0,
+            })
+        }
+    }
+
+    /// Whether the training runs are over.
+    #[must_use]
+    pub fn trained(&self) -> bool {
+        self.train_run >= TRAINING_RUN_COUNT
     }
 }
 
@@ -174,7 +204,11 @@ impl<M: Model> Task<M> for MttTask {
                 self.train_run += 1;
                 if self.train_run == TRAINING_RUN_COUNT {
                     self.nodes_after_training = Some(model.stats());
-                    if let Err(err) = model.set_target(Some(Target::new(BLUE_ID, self.target))) {
+                    if self.training_only {
+                        core.finish();
+                    } else if let Err(err) =
+                        model.set_target(Some(Target::new(BLUE_ID, self.target)))
+                    {
                         self.error = Some(err);
                         core.finish();
                     }

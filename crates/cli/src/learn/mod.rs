@@ -12,6 +12,8 @@
 use std::time::{Duration, Instant};
 
 use learner::{object_name, Action, Frame, Model, ObjectState, ParseError, Target, TargetError};
+
+use episodes::Step;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -22,8 +24,12 @@ use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};
 use pushlearn::wire::{Ghost, TimingMode};
 
+pub mod episodes;
+pub mod pretrain;
 pub mod reconnect;
 pub mod state;
+
+pub use episodes::{EpisodeResult, Episodes};
 
 /// How the daemon chooses its actions.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -64,6 +70,9 @@ pub trait OnState {
     /// # Errors
     /// The learner's memory cannot be kept.
     fn resync(&mut self) -> Result<(), LearnError>;
+
+    /// The attempts at the target, for a target policy.
+    fn episodes(&self) -> Option<&Episodes>;
 }
 
 impl<M: Model> OnState for Learner<M> {
@@ -78,6 +87,10 @@ impl<M: Model> OnState for Learner<M> {
     fn resync(&mut self) -> Result<(), LearnError> {
         Learner::resync(self);
         Ok(())
+    }
+
+    fn episodes(&self) -> Option<&Episodes> {
+        Learner::episodes(self)
     }
 }
 
@@ -99,6 +112,10 @@ pub struct Learner<M: Model> {
     reached_reported: bool,
     /// States the model could not parse.
     pub parse_errors: u64,
+    /// A target policy's attempts (a memory from before episodes existed
+    /// is in its first and only one).
+    #[serde(default)]
+    episodes: Episodes,
 }
 
 impl<M: Model> Learner<M> {
@@ -113,7 +130,16 @@ impl<M: Model> Learner<M> {
             target_set: false,
             reached_reported: false,
             parse_errors: 0,
+            episodes: Episodes::default(),
         }
+    }
+
+    /// With a target policy: makes `episodes` attempts of at most
+    /// `max_steps` steps each, the world reset between them.
+    #[must_use]
+    pub fn with_episodes(mut self, episodes: u32, max_steps: u64) -> Self {
+        self.episodes = Episodes::new(episodes, max_steps);
+        self
     }
 
     /// Handles one world state; returns the commands to send (Move, then
@@ -142,6 +168,9 @@ impl<M: Model> Learner<M> {
         let action = match self.policy {
             Policy::Fixed(action) => action,
             Policy::Target(pose) => {
+                if self.episodes.finished() {
+                    return Ok(vec![Payload::move_(0.0, 0.0)]);
+                }
                 if !self.target_set {
                     self.model
                         .set_target(Some(Target::new(learner::BLUE_ID, pose)))?;
@@ -150,9 +179,17 @@ impl<M: Model> Learner<M> {
                 let action = self.model.act(&mut self.rng);
                 if !self.model.has_target() && !self.reached_reported {
                     self.reached_reported = true;
-                    tracing::info!(?pose, "target reached");
+                    tracing::debug!(?pose, "target reached");
                 }
-                action
+                let block = M::poses(&world).blocks.get(&learner::BLUE_ID).copied();
+                match self.episodes.step(block, pose, self.model.has_target()) {
+                    Step::Running => action,
+                    Step::Ended => return Ok(self.next_episode()),
+                    Step::Finished => {
+                        self.last_action = Some(Action::ZERO);
+                        return Ok(vec![Payload::move_(0.0, 0.0)]);
+                    }
+                }
             }
         };
         self.last_action = Some(action);
@@ -168,6 +205,16 @@ impl<M: Model> Learner<M> {
         Ok(commands)
     }
 
+    /// Ends an attempt: the actuator stopped and the world reset to the
+    /// scene's start; the next state (the serving loop waits for one after
+    /// the Reset) re-synchronises the model and the target is set again.
+    fn next_episode(&mut self) -> Vec<Payload> {
+        self.last_action = None;
+        self.target_set = false;
+        self.reached_reported = false;
+        vec![Payload::move_(0.0, 0.0), Payload::reset()]
+    }
+
     /// Forgets the action in force, so that the next state re-synchronises
     /// the model instead of training it on a transition across a gap (after
     /// a reconnect or a restart) whose action is unknown.
@@ -180,10 +227,10 @@ impl<M: Model> Learner<M> {
         tracing::warn!(%err, "skipping a world state the model cannot parse");
     }
 
-    /// Whether a target policy has reached its target.
+    /// A target policy's attempts.
     #[must_use]
-    pub fn reached(&self) -> bool {
-        self.reached_reported
+    pub fn episodes(&self) -> Option<&Episodes> {
+        matches!(self.policy, Policy::Target(_)).then_some(&self.episodes)
     }
 
     /// The model.
@@ -314,6 +361,20 @@ pub struct ServeOptions {
     pub max_messages: Option<u64>,
     /// Print the work-time summary this often.
     pub report_every: Option<Duration>,
+    /// With a target policy: report the distance to the target every this
+    /// many states.
+    pub progress_every: Option<u64>,
+}
+
+/// What the serving loop tells its caller on the way.
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'a> {
+    /// The periodic work-time summary (`report_every`).
+    Work(&'a WorkSummary),
+    /// The distance to the target (`progress_every`), in the current attempt.
+    Progress(&'a Episodes),
+    /// An attempt ended; its result is the last of [`Episodes::ended`].
+    EpisodeEnded(&'a Episodes),
 }
 
 /// Why the loop ended.
@@ -321,10 +382,13 @@ pub struct ServeOptions {
 pub enum Stop {
     Interrupted,
     MessageLimit,
+    /// Every attempt at the target has ended.
+    EpisodesDone,
 }
 
 /// Runs `learner` against the world behind `client` until interrupted
-/// (SIGINT) or the message limit. `report` receives the periodic summaries.
+/// (SIGINT), the message limit or the last attempt at the target. `report`
+/// receives the periodic summaries and the attempts' progress.
 ///
 /// # Errors
 /// Socket errors, a refused command, a refused target.
@@ -332,7 +396,7 @@ pub async fn serve(
     client: &mut SimClient,
     learner: &mut impl OnState,
     options: ServeOptions,
-    mut report: impl FnMut(&WorkSummary),
+    mut report: impl FnMut(Event<'_>),
 ) -> Result<(Stop, WorkSummary), LearnError> {
     let lockstep = client.hello().timing() == Ok(TimingMode::Lockstep);
     let budget = budget(client.hello().publish_rate);
@@ -343,6 +407,9 @@ pub async fn serve(
     let mut last_report = Instant::now();
     let interrupt = tokio::signal::ctrl_c();
     tokio::pin!(interrupt);
+    // After a Reset, the first state that shows it: in realtime, states
+    // published before the world applied it may still be on their way.
+    let mut reset_seq = None;
     let stop = loop {
         if options.max_messages.is_some_and(|n| times.messages() >= n) {
             break Stop::MessageLimit;
@@ -351,6 +418,8 @@ pub async fn serve(
             if lockstep {
                 let advance = client.send(Payload::advance()).await?;
                 client.wait_applied(advance).await
+            } else if let Some(seq) = reset_seq {
+                client.wait_applied(seq).await
             } else {
                 client.next_state().await
             }
@@ -359,19 +428,41 @@ pub async fn serve(
             state = next => state?,
             _ = &mut interrupt => break Stop::Interrupted,
         };
+        reset_seq = None;
         let received = Instant::now();
         let frame = frame_from_state(&state);
         let modelled = Instant::now();
+        let ended_before = learner.episodes().map_or(0, |e| e.ended.len());
         let commands = learner.on_state(&frame, &heights)?;
         times.record_model(modelled.elapsed());
         for command in commands {
-            client.send(command).await?;
+            let reset = command.kind() == "reset";
+            let seq = client.send(command).await?;
+            if reset {
+                reset_seq = Some(seq);
+            }
         }
         times.record(received.elapsed(), budget);
         if let Some(every) = options.report_every {
             if last_report.elapsed() >= every {
-                report(&times.summary());
+                report(Event::Work(&times.summary()));
                 last_report = Instant::now();
+            }
+        }
+        if let Some(episodes) = learner.episodes() {
+            if episodes.ended.len() > ended_before {
+                report(Event::EpisodeEnded(episodes));
+                if episodes.finished() {
+                    break Stop::EpisodesDone;
+                }
+            } else if options.progress_every.is_some_and(|every| {
+                // The first state of an attempt, then every `every`th.
+                episodes
+                    .handled
+                    .checked_sub(1)
+                    .is_some_and(|n| n % every.max(1) == 0)
+            }) {
+                report(Event::Progress(episodes));
             }
         }
     };
@@ -448,7 +539,7 @@ mod tests {
             l.model().target.map(|t| (t.id, t.pose)),
             Some((BLUE_ID, goal))
         );
-        assert!(!l.reached());
+        assert!(l.episodes().unwrap().ended.is_empty());
         l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
             .unwrap();
         let stop = describe(
@@ -456,7 +547,51 @@ mod tests {
                 .unwrap(),
         );
         assert_eq!(stop, ["move(0,0)"]);
-        assert!(l.reached());
+        let episodes = l.episodes().unwrap();
+        assert!(episodes.finished());
+        assert_eq!(episodes.reached(), 1);
+        assert_eq!(episodes.ended[0].steps, 2);
+        // The block at (0, 0.25) against the goal (0.6, 0.7, −2.1).
+        assert!((episodes.ended[0].pos_err - 0.75).abs() < 1e-12);
+        // Finished: the actuator is held still.
+        let after = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
+        assert_eq!(after, ["move(0,0)"]);
+    }
+
+    #[test]
+    fn episodes_reset_the_world_between_attempts_and_keep_the_model() {
+        let probe = Probe {
+            reach_after: Some(2),
+            ..Probe::default()
+        };
+        let goal = ObjectState::new(0.6, 0.7, -2.1);
+        let mut l = Learner::new(probe, Policy::Target(goal), false, 1).with_episodes(2, 3000);
+        let on = |l: &mut Learner<Probe>| {
+            describe(
+                &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                    .unwrap(),
+            )
+        };
+        on(&mut l);
+        assert_eq!(on(&mut l), ["move(0,0)", "reset"]);
+        assert_eq!(l.episodes().unwrap().ended.len(), 1);
+        assert!(l.model().target.is_none());
+        // The state after the reset re-synchronises the model (no update
+        // across the reset) and sets the target again; the probe, past its
+        // reach count, finds it reached at once.
+        let updates = l.model().updates;
+        assert_eq!(on(&mut l), ["move(0,0)"]);
+        assert_eq!(l.model().resets, 2);
+        assert_eq!(l.model().updates, updates);
+        let episodes = l.episodes().unwrap();
+        assert!(episodes.finished());
+        assert_eq!(
+            episodes.ended.iter().map(|e| e.steps).collect::<Vec<_>>(),
+            [1, 0]
+        );
     }
 
     #[test]

@@ -7,7 +7,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::{serve, LearnError, OnState, ServeOptions, Stop, WorkSummary};
+use super::{serve, Episodes, Event, LearnError, OnState, ServeOptions, Stop, WorkSummary};
 use crate::frame::StartHeights;
 use learner::Frame;
 use pushlearn::client::{seq_base_from_clock, ClientError, ClientOptions, SimClient};
@@ -87,6 +87,10 @@ impl<H: OnState> OnState for Counting<'_, H> {
     fn resync(&mut self) -> Result<(), LearnError> {
         self.inner.resync()
     }
+
+    fn episodes(&self) -> Option<&Episodes> {
+        self.inner.episodes()
+    }
 }
 
 /// [`serve`], surviving a lost world: reconnects as `reconnect` says and
@@ -101,7 +105,7 @@ pub async fn serve_resilient(
     learner: &mut impl OnState,
     options: ServeOptions,
     reconnect: &Reconnect,
-    mut report: impl FnMut(&WorkSummary),
+    mut report: impl FnMut(Event<'_>),
 ) -> Result<Served, LearnError> {
     let mut counting = Counting {
         inner: learner,

@@ -17,7 +17,7 @@ use super::segment::{open_segment, segments};
 use super::snapshot::write_snapshot;
 use super::{io_error, Settings, StateError};
 use crate::frame::StartHeights;
-use crate::learn::{LearnError, Learner, OnState};
+use crate::learn::{Episodes, LearnError, Learner, OnState};
 use pushlearn::wire::pb::client_message::Payload;
 
 enum ToWriter<M: Model> {
@@ -268,6 +268,10 @@ impl<M: Model + 'static> OnState for Durable<M> {
 
     fn resync(&mut self) -> Result<(), LearnError> {
         Ok(self.resync_journalled()?)
+    }
+
+    fn episodes(&self) -> Option<&Episodes> {
+        self.learner.episodes()
     }
 }
 

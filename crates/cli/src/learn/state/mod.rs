@@ -31,6 +31,7 @@
 use std::io;
 use std::path::{Path, PathBuf};
 
+use learner::Model;
 use serde::{Deserialize, Serialize};
 
 use super::Policy;
@@ -46,7 +47,7 @@ mod testing;
 pub use durable::{Durable, Opened};
 pub use record::{decode_entry, read_records, Entry, SegmentRead};
 pub use recovery::{recover, Cut, Recovery};
-pub use snapshot::SNAPSHOT_FILE;
+pub use snapshot::{write_snapshot_file, SNAPSHOT_FILE};
 
 /// Records between two snapshots by default: 5 minutes at 100 Hz. Recovery
 /// replays at most this many records; a snapshot clones the learner once.
@@ -69,6 +70,12 @@ pub enum StateError {
         dir.display()
     )]
     Mismatch { dir: PathBuf, differences: String },
+    #[error(
+        "{} holds a model made otherwise ({differences}); start from it with the same \
+         --model, model options and world publish rate",
+        path.display()
+    )]
+    OtherModel { path: PathBuf, differences: String },
     #[error("cannot keep the learner's memory: {0}")]
     Writer(String),
 }
@@ -99,6 +106,81 @@ pub struct Settings {
     /// under others would silently ignore the new ones.
     #[serde(default)]
     pub model_options: String,
+    /// A target policy's attempts and their step limit (memories from
+    /// before episodes existed made one attempt of the thesis's limit).
+    #[serde(default)]
+    pub episodes: EpisodeSettings,
+}
+
+/// See [`Settings::episodes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EpisodeSettings {
+    pub episodes: u32,
+    pub max_steps: u64,
+}
+
+impl Default for EpisodeSettings {
+    fn default() -> Self {
+        EpisodeSettings {
+            episodes: 1,
+            max_steps: crate::experiment::move_to_target::MAX_STEPS,
+        }
+    }
+}
+
+/// Loads the model an earlier daemon kept — its `--state` directory (the
+/// snapshot and the journal replayed after it) or a file of
+/// `pushlearn learn --save-model` — without changing anything there, for a
+/// daemon that starts from that experience. Only what made the model must
+/// match (`expected`'s model, publish rate and options); policy, seed and
+/// the rest are the new daemon's.
+///
+/// # Errors
+/// Nothing stored at `path`, a damaged memory, or a model made otherwise.
+pub fn load_model<M: Model>(path: &Path, expected: &Settings) -> Result<(M, u64), StateError> {
+    let (snapshot, dir) = if path.is_dir() {
+        (path.join(SNAPSHOT_FILE), path)
+    } else {
+        (path.to_path_buf(), path.parent().unwrap_or(Path::new(".")))
+    };
+    let bytes = std::fs::read(&snapshot).map_err(io_error(&snapshot))?;
+    let stored = snapshot::stored_settings(&bytes, &snapshot)?;
+    let made_otherwise = [
+        ("model", stored.model.clone(), expected.model.clone()),
+        (
+            "publish rate",
+            stored.publish_rate_hz.to_string(),
+            expected.publish_rate_hz.to_string(),
+        ),
+        (
+            "model options",
+            stored.model_options.clone(),
+            expected.model_options.clone(),
+        ),
+    ]
+    .into_iter()
+    .filter(|(_, stored, now)| stored != now)
+    .map(|(what, stored, now)| format!("{what}: stored {stored}, now {now}"))
+    .collect::<Vec<_>>();
+    if !made_otherwise.is_empty() {
+        return Err(StateError::OtherModel {
+            path: path.to_path_buf(),
+            differences: made_otherwise.join("; "),
+        });
+    }
+    if path.is_dir() {
+        let (learner, recovery) = recover::<M>(dir, &stored)?.ok_or_else(|| StateError::Io {
+            path: snapshot.clone(),
+            source: io::Error::from(io::ErrorKind::NotFound),
+        })?;
+        if let Some(cut) = &recovery.cut {
+            tracing::warn!("{}: damaged journal tail, not loaded: {cut}", dir.display());
+        }
+        Ok((learner.into_model(), recovery.records()))
+    } else {
+        let (records, learner) = snapshot::decode_snapshot::<M>(&bytes, &snapshot, dir, &stored)?;
+        Ok((learner.into_model(), records))
+    }
 }
 
 impl Settings {
@@ -130,6 +212,11 @@ impl Settings {
             "model options",
             stored.model_options.clone(),
             self.model_options.clone(),
+        );
+        differ(
+            "episodes",
+            format!("{:?}", stored.episodes),
+            format!("{:?}", self.episodes),
         );
         out
     }

@@ -15,7 +15,6 @@ use crate::learn::Learner;
 
 /// The snapshot's file name in the state directory.
 pub const SNAPSHOT_FILE: &str = "snapshot";
-const SNAPSHOT_TMP: &str = "snapshot.tmp";
 const SNAPSHOT_MAGIC: &[u8; 8] = b"PLSNAP01";
 const FORMAT_VERSION: u32 = 1;
 
@@ -57,6 +56,34 @@ pub(super) fn decode_snapshot<M: Model>(
     dir: &Path,
     expected: &Settings,
 ) -> Result<(u64, Learner<M>), StateError> {
+    let (header, learner) = decode_header(bytes, path)?;
+    let differences = expected.differences(&header.settings);
+    if !differences.is_empty() {
+        return Err(StateError::Mismatch {
+            dir: dir.to_path_buf(),
+            differences: differences.join("; "),
+        });
+    }
+    let learner = serde_json::from_slice(learner).map_err(|err| StateError::CorruptSnapshot {
+        path: path.to_path_buf(),
+        reason: err.to_string(),
+    })?;
+    Ok((header.records, learner))
+}
+
+/// The settings a snapshot was written with.
+///
+/// # Errors
+/// A file that is no intact snapshot.
+pub(super) fn stored_settings(bytes: &[u8], path: &Path) -> Result<Settings, StateError> {
+    Ok(decode_header(bytes, path)?.0.settings)
+}
+
+/// The checked header and the learner's bytes.
+fn decode_header<'a>(
+    bytes: &'a [u8],
+    path: &Path,
+) -> Result<(SnapshotHeader, &'a [u8]), StateError> {
     let corrupt = |reason: &str| StateError::CorruptSnapshot {
         path: path.to_path_buf(),
         reason: reason.to_owned(),
@@ -89,15 +116,7 @@ pub(super) fn decode_snapshot<M: Model>(
             header.version
         )));
     }
-    let differences = expected.differences(&header.settings);
-    if !differences.is_empty() {
-        return Err(StateError::Mismatch {
-            dir: dir.to_path_buf(),
-            differences: differences.join("; "),
-        });
-    }
-    let learner = serde_json::from_slice(c.bytes).map_err(|err| corrupt(&err.to_string()))?;
-    Ok((header.records, learner))
+    Ok((header, c.bytes))
 }
 
 /// Writes the snapshot crash-safely: temporary file, fsync, atomic rename,
@@ -108,15 +127,34 @@ pub(super) fn write_snapshot<M: Model>(
     settings: &Settings,
     learner: &Learner<M>,
 ) -> Result<(), StateError> {
+    write_snapshot_file(&dir.join(SNAPSHOT_FILE), records, settings, learner)
+}
+
+/// [`write_snapshot`] to any file: `path.tmp` first, then renamed over
+/// `path` (`pushlearn learn --save-model`).
+///
+/// # Errors
+/// The learner cannot be serialised or the file written.
+pub fn write_snapshot_file<M: Model>(
+    path: &Path,
+    records: u64,
+    settings: &Settings,
+    learner: &Learner<M>,
+) -> Result<(), StateError> {
     let bytes = encode_snapshot(records, settings, learner)
         .map_err(|err| StateError::Writer(format!("cannot serialise the learner: {err}")))?;
-    let tmp = dir.join(SNAPSHOT_TMP);
+    let mut tmp = path.as_os_str().to_owned();
+    tmp.push(".tmp");
+    let tmp = std::path::PathBuf::from(tmp);
     let mut file = File::create(&tmp).map_err(io_error(&tmp))?;
     file.write_all(&bytes).map_err(io_error(&tmp))?;
     file.sync_all().map_err(io_error(&tmp))?;
     drop(file);
-    let path = dir.join(SNAPSHOT_FILE);
-    fs::rename(&tmp, &path).map_err(io_error(&path))?;
+    fs::rename(&tmp, path).map_err(io_error(path))?;
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     sync_dir(dir)
 }
 
@@ -136,7 +174,7 @@ mod tests {
         let header = std::str::from_utf8(&payload[4..4 + header_len]).unwrap();
         assert_eq!(
             header,
-            r#"{"version":1,"records":42,"settings":{"model":"gate","publish_rate_hz":100,"policy":{"Target":{"x":0.1,"y":0.5,"theta":0.3}},"shadows":true,"seed":7,"model_options":"eta 0"}}"#
+            r#"{"version":1,"records":42,"settings":{"model":"gate","publish_rate_hz":100,"policy":{"Target":{"x":0.1,"y":0.5,"theta":0.3}},"shadows":true,"seed":7,"model_options":"eta 0","episodes":{"episodes":1,"max_steps":3000}}}"#
         );
         let path = Path::new("snapshot");
         let (records, back) =

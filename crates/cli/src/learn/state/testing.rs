@@ -45,6 +45,7 @@ pub(super) fn settings() -> Settings {
         shadows: true,
         seed: 7,
         model_options: "eta 0".into(),
+        episodes: super::EpisodeSettings::default(),
     }
 }
 

@@ -1,0 +1,81 @@
+//! The files a command writes: checked before any work starts, so that a
+//! typo in a path does not cost a long run (and the run's results are never
+//! lost to it).
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Why an output path cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot write {flag} {}: the directory {} does not exist", path.display(), dir.display())]
+    NoDirectory {
+        flag: &'static str,
+        path: PathBuf,
+        dir: PathBuf,
+    },
+    #[error("cannot write {flag} {}: it is a directory", path.display())]
+    IsDirectory { flag: &'static str, path: PathBuf },
+    #[error("cannot write {flag} {}: {source}", path.display())]
+    NotWritable {
+        flag: &'static str,
+        path: PathBuf,
+        source: io::Error,
+    },
+}
+
+/// Checks that the file `path` (given as `flag`) can be written: its
+/// directory exists and takes a new file, and it is not itself a directory.
+/// Nothing is left behind.
+///
+/// # Errors
+/// [`OutputError`], naming the flag and the path.
+pub fn check_file(path: &Path, flag: &'static str) -> Result<(), OutputError> {
+    let dir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        return Err(OutputError::NoDirectory {
+            flag,
+            path: path.to_path_buf(),
+            dir: dir.to_path_buf(),
+        });
+    }
+    if path.is_dir() {
+        return Err(OutputError::IsDirectory {
+            flag,
+            path: path.to_path_buf(),
+        });
+    }
+    let probe = dir.join(format!(".pushlearn-write-check-{}", std::process::id()));
+    std::fs::write(&probe, b"")
+        .and_then(|()| std::fs::remove_file(&probe))
+        .map_err(|source| OutputError::NotWritable {
+            flag,
+            path: path.to_path_buf(),
+            source,
+        })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_in_a_missing_directory_or_a_directory_is_refused_naming_the_flag() {
+        let missing = Path::new("/nonexistent-pushlearn-dir/x.json");
+        let err = check_file(missing, "--json").unwrap_err().to_string();
+        assert_eq!(
+            err,
+            "cannot write --json /nonexistent-pushlearn-dir/x.json: the directory /nonexistent-pushlearn-dir does not exist"
+        );
+        let dir = std::env::temp_dir();
+        let err = check_file(&dir, "--save-model").unwrap_err().to_string();
+        assert!(err.ends_with("it is a directory"), "{err}");
+        let ok = dir.join("pushlearn-output-check-ok.json");
+        check_file(&ok, "--json").unwrap();
+        assert!(!ok.exists());
+        check_file(Path::new("relative.json"), "--json").unwrap();
+    }
+}
