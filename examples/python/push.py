@@ -20,7 +20,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from pushlearn import ProtocolError, SimClient, SimError
+try:
+    from pushlearn import ProtocolError, SimClient, SimError
+except ImportError as missing:
+    sys.exit(f"error: {missing}")
 
 STATES = 150
 """World states to push for: 1.5 s at 100 Hz."""

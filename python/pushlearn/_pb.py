@@ -9,8 +9,16 @@ schemas.
 
 from typing import Any
 
-from ._proto import learner_pb2 as _learner_pb2
-from ._proto import pushlearn_pb2 as _pushlearn_pb2
+try:
+    from ._proto import learner_pb2 as _learner_pb2
+    from ._proto import pushlearn_pb2 as _pushlearn_pb2
+except ModuleNotFoundError as missing:
+    if missing.name is None or not missing.name.startswith("google"):
+        raise
+    raise ImportError(
+        "pushlearn needs the protobuf package (4.21 or newer, as pyproject.toml "
+        "says): python3 -m pip install 'protobuf>=4.21'"
+    ) from None
 
 learner_pb2: Any = _learner_pb2
 """``proto/learner.proto``'s messages (package ``pushlearn.learner``)."""

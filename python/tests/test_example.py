@@ -64,3 +64,36 @@ def test_the_push_example_reports_a_missing_world() -> None:
         "is pushlearn-sim running there?" in done.stderr
         and "Traceback" not in done.stderr
     )
+
+
+# Runs the example with every `google.*` import failing, as on a machine
+# without protobuf.
+_WITHOUT_PROTOBUF = """
+import runpy, sys
+
+class NoProtobuf:
+    def find_spec(self, name, path=None, target=None):
+        if name == "google" or name.startswith("google."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return None
+
+sys.meta_path.insert(0, NoProtobuf())
+sys.argv = sys.argv[1:]
+runpy.run_path(sys.argv[0], run_name="__main__")
+"""
+
+
+def test_without_protobuf_the_example_says_what_to_install() -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", _WITHOUT_PROTOBUF, str(EXAMPLE), "--port", "9"],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip() == (
+        "error: pushlearn needs the protobuf package (4.21 or newer, as "
+        "pyproject.toml says): python3 -m pip install 'protobuf>=4.21'"
+    )

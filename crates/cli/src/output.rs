@@ -58,6 +58,22 @@ pub fn check_file(path: &Path, flag: &'static str) -> Result<(), OutputError> {
         })
 }
 
+/// Writes `bytes` to `path` through a temporary file beside it, renamed
+/// over `path` once complete: a reader never sees half a file, and an
+/// interrupted write leaves the old one.
+///
+/// # Errors
+/// The file cannot be written or renamed.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut temporary = path.as_os_str().to_owned();
+    temporary.push(".partial");
+    let temporary = PathBuf::from(temporary);
+    std::fs::write(&temporary, bytes)?;
+    std::fs::rename(&temporary, path).inspect_err(|_| {
+        let _ = std::fs::remove_file(&temporary);
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -77,5 +93,17 @@ mod tests {
         check_file(&ok, "--json").unwrap();
         assert!(!ok.exists());
         check_file(Path::new("relative.json"), "--json").unwrap();
+    }
+
+    #[test]
+    fn an_atomic_write_replaces_the_whole_file_and_leaves_no_temporary() {
+        let path = std::env::temp_dir().join(format!("pushlearn-atomic-{}", std::process::id()));
+        std::fs::write(&path, "old, and longer than the new text").unwrap();
+        write_atomically(&path, b"new").unwrap();
+        assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+        let mut partial = path.clone().into_os_string();
+        partial.push(".partial");
+        assert!(!Path::new(&partial).exists());
+        std::fs::remove_file(&path).unwrap();
     }
 }

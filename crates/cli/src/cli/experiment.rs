@@ -360,17 +360,22 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     let bar = progress(spec.jobs(), spec.title());
     let document = spec.run(&plan, |done| bar.set_position(done as u64))?;
     bar.finish_and_clear();
+    // The tables first: a file that cannot be written after all (a full
+    // disk) must not cost the run's results.
+    {
+        let mut out = std::io::stdout().lock();
+        document.write_tables(&mut out)?;
+        out.flush()?;
+    }
     if let Some(path) = &world.json {
-        std::fs::write(path, document.to_json()?)
-            .with_context(|| format!("writing {}", path.display()))?;
+        pushlearn_cli::output::write_atomically(path, document.to_json()?.as_bytes())
+            .with_context(|| format!("cannot write --json {}", path.display()))?;
     }
     if let Some(dir) = &world.plots {
         let written = document.plot(dir)?;
         eprintln!("wrote {} figures to {}", written.len(), dir.display());
     }
-    let mut out = std::io::stdout().lock();
-    document.write_tables(&mut out)?;
-    Ok(out.flush()?)
+    Ok(())
 }
 
 fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {

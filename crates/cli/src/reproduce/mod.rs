@@ -337,18 +337,13 @@ pub fn write_files(dir: &Path, files: &[(String, String)]) -> Result<(), Reprodu
     Ok(())
 }
 
-/// Writes `text` to `path` through a temporary file in the same directory.
+/// [`crate::output::write_atomically`], with the reproduction's error.
 ///
 /// # Errors
 /// The file cannot be written or renamed.
 pub fn write_atomically(path: &Path, text: &str) -> Result<(), ReproduceError> {
-    let error = |source| ReproduceError::Write {
+    crate::output::write_atomically(path, text.as_bytes()).map_err(|source| ReproduceError::Write {
         path: path.display().to_string(),
         source,
-    };
-    let mut temporary = path.as_os_str().to_owned();
-    temporary.push(".partial");
-    let temporary = PathBuf::from(temporary);
-    std::fs::write(&temporary, text).map_err(error)?;
-    std::fs::rename(&temporary, path).map_err(error)
+    })
 }
