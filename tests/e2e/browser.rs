@@ -44,7 +44,11 @@ fn program() -> String {
 impl Browser {
     /// Starts the browser with a `width` × `height` window and opens a blank page.
     pub async fn start(width: u32, height: u32) -> Browser {
-        let profile = TempDir::new("chromium-profile");
+        // One profile per browser: Chromium locks its profile directory, and
+        // tests in this process may run browsers side by side.
+        static STARTED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = STARTED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let profile = TempDir::new(&format!("chromium-profile-{n}"));
         let program = program();
         let mut command = Command::new(&program);
         command

@@ -10,7 +10,7 @@ use crate::experiment::{pushlearn, succeeded, TempDir};
 use crate::process::{repo_root, run, text};
 
 /// The `pushlearn learn` command of the README's "Watch a push", as words.
-fn readme_learn_command() -> Vec<String> {
+pub(crate) fn readme_learn_command() -> Vec<String> {
     let readme = std::fs::read_to_string(repo_root().join("README.md")).expect("README.md");
     let section = readme
         .split("## Watch a push")

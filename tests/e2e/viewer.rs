@@ -318,3 +318,58 @@ async fn the_page_draws_the_world_and_controls_it() {
         "ghosts after a reset: {frame}"
     );
 }
+
+/// The README's figure is what its "Watch a push" commands show: run them
+/// (the world in lock-step, so the run is exact and fast), then look at the
+/// page. `PUSHLEARN_BLESS=1` writes the screenshot to docs/figures/viewer.png.
+#[tokio::test]
+async fn the_readme_demo_ends_with_the_block_on_its_target_in_the_viewer() {
+    let daemon = Daemon::start(&["--mode", "lockstep"]);
+    let viewer = Viewer::start(daemon.addr);
+    let words = crate::first_hour::readme_learn_command();
+    let target = words
+        .iter()
+        .find_map(|w| w.strip_prefix("--target="))
+        .expect("the README's command gives --target=X,Y,ORI");
+    let target: Vec<f64> = target
+        .split(',')
+        .map(|v| v.parse().expect("a number"))
+        .collect();
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command
+        .args(&words[1..])
+        .args(["--sim", &daemon.addr.to_string()]);
+    let learned = crate::process::run(command);
+    let stdout = crate::experiment::succeeded(&learned);
+    assert!(stdout.contains("target reached: 1 of 1"), "{stdout}");
+
+    let mut browser = Browser::start(1000, 700).await;
+    browser.navigate(&viewer.url).await;
+    let mut world = SimClient::connect(daemon.addr).await.unwrap();
+    let state = world
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .unwrap();
+    let frame = wait_for_state(&mut browser, &state).await;
+    let (x, y, _) = pose(&state, "blockA");
+    assert!(
+        (x - target[0]).hypot(y - target[1]) < 0.02,
+        "the block ended at ({x}, {y}), the target is {target:?}"
+    );
+    assert_drawn_at(&frame, "blockA", "body", pose(&state, "blockA"));
+    assert_drawn_at(
+        &frame,
+        "blockAShadowTarget",
+        "target",
+        pose(&state, "blockAShadowTarget"),
+    );
+    let png = browser.screenshot().await;
+    assert!(png.starts_with(b"\x89PNG\r\n\x1a\n"), "no PNG");
+    let path = screenshot_path().with_file_name("e2e-demo.png");
+    std::fs::write(&path, &png).unwrap();
+    if std::env::var_os("PUSHLEARN_BLESS").is_some() {
+        let figure = crate::process::repo_root().join("docs/figures/viewer.png");
+        std::fs::write(&figure, &png).unwrap();
+        println!("blessed: {}", figure.display());
+    }
+}
