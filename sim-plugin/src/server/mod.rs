@@ -417,7 +417,15 @@ impl ServerHandle {
             .await
             .map_err(|err| ServerError::Physics(err.to_string()))?;
         let stats = self.stats();
-        tracing::info!(?stats, "stopped");
+        tracing::info!(
+            connections = stats.connections,
+            refused_connections = stats.refused_connections,
+            refused_commands = stats.refused_commands,
+            states_dropped = stats.states_dropped,
+            slow_disconnects = stats.slow_disconnects,
+            published = stats.published,
+            "stopped"
+        );
         match joined {
             Ok(Ok(())) => Ok(()),
             Ok(Err(message)) => Err(ServerError::Physics(message)),

@@ -193,7 +193,7 @@ pub async fn connect_with_backoff(
             Ok(client) => {
                 tracing::warn!(
                     attempt,
-                    after = ?started.elapsed(),
+                    after = %pushlearn::duration::describe(started.elapsed()),
                     "reconnected to the world at {}; the next state re-synchronises the model",
                     reconnect.addr
                 );
@@ -204,7 +204,11 @@ pub async fn connect_with_backoff(
                 return Err(err);
             }
             Err(err) => {
-                tracing::warn!(attempt, retry_in = ?delay, "reconnecting failed: {err}");
+                tracing::warn!(
+                    attempt,
+                    retry_in = %pushlearn::duration::describe(delay),
+                    "reconnecting failed: {err}"
+                );
                 tokio::time::sleep(delay).await;
                 delay = (delay * 2).min(reconnect.max_delay);
             }
