@@ -535,7 +535,14 @@ const NOT_THE_VIEWER: &str =
 fn connect_hint(reason: &std::io::Error, addr: &str) -> String {
     match reason.kind() {
         std::io::ErrorKind::ConnectionRefused => {
-            format!("; is pushlearn-sim running on {addr}? (`pushlearn-sim serve` starts one on 127.0.0.1:11345)")
+            let default = if addr == DEFAULT_ADDR {
+                ""
+            } else {
+                " (`pushlearn-sim serve --port P` listens on another port)"
+            };
+            format!(
+                "; is pushlearn-sim running there? (`pushlearn-sim serve` starts one on {DEFAULT_ADDR}){default}"
+            )
         }
         std::io::ErrorKind::TimedOut => "; is the host up and the address right?".to_owned(),
         _ => String::new(),

@@ -248,6 +248,13 @@ fn errors_say_each_cause_once_and_usage_errors_exit_with_2() {
     }
     let out = pushlearn(&["learn", "--no-such-flag"]);
     assert_eq!(out.status.code(), Some(2));
+    let out = learn(&["--action", "0,0", "--episodes", "3"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        text(&out.stderr).starts_with("error: --episodes counts attempts at a target"),
+        "{}",
+        text(&out.stderr)
+    );
 }
 
 #[test]
@@ -267,7 +274,9 @@ fn a_port_that_is_no_world_is_named_as_such() {
     // Nothing listens: the hint says what to start.
     let out = learn(&["--sim", "127.0.0.1:9", "--action", "0,0"]);
     assert!(
-        text(&out.stderr).contains("is pushlearn-sim running on 127.0.0.1:9?"),
+        text(&out.stderr).contains(
+            "127.0.0.1:9: Connection refused (os error 111); is pushlearn-sim running there?"
+        ),
         "{}",
         text(&out.stderr)
     );

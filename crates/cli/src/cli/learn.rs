@@ -8,7 +8,6 @@ use clap::Args;
 use learner::{Action, Model, ObjectState};
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
 use pushlearn::duration;
-use pushlearn_cli::experiment::move_to_target::MAX_STEPS;
 use pushlearn_cli::learn::pretrain::{pretrain, Pretrain};
 use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
 use pushlearn_cli::learn::state::{
@@ -89,19 +88,19 @@ pub struct LearnArgs {
 
     /// With --target: attempts to make; the world is reset between them and
     /// the model keeps learning across all.
-    #[arg(long, value_name = "N", default_value_t = 1, requires = "target",
-          value_parser = clap::value_parser!(u32).range(1..))]
-    episodes: u32,
+    /// [default: 1]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    episodes: Option<u32>,
 
-    /// With --target: the step limit of one attempt (the thesis's 3000).
-    #[arg(long, value_name = "N", default_value_t = MAX_STEPS, requires = "target",
-          value_parser = clap::value_parser!(u64).range(1..))]
-    max_steps: u64,
+    /// With --target: the step limit of one attempt [default: the thesis's
+    /// 3000].
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    max_steps: Option<u64>,
 
     /// With --target: print the distance to the target every N world states
-    /// (0: never).
-    #[arg(long, value_name = "N", default_value_t = 100, requires = "target")]
-    progress_every: u64,
+    /// (0: never) [default: 100].
+    #[arg(long, value_name = "N")]
+    progress_every: Option<u64>,
 
     /// Train before pursuing the policy: `thesis` makes the thesis's eight
     /// fixed training pushes of Move to Target against the world first.
@@ -141,6 +140,19 @@ pub struct LearnArgs {
     reconnect_for: Duration,
 }
 
+/// See [`LearnArgs::progress_every`].
+const DEFAULT_PROGRESS_EVERY: u64 = 100;
+
+impl LearnArgs {
+    fn episode_settings(&self) -> EpisodeSettings {
+        let default = EpisodeSettings::default();
+        EpisodeSettings {
+            episodes: self.episodes.unwrap_or(default.episodes),
+            max_steps: self.max_steps.unwrap_or(default.max_steps),
+        }
+    }
+}
+
 fn parse_seconds_or_zero(text: &str) -> Result<Duration, String> {
     duration::parse_seconds(text).map_err(|_| format!("'{text}' is not a number of seconds"))
 }
@@ -157,6 +169,22 @@ fn parse_seconds(text: &str) -> Result<Duration, String> {
 
 /// Runs `pushlearn learn`.
 pub fn run(args: LearnArgs) -> Result<()> {
+    // clap's `requires` is not enforced for these (the policy group), so
+    // the usage error is raised here, as clap would.
+    if args.target.is_none() {
+        let given = [
+            ("--episodes", args.episodes.is_some()),
+            ("--max-steps", args.max_steps.is_some()),
+            ("--progress-every", args.progress_every.is_some()),
+        ];
+        if let Some((flag, _)) = given.iter().find(|(_, given)| *given) {
+            clap::Error::raw(
+                clap::error::ErrorKind::MissingRequiredArgument,
+                format!("{flag} counts attempts at a target: it needs --target X,Y,ORI\n"),
+            )
+            .exit();
+        }
+    }
     check_outputs(&args)?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
@@ -232,10 +260,7 @@ impl<'a> WithModel for Daemon<'a> {
                 shadows: args.shadows,
                 seed: args.seed,
                 model_options: args.options.canonical(),
-                episodes: EpisodeSettings {
-                    episodes: args.episodes,
-                    max_steps: args.max_steps,
-                },
+                episodes: args.episode_settings(),
             };
             let resuming = args
                 .state
@@ -254,8 +279,9 @@ impl<'a> WithModel for Daemon<'a> {
                 None => experienced(&mut client, untrained, &settings, args).await?,
             };
             let fresh = || {
+                let episodes = args.episode_settings();
                 Learner::new(model, policy, args.shadows, args.seed)
-                    .with_episodes(args.episodes, args.max_steps)
+                    .with_episodes(episodes.episodes, episodes.max_steps)
             };
             let Some(dir) = &args.state else {
                 let mut learner = fresh();
@@ -323,7 +349,8 @@ async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArg
     let options = ServeOptions {
         max_messages: args.messages,
         report_every: args.report_every,
-        progress_every: (args.progress_every > 0).then_some(args.progress_every),
+        progress_every: Some(args.progress_every.unwrap_or(DEFAULT_PROGRESS_EVERY))
+            .filter(|&every| every > 0),
     };
     let reconnect = Reconnect::new(
         args.sim.clone(),
