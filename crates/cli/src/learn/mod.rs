@@ -595,6 +595,25 @@ mod tests {
     }
 
     #[test]
+    fn the_attempts_are_part_of_the_memory_and_an_old_memory_makes_one() {
+        let goal = ObjectState::new(0.6, 0.7, -2.1);
+        let mut l =
+            Learner::new(Probe::default(), Policy::Target(goal), false, 1).with_episodes(3, 50);
+        for _ in 0..5 {
+            l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap();
+        }
+        let json = serde_json::to_value(&l).unwrap();
+        let back: Learner<Probe> = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(back.episodes(), l.episodes());
+        assert_eq!(back.episodes().unwrap().handled, 5);
+        let mut old = json;
+        old.as_object_mut().unwrap().remove("episodes");
+        let old: Learner<Probe> = serde_json::from_value(old).unwrap();
+        assert_eq!(old.episodes(), Some(&Episodes::default()));
+    }
+
+    #[test]
     fn shadows_of_a_target_policy_mark_the_target() {
         let goal = ObjectState::new(0.6, 0.7, -2.1);
         let mut l = Learner::new(Probe::default(), Policy::Target(goal), true, 1);
