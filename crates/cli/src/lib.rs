@@ -1,5 +1,6 @@
 //! The pushlearn application: everything behind the `pushlearn` command.
 //!
+//! * [`files`]: writing output files whole (temporary name, rename);
 //! * [`frame`]: world states as the learner sees them;
 //! * [`experiment`]: the thesis's experiments over the sockets;
 //! * [`learn`]: the learner daemon;
@@ -19,6 +20,7 @@
 
 pub mod experiment;
 pub mod external;
+pub mod files;
 pub mod frame;
 pub mod latency;
 pub mod learn;

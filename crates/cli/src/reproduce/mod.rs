@@ -267,7 +267,11 @@ pub fn run(
             .collect();
         produced.push(Produced {
             entry: entry.clone(),
-            document: document.without_timing(),
+            // The documents are the page's sources, checked byte for byte:
+            // no machine-dependent timing, and no fold-level detail, which
+            // is for users' own analysis of `--json` and would change (and
+            // multiply the size of) every committed document.
+            document: document.without_timing().without_folds(),
             timing,
         });
     }
@@ -337,18 +341,14 @@ pub fn write_files(dir: &Path, files: &[(String, String)]) -> Result<(), Reprodu
     Ok(())
 }
 
-/// Writes `text` to `path` through a temporary file in the same directory.
+/// Writes `text` to `path` through a temporary file in the same directory
+/// ([`crate::files::write_atomically`]).
 ///
 /// # Errors
 /// The file cannot be written or renamed.
 pub fn write_atomically(path: &Path, text: &str) -> Result<(), ReproduceError> {
-    let error = |source| ReproduceError::Write {
+    crate::files::write_atomically(path, text.as_bytes()).map_err(|source| ReproduceError::Write {
         path: path.display().to_string(),
         source,
-    };
-    let mut temporary = path.as_os_str().to_owned();
-    temporary.push(".partial");
-    let temporary = PathBuf::from(temporary);
-    std::fs::write(&temporary, text).map_err(error)?;
-    std::fs::rename(&temporary, path).map_err(error)
+    })
 }

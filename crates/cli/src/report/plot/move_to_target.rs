@@ -180,6 +180,7 @@ mod tests {
                     nodes_after_training: Default::default(),
                 },
             ],
+            training_starts: Vec::new(),
             run: RunInfo::default(),
         }
     }
