@@ -243,7 +243,8 @@ impl Table {
                 }
             })
             .collect();
-        line.join("  ")
+        // Padding is for the columns that follow; none follows the last.
+        line.join("  ").trim_end().to_owned()
     }
 
     /// The table as the terminal shows it, after an empty line.
