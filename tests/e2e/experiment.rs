@@ -102,8 +102,18 @@ fn push_task_over_sockets_is_plausible_and_identical_for_any_worker_count() {
         "2",
     ];
     let figures = dir.file("figures");
+    let tables = dir.file("tables");
     let mut args = reduced.to_vec();
-    args.extend_from_slice(&["--workers", "2", "--json", &two, "--plots", &figures]);
+    args.extend_from_slice(&[
+        "--workers",
+        "2",
+        "--json",
+        &two,
+        "--plots",
+        &figures,
+        "--csv",
+        &tables,
+    ]);
     let table = succeeded(&experiment(&args));
     // The figures, and the same ones again from the saved JSON.
     let again = dir.file("again");
@@ -165,12 +175,99 @@ fn push_task_over_sockets_is_plausible_and_identical_for_any_worker_count() {
     assert!(number(&run_info["messages"]) > 2.0 * (22.0 + 24.0) * 150.0);
     assert_eq!(run_info["parse_errors"], 0);
 
+    // Fold-level data: every fold's training starts and each of its 21
+    // test runs, whose mean is the table's.
+    for (r, n) in results.iter().zip([1, 3]) {
+        let folds = r["by_fold"].as_array().expect("by_fold");
+        assert_eq!(folds.len(), 2);
+        for f in folds {
+            assert_eq!(f["training_starts"].as_array().map(Vec::len), Some(n));
+            assert_eq!(f["runs"].as_array().map(Vec::len), Some(21));
+        }
+        let mean = |key: &str| folds.iter().map(|f| number(&f[key])).sum::<f64>() / 2.0;
+        for key in ["block_pos_err", "block_ori_err", "actuator_pos_err"] {
+            assert!((mean(key) - number(&r[key]["mean"])).abs() < 1e-12, "{key}");
+        }
+        let runs_mean = folds
+            .iter()
+            .flat_map(|f| f["runs"].as_array().into_iter().flatten())
+            .map(|run| number(&run["blocks"]["15"]["pos"]))
+            .sum::<f64>()
+            / 42.0;
+        assert!((runs_mean - number(&r["block_pos_err"]["mean"])).abs() < 1e-12);
+    }
+
+    // The CSV files: one per printed table, a header with units, and the
+    // rows of the table at full precision.
+    let csv = |name: &str| {
+        let path = Path::new(&tables).join(format!("push-task-gate-random-{name}.csv"));
+        std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    };
+    for name in [
+        "learning-curve",
+        "learning-curve-interacting",
+        "nodes",
+        "keypoints",
+    ] {
+        assert!(csv(name).lines().count() == 3, "{name}:\n{}", csv(name));
+    }
+    let curve = csv("learning-curve");
+    let mut lines = curve.lines();
+    let head: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    assert_eq!(head[0], "N_train");
+    assert_eq!(head[1], "block position mean [m]");
+    for (line, r) in lines.zip(results) {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(fields[0], r["train_runs"].to_string());
+        let mean: f64 = fields[1].parse().expect("a number");
+        assert_eq!(mean, number(&r["block_pos_err"]["mean"]));
+        assert!(
+            table.contains(&format!("{mean:.4} ± ")),
+            "{mean} not in\n{table}"
+        );
+    }
+    // `report show` writes the same files from the saved JSON.
+    let shown = dir.file("shown");
+    succeeded(&pushlearn(&["report", "show", &two, "--csv", &shown]));
+    assert_eq!(
+        std::fs::read_to_string(Path::new(&shown).join("push-task-gate-random-learning-curve.csv"))
+            .expect("report show's CSV"),
+        curve
+    );
+
     // Same seed, one worker: bit-identical results (jobs carry their own
     // seeds, and each job reseeds the world's latency emulation).
     let mut args = reduced.to_vec();
     args.extend_from_slice(&["--workers", "1", "--json", &one]);
     succeeded(&experiment(&args));
     assert_eq!(read_json(&one)["results"], v["results"]);
+}
+
+#[test]
+fn an_unwritable_csv_directory_fails_before_the_experiment_runs() {
+    let dir = TempDir::new("csv-dir");
+    let blocker = dir.file("a-file");
+    std::fs::write(&blocker, "").expect("a file");
+    let json = dir.file("never.json");
+    let csv = format!("{blocker}/tables");
+    let started = std::time::Instant::now();
+    let out = experiment(&[
+        "push-task",
+        "--train-runs",
+        "30",
+        "--folds",
+        "20",
+        "--json",
+        &json,
+        "--csv",
+        &csv,
+    ]);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(stderr.contains("cannot write CSV files into"), "{stderr}");
+    // Refused before any work: no world ran, no report was written.
+    assert!(!Path::new(&json).exists());
+    assert!(started.elapsed().as_secs() < 10, "{:?}", started.elapsed());
 }
 
 #[test]

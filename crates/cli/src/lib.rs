@@ -5,7 +5,8 @@
 //! * [`learn`]: the learner daemon;
 //! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
 //! * [`models`]: the learners by name;
-//! * [`output`]: output paths checked before the work that fills them;
+//! * [`output`]: output paths checked before the work that fills them, and
+//!   files written whole (temporary name, rename);
 //! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
 //!   and figures;
 //! * [`results`]: what the experiments measured, as plain data: filled by

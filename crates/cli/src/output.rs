@@ -1,6 +1,6 @@
 //! The files a command writes: checked before any work starts, so that a
-//! typo in a path does not cost a long run (and the run's results are never
-//! lost to it).
+//! typo in a path does not cost a long run, and written whole (the
+//! reproduction's documents and figures, `--json`, the tables' CSV files).
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -74,6 +74,19 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
     })
 }
 
+/// Checks that `dir` can take output files before any work starts: creates
+/// it if needed and writes (then removes) a probe file, so that a typo or a
+/// read-only directory fails at once rather than after a whole run.
+///
+/// # Errors
+/// The directory cannot be created or written, with the reason.
+pub fn check_writable_dir(dir: &Path) -> io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let probe = dir.join(format!(".pushlearn-probe-{}", std::process::id()));
+    std::fs::write(&probe, b"")?;
+    std::fs::remove_file(&probe)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -93,6 +106,22 @@ mod tests {
         check_file(&ok, "--json").unwrap();
         assert!(!ok.exists());
         check_file(Path::new("relative.json"), "--json").unwrap();
+    }
+
+    #[test]
+    fn files_are_replaced_whole_and_unwritable_dirs_are_refused() {
+        let dir = std::env::temp_dir().join(format!("pushlearn-files-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        check_writable_dir(&dir.join("nested")).unwrap();
+        let path = dir.join("nested").join("a.csv");
+        write_atomically(&path, b"one\n").unwrap();
+        write_atomically(&path, b"two\n").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"two\n");
+        let names: Vec<_> = std::fs::read_dir(dir.join("nested")).unwrap().collect();
+        assert_eq!(names.len(), 1, "no temporary or probe file is left");
+        // Under a file, no directory can be made.
+        assert!(check_writable_dir(&path.join("below")).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -11,6 +11,7 @@ use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
 use crate::external::{ExternalModel, LearnerError};
 use crate::models::{LearnerChoice, ModelKind, ModelOptions, ModelOptionsError, WithModel};
 use crate::report::draft::{self, DraftReport, DraftRowResult};
+use crate::report::layout::Printout;
 use crate::report::plot::{self, PlotError};
 use crate::report::table;
 use crate::results::run_info::RunInfo;
@@ -317,22 +318,57 @@ impl Document {
         }
     }
 
+    /// The document without its fold-level detail
+    /// ([`CurveEntry::without_folds`](crate::results::push_task::CurveEntry::without_folds)),
+    /// as the reproduction keeps its documents.
+    #[must_use]
+    pub fn without_folds(self) -> Self {
+        let strip = |r: &mut PushReport| {
+            r.results = std::mem::take(&mut r.results)
+                .into_iter()
+                .map(|e| e.without_folds())
+                .collect();
+        };
+        match self {
+            Document::Push(mut r) => {
+                strip(&mut r);
+                Document::Push(r)
+            }
+            Document::Draft(mut r) => {
+                r.reports.iter_mut().for_each(strip);
+                Document::Draft(r)
+            }
+            Document::MoveToTarget(mut r) => {
+                r.training_starts = Vec::new();
+                Document::MoveToTarget(r)
+            }
+            other @ Document::Feedback(_) => other,
+        }
+    }
+
+    /// The terminal tables beside the thesis's numbers, as `pushlearn
+    /// experiment` prints them, each also as CSV.
+    #[must_use]
+    pub fn printout(&self) -> Printout {
+        match self {
+            Document::Push(r) => {
+                let mut printout = table::push_printout(r, model_of(&r.setup));
+                printout.tables.push(draft::keypoint_table(r));
+                printout
+            }
+            Document::Feedback(r) => table::feedback_printout(r, model_of(&r.setup)),
+            Document::MoveToTarget(r) => table::move_to_target_printout(r, model_of(&r.setup)),
+            Document::Draft(r) => draft::printout(r),
+        }
+    }
+
     /// The terminal tables beside the thesis's numbers, as `pushlearn
     /// experiment` prints them.
     ///
     /// # Errors
     /// Writing to `out`.
     pub fn write_tables(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
-        match self {
-            Document::Push(r) => {
-                let model = model_of(&r.setup);
-                table::push(out, r, model)?;
-                draft::keypoint_section(out, r)
-            }
-            Document::Feedback(r) => table::feedback(out, r, model_of(&r.setup)),
-            Document::MoveToTarget(r) => table::move_to_target(out, r, model_of(&r.setup)),
-            Document::Draft(r) => draft::tables(out, r),
-        }
+        self.printout().write_text(out)
     }
 
     /// Draws the document's figures into `dir` (the draft's tables have
@@ -360,11 +396,7 @@ impl Document {
                 .map(Document::Draft)
                 .map_err(|e| format!("not the draft's tables: {e}"));
         }
-        let document = match AnyReport::from_json(text).map_err(|e| e.to_string())? {
-            AnyReport::Push(r) => Document::Push(r),
-            AnyReport::Feedback(r) => Document::Feedback(r),
-            AnyReport::MoveToTarget(r) => Document::MoveToTarget(r),
-        };
+        let document = Document::from(AnyReport::from_json(text).map_err(|e| e.to_string())?);
         let fits = matches!(
             (&document, spec),
             (Document::Push(_), Spec::PushTask { .. })
@@ -395,6 +427,16 @@ impl Document {
         }?;
         text.push('\n');
         Ok(text)
+    }
+}
+
+impl From<AnyReport> for Document {
+    fn from(report: AnyReport) -> Self {
+        match report {
+            AnyReport::Push(r) => Document::Push(r),
+            AnyReport::Feedback(r) => Document::Feedback(r),
+            AnyReport::MoveToTarget(r) => Document::MoveToTarget(r),
+        }
     }
 }
 

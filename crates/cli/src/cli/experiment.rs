@@ -110,6 +110,11 @@ struct WorldArgs {
     /// `pushlearn report plot FILE.json` draws them again from saved JSON.
     #[arg(long, value_name = "DIR")]
     plots: Option<PathBuf>,
+
+    /// Also write every printed table as CSV into DIR (created if needed),
+    /// one file per table, named after the experiment and the table.
+    #[arg(long, value_name = "DIR")]
+    csv: Option<PathBuf>,
 }
 
 /// Which learner runs: a built-in model, or an external one over the
@@ -284,12 +289,17 @@ impl WorldArgs {
     }
 
     /// Checks before the experiment runs that its outputs can be written —
-    /// the figure directory created, the JSON file's directory present — so
+    /// the figure directory created, the CSV directory created and
+    /// writable, the JSON file's directory present — so
     /// that a typo does not cost a whole run.
     fn check_outputs(&self) -> Result<()> {
         if let Some(dir) = &self.plots {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create the figure directory {}", dir.display()))?;
+        }
+        if let Some(dir) = &self.csv {
+            pushlearn_cli::output::check_writable_dir(dir)
+                .with_context(|| format!("cannot write CSV files into {}", dir.display()))?;
         }
         if let Some(path) = &self.json {
             pushlearn_cli::output::check_file(path, "--json")?;
@@ -362,9 +372,10 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     bar.finish_and_clear();
     // The tables first: a file that cannot be written after all (a full
     // disk) must not cost the run's results.
+    let printout = document.printout();
     {
         let mut out = std::io::stdout().lock();
-        document.write_tables(&mut out)?;
+        printout.write_text(&mut out)?;
         out.flush()?;
     }
     if let Some(path) = &world.json {
@@ -374,6 +385,12 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     if let Some(dir) = &world.plots {
         let written = document.plot(dir)?;
         eprintln!("wrote {} figures to {}", written.len(), dir.display());
+    }
+    if let Some(dir) = &world.csv {
+        let written = printout
+            .write_csv(dir)
+            .with_context(|| format!("writing CSV files into {}", dir.display()))?;
+        eprintln!("wrote {} CSV files to {}", written.len(), dir.display());
     }
     Ok(())
 }

@@ -7,8 +7,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use pushlearn_cli::models::ModelKind;
-use pushlearn_cli::report::{plot, table};
+use pushlearn_cli::output;
+use pushlearn_cli::report::plot;
 use pushlearn_cli::results::AnyReport;
+use pushlearn_cli::spec::Document;
 
 /// Print the table or draw the figures of a report saved with `--json`.
 #[derive(Debug, Args)]
@@ -31,6 +33,10 @@ enum ReportCommand {
     Show {
         /// A file written by `pushlearn experiment … --json FILE`.
         file: PathBuf,
+        /// Also write every printed table as CSV into DIR, as `--csv DIR`
+        /// of `pushlearn experiment` does.
+        #[arg(long, value_name = "DIR")]
+        csv: Option<PathBuf>,
     },
 }
 
@@ -61,14 +67,22 @@ pub fn run(args: ReportArgs) -> Result<()> {
             }
             Ok(stdout.flush()?)
         }
-        ReportCommand::Show { file } => {
-            let (report, model) = load(&file)?;
-            let mut out = std::io::stdout().lock();
-            match &report {
-                AnyReport::Push(r) => table::push(&mut out, r, model)?,
-                AnyReport::Feedback(r) => table::feedback(&mut out, r, model)?,
-                AnyReport::MoveToTarget(r) => table::move_to_target(&mut out, r, model)?,
+        ReportCommand::Show { file, csv } => {
+            if let Some(dir) = &csv {
+                output::check_writable_dir(dir)
+                    .with_context(|| format!("cannot write CSV files into {}", dir.display()))?;
             }
+            // The model is checked by `load`; the document names it.
+            let (report, _) = load(&file)?;
+            let printout = Document::from(report).printout();
+            if let Some(dir) = &csv {
+                let written = printout
+                    .write_csv(dir)
+                    .with_context(|| format!("writing CSV files into {}", dir.display()))?;
+                eprintln!("wrote {} CSV files to {}", written.len(), dir.display());
+            }
+            let mut out = std::io::stdout().lock();
+            printout.write_text(&mut out)?;
             Ok(out.flush()?)
         }
     }

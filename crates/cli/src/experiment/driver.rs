@@ -269,6 +269,9 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     }
 }
 
+/// The actuator's start y of every push-task run (its x is the run's x0).
+pub const PUSH_TASK_START_Y: f64 = 0.0;
+
 /// Expected start poses of the blocks in push-task runs (`docs/spec/experiments.md`
 /// §2.1; the red block's entry only matters in the two-object scene).
 #[must_use]

@@ -333,6 +333,10 @@ pub fn move_to_target<M: Model>(
         repetitions,
         max_steps,
         targets: entries,
+        training_starts: crate::experiment::move_to_target::TRAINING_RUNS
+            .iter()
+            .map(|&((x, y), _)| [x, y])
+            .collect(),
         run: plan.run_info(
             &started,
             results.iter().map(|r| (r.counters, r.timing)),

@@ -14,6 +14,8 @@ use learner::keypoints::KeyPointScore;
 use learner::{ACTUATOR_ID, BLUE_ID};
 use serde::{Deserialize, Serialize};
 
+use super::layout::{field, Cell, Column, Kind, Printout, Table};
+use super::plural;
 use crate::models::{ConfigFlag, ModelKind, ModelOptions};
 use crate::results::push_task::{CurveEntry, SelectionCount};
 use crate::results::{PushReport, Setup};
@@ -217,11 +219,12 @@ pub struct DraftReport {
     pub reports: Vec<PushReport>,
 }
 
-fn score_cells(ours: &KeyPointScore, draft: &DraftNumbers) -> String {
-    format!(
-        "{:>7.3} [{:.3}]  {:>8.3} [{:>6.3}]  {:>7.3} [{:.3}]",
-        ours.final_dif, draft.final_dif, ours.cum_dif, draft.cum_dif, ours.mean_dif, draft.mean_dif
-    )
+/// Our score beside [the draft's], and both as CSV fields.
+fn score_cell(ours: f64, draft: f64, width: usize, draft_width: usize) -> Cell {
+    Cell::Composed {
+        text: format!("{ours:>width$.3} [{draft:>draft_width$.3}]"),
+        fields: vec![field(ours), field(draft)],
+    }
 }
 
 /// Tables 6.1 and 6.2 in the draft's layout, ours then [the draft's].
@@ -229,112 +232,169 @@ fn score_cells(ours: &KeyPointScore, draft: &DraftNumbers) -> String {
 /// # Errors
 /// Writing to `out`.
 pub fn tables(out: &mut impl Write, report: &DraftReport) -> io::Result<()> {
-    writeln!(
-        out,
-        "Push task, thesis draft protocol: {} test runs per row, {} fold(s), mode {}, seed {}",
-        report.test_positions.len(),
-        report.folds,
-        report.setup.mode,
-        report.setup.seed
-    )?;
-    writeln!(
-        out,
+    printout(report).write_text(out)
+}
+
+/// The draft's tables, and the final thesis's errors of the same runs.
+#[must_use]
+pub fn printout(report: &DraftReport) -> Printout {
+    let head = vec![
+        format!(
+            "Push task, thesis draft protocol: {} per row, {}, mode {}, seed {}",
+            plural(report.test_positions.len(), "test run"),
+            plural(report.folds, "fold"),
+            report.setup.mode,
+            report.setup.seed
+        ),
         "key-point score (draft §6.1.2), mean over the test runs; ours, then [the draft's]"
-    )?;
+            .to_owned(),
+    ];
     let width = report
         .rows
         .iter()
         .map(|r| r.name.chars().count())
         .max()
-        .unwrap_or(0);
-    for (title, part) in [
-        ("Table 6.1 (Test1)", "Actuator"),
-        ("Table 6.2 (Test2)", "Block"),
+        .unwrap_or(0)
+        .max("Model configuration".len());
+    let name_column = || Column::new("Model configuration", width, false, Kind::Text);
+    let mut tables = Vec::new();
+    for (name, title, part) in [
+        ("table-6.1", "Table 6.1 (Test1)", "Actuator"),
+        ("table-6.2", "Table 6.2 (Test2)", "Block"),
     ] {
-        writeln!(out)?;
-        writeln!(out, "{title}")?;
-        writeln!(
-            out,
-            "{:<width$}  {:>15}  {:>17}  {:>15}",
-            "Model configuration",
-            format!("{part} final dif"),
-            format!("{part} cumDif"),
-            format!("{part} mean dif"),
-        )?;
+        let score = |what: &str, width: usize| {
+            let head = format!("{part} {what}");
+            Column::new(
+                &head,
+                width,
+                true,
+                Kind::Composed(vec![head.clone(), format!("{head}, draft")]),
+            )
+        };
+        let mut t = Table::new(
+            name,
+            title,
+            vec![
+                name_column(),
+                score("final dif", 15),
+                score("cumDif", 17),
+                score("mean dif", 15),
+            ],
+        );
         for r in &report.rows {
             let (ours, draft) = if part == "Actuator" {
                 (&r.actuator, &r.draft_actuator)
             } else {
                 (&r.block, &r.draft_block)
             };
-            writeln!(out, "{:<width$}  {}", r.name, score_cells(ours, draft))?;
+            t.rows.push(vec![
+                Cell::Text(r.name.clone()),
+                score_cell(ours.final_dif, draft.final_dif, 7, 0),
+                score_cell(ours.cum_dif, draft.cum_dif, 8, 6),
+                score_cell(ours.mean_dif, draft.mean_dif, 7, 0),
+            ]);
         }
+        tables.push(t);
     }
-    writeln!(out)?;
-    writeln!(
-        out,
-        "Same runs, final thesis errors (docs/spec/experiments.md §7.2) and AC selector agreement"
-    )?;
-    writeln!(
-        out,
-        "{:<width$}  {:>9}  {:>9}  {:>9}  {:>9}",
-        "Model configuration", "block pos", "block ori", "actuator", "selector"
-    )?;
+    let mut t = Table::new(
+        "errors",
+        "Same runs, final thesis errors (docs/spec/experiments.md §7.2) and AC selector agreement",
+        vec![
+            name_column(),
+            Column::new("block pos [m]", 13, true, Kind::Number { decimals: 4 }),
+            Column::new("block ori [rad]", 15, true, Kind::Number { decimals: 4 }),
+            Column::new("actuator [m]", 12, true, Kind::Number { decimals: 4 }),
+            selection_column(),
+        ],
+    );
     for r in &report.rows {
-        writeln!(
-            out,
-            "{:<width$}  {:>9.4}  {:>9.4}  {:>9.4}  {:>9}",
-            r.name,
-            r.block_pos_err,
-            r.block_ori_err,
-            r.actuator_pos_err,
-            selection_cell(r.selection.as_ref())
-        )?;
+        t.rows.push(vec![
+            Cell::Text(r.name.clone()),
+            Cell::Number(r.block_pos_err),
+            Cell::Number(r.block_ori_err),
+            Cell::Number(r.actuator_pos_err),
+            selection_cell(r.selection.as_ref()),
+        ]);
     }
-    Ok(())
+    tables.push(t);
+    Printout {
+        stem: "push-task-draft".to_owned(),
+        head,
+        tables,
+        foot: Vec::new(),
+    }
 }
 
-fn selection_cell(s: Option<&SelectionCount>) -> String {
-    s.and_then(SelectionCount::accuracy)
-        .map_or_else(|| "–".to_owned(), |a| format!("{:.1} %", 100.0 * a))
+fn selection_column() -> Column {
+    Column::new(
+        "selector [%]",
+        12,
+        true,
+        Kind::Composed(vec!["selector agreement [%]".to_owned()]),
+    )
+}
+
+fn selection_cell(s: Option<&SelectionCount>) -> Cell {
+    let accuracy = s.and_then(SelectionCount::accuracy);
+    Cell::Composed {
+        text: accuracy.map_or_else(|| "–".to_owned(), |a| format!("{:.1} %", 100.0 * a)),
+        fields: vec![accuracy.map_or_else(String::new, |a| field(100.0 * a))],
+    }
 }
 
 /// The key-point scores of a push-task report beside its position and
 /// orientation errors, per N_train, and the AC selector's agreement where
 /// the model has one.
-///
-/// # Errors
-/// Writing to `out`.
-pub fn keypoint_section(out: &mut impl Write, report: &PushReport) -> io::Result<()> {
-    writeln!(out)?;
-    writeln!(
-        out,
-        "Key-point score (thesis draft §6.1.2; mean over test runs: final / accumulated / mean per prediction)"
-    )?;
-    writeln!(
-        out,
-        "{:>7}  {:>26}  {:>26}  {:>9}  {:>9}  {:>9}",
-        "N_train", "actuator", "block 15", "block pos", "block ori", "selector"
-    )?;
+#[must_use]
+pub fn keypoint_table(report: &PushReport) -> Table {
+    let score = |who: &str| {
+        Column::new(
+            who,
+            26,
+            true,
+            Kind::Composed(
+                ["final", "accumulated", "mean per prediction"]
+                    .iter()
+                    .map(|w| format!("{who} key-point score, {w}"))
+                    .collect(),
+            ),
+        )
+    };
+    let mut t = Table::new(
+        "keypoints",
+        "Key-point score (thesis draft §6.1.2; mean over test runs: final / accumulated / mean per prediction)",
+        vec![
+            Column::new("N_train", 7, true, Kind::Text),
+            score("actuator"),
+            score("block 15"),
+            Column::new("block pos [m]", 13, true, Kind::Number { decimals: 4 }),
+            Column::new("block ori [rad]", 15, true, Kind::Number { decimals: 4 }),
+            selection_column(),
+        ],
+    );
     for e in &report.results {
         let cell = |m: &BTreeMap<u32, KeyPointScore>, id| {
             m.get(&id).map_or_else(
-                || "–".to_owned(),
-                |s| format!("{:.3} / {:.3} / {:.4}", s.final_dif, s.cum_dif, s.mean_dif),
+                || Cell::Composed {
+                    text: "–".to_owned(),
+                    fields: vec![String::new(); 3],
+                },
+                |s| Cell::Composed {
+                    text: format!("{:.3} / {:.3} / {:.4}", s.final_dif, s.cum_dif, s.mean_dif),
+                    fields: vec![field(s.final_dif), field(s.cum_dif), field(s.mean_dif)],
+                },
             )
         };
-        writeln!(
-            out,
-            "{:>7}  {:>26}  {:>26}  {:>9.4}  {:>9.4}  {:>9}",
-            e.train_runs,
+        t.rows.push(vec![
+            Cell::Text(e.train_runs.to_string()),
             cell(&e.keypoints, ACTUATOR_ID),
             cell(&e.keypoints, BLUE_ID),
-            e.blue.block_pos_err.mean,
-            e.blue.block_ori_err.mean,
-            selection_cell(e.selection.as_ref())
-        )?;
+            Cell::Number(e.blue.block_pos_err.mean),
+            Cell::Number(e.blue.block_ori_err.mean),
+            selection_cell(e.selection.as_ref()),
+        ]);
     }
-    Ok(())
+    t
 }
 
 #[cfg(test)]

@@ -4,9 +4,10 @@
 
 use std::io::{self, Write};
 
-use learner::eval::MeanStd;
 use learner::{MapName, BLUE_ID};
 
+use super::layout::{field, text, Cell, Column, Kind, Printout, Table};
+use super::plural;
 use super::reference::{self, Ms};
 use crate::models::ModelKind;
 use crate::results::move_to_target::{REPETITIONS, TARGETS};
@@ -15,35 +16,43 @@ use crate::results::push_task::{BlockCurve, CurveEntry};
 use crate::results::run_info::RunInfo;
 use crate::results::{FeedbackReport, MttReport, PushReport};
 
-fn ms(m: MeanStd) -> String {
-    format!("{:.4} ± {:.4}", m.mean, m.std)
+/// Ours ± spread beside [the thesis's]: 33 characters.
+fn error_column(head: &str) -> Column {
+    Column::new(head, 33, false, Kind::Error { thesis: true })
 }
 
-fn thesis(r: Option<Ms>) -> String {
-    r.map_or_else(String::new, |Ms(m, s)| format!("[{m:.4} ± {s:.4}]"))
+/// Ours ± spread alone.
+fn own_error_column(head: &str) -> Column {
+    Column::new(head, 15, false, Kind::Error { thesis: false })
 }
 
-fn cell(ours: MeanStd, reference: Option<Ms>) -> String {
-    format!("{:<15} {:<17}", ms(ours), thesis(reference))
+/// A count over folds beside [the thesis's]: 34 characters.
+fn count_column(head: &str) -> Column {
+    Column::new(head, 34, false, Kind::Count { thesis: true })
 }
 
-fn count(m: MeanStd) -> String {
-    format!("{:.2} ({:.2})", m.mean, m.std)
+fn own_count_column(head: &str) -> Column {
+    Column::new(head, 16, false, Kind::Count { thesis: false })
 }
 
-fn thesis_count(r: Option<Ms>) -> String {
-    r.map_or_else(String::new, |Ms(m, s)| format!("[{m} ({s})]"))
+/// A column of composed cells with these CSV fields.
+fn composed(head: &str, width: usize, fields: &[&str]) -> Column {
+    Column::new(
+        head,
+        width,
+        false,
+        Kind::Composed(fields.iter().map(|&f| f.to_owned()).collect()),
+    )
 }
 
-fn count_cell(ours: Option<MeanStd>, reference: Option<Ms>) -> String {
-    let ours = ours.map_or_else(|| "–".to_owned(), count);
-    format!("{ours:<16} {:<17}", thesis_count(reference))
+fn n_train_column() -> Column {
+    Column::new("N_train", 7, true, Kind::Text)
 }
 
-/// The terminal report of a push-task experiment.
-///
-/// # Errors
-/// Writing to `out`.
+fn whole(n: usize) -> Cell {
+    Cell::Text(n.to_string())
+}
+
 /// "gate model", or for an external learner its name, version and the
 /// built-in model whose thesis values stand beside it.
 fn learner_title(setup: &crate::results::Setup, reference: ModelKind) -> String {
@@ -56,134 +65,166 @@ fn learner_title(setup: &crate::results::Setup, reference: ModelKind) -> String 
     }
 }
 
+/// The terminal report of a push-task experiment.
+///
+/// # Errors
+/// Writing to `out`.
 pub fn push(out: &mut impl Write, report: &PushReport, model: ModelKind) -> io::Result<()> {
-    writeln!(
-        out,
-        "Push task ({}), {}, {} folds, mode {}, seed {}",
-        report.variant,
-        learner_title(&report.setup, model),
-        report.folds,
-        report.setup.mode,
-        report.setup.seed
-    )?;
-    writeln!(
-        out,
-        "errors after 150 chained predictions; ours, then [the thesis's] where it has the value"
-    )?;
-    match report.variant.as_str() {
-        "fixed-three" => {
-            for entry in &report.results {
-                positions(out, entry, model)?;
-            }
-        }
-        "two-objects" => {
-            for entry in &report.results {
-                two_objects(out, entry)?;
-            }
-        }
-        _ => curve(out, &report.results, model)?,
-    }
-    nodes(out, &report.results, model)?;
-    run_info(out, &report.run)
+    push_printout(report, model).write_text(out)
 }
 
-fn curve(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::Result<()> {
+/// The push-task report's tables (without the key-point section, which
+/// [`crate::report::draft::keypoint_table`] adds).
+#[must_use]
+pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
+    let head = vec![
+        format!(
+            "Push task ({}), {}, {}, mode {}, seed {}",
+            report.variant,
+            learner_title(&report.setup, model),
+            plural(report.folds, "fold"),
+            report.setup.mode,
+            report.setup.seed
+        ),
+        "errors after 150 chained predictions; ours, then [the thesis's] where it has the value"
+            .to_owned(),
+    ];
+    let mut tables = match report.variant.as_str() {
+        "fixed-three" => report.results.iter().map(|e| positions(e, model)).collect(),
+        "two-objects" => report.results.iter().map(two_objects).collect(),
+        _ => curve(&report.results, model),
+    };
+    tables.push(nodes(&report.results, model));
+    Printout {
+        stem: format!("push-task-{}-{}", report.setup.model, report.variant),
+        head,
+        tables,
+        foot: run_info(&report.run),
+    }
+}
+
+fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
     let source = match model {
         ModelKind::Gate => "§3.4",
         ModelKind::Interaction => "§3.2",
     };
-    writeln!(out)?;
-    writeln!(
-        out,
-        "Learning curve, all 21 test positions: mean of per-position means ± mean of per-position stds [{source}]"
-    )?;
-    writeln!(
-        out,
-        "{:>7}  {:<33}  {:<33}  {:<33}",
-        "N_train", "block position [m]", "block orientation [rad]", "actuator position [m]"
-    )?;
+    let mut all = Table::new(
+        "learning-curve",
+        format!(
+            "Learning curve, all 21 test positions: mean of per-position means ± mean of per-position stds [{source}]"
+        ),
+        vec![
+            n_train_column(),
+            error_column("block position [m]"),
+            error_column("block orientation [rad]"),
+            error_column("actuator position [m]"),
+        ],
+    );
     for e in results {
         let r = reference::curve(model, e.train_runs);
-        writeln!(
-            out,
-            "{:>7}  {}  {}  {}",
-            e.train_runs,
-            cell(e.blue.block_pos_err, r.map(|r| r.pos)),
-            cell(e.blue.block_ori_err, r.map(|r| r.ori)),
-            cell(e.blue.actuator_pos_err, r.map(|r| r.actuator)),
-        )?;
+        let f = e.folds;
+        all.rows.push(vec![
+            whole(e.train_runs),
+            Cell::spread(e.blue.block_pos_err, f, r.map(|r| r.pos)),
+            Cell::spread(e.blue.block_ori_err, f, r.map(|r| r.ori)),
+            Cell::spread(e.blue.actuator_pos_err, f, r.map(|r| r.actuator)),
+        ]);
     }
-    writeln!(out)?;
-    writeln!(
-        out,
-        "The 15 interacting test positions (−0.245 … 0.245) [{source}]; last column: the thesis \
-         script's actuator value, mean of (mean + std) / 2 (docs/spec/experiments.md §7.4)"
-    )?;
-    writeln!(
-        out,
-        "{:>7}  {:<33}  {:<33}  {:<15}  {:<24}",
-        "N_train",
-        "block position [m]",
-        "block orientation [rad]",
-        "actuator [m]",
-        "actuator, script's value"
-    )?;
+    let mut interacting = Table::new(
+        "learning-curve-interacting",
+        format!(
+            "The 15 interacting test positions (−0.245 … 0.245) [{source}]; last column: the thesis \
+             script's actuator value, mean of (mean + std) / 2 (docs/spec/experiments.md §7.4)"
+        ),
+        vec![
+            n_train_column(),
+            error_column("block position [m]"),
+            error_column("block orientation [rad]"),
+            own_error_column("actuator [m]"),
+            Column::new(
+                "actuator, script's value [m]",
+                24,
+                false,
+                Kind::Composed(vec![
+                    "actuator, script's value [m]".into(),
+                    "actuator, script's value, thesis [m]".into(),
+                ]),
+            ),
+        ],
+    );
     for e in results {
         let r = reference::curve(model, e.train_runs);
         let i = &e.blue.interacting;
-        let quirk_ref = r.map_or_else(String::new, |r| {
-            format!("[{:.4}]", r.actuator_interacting_quirk.0)
-        });
-        writeln!(
-            out,
-            "{:>7}  {}  {}  {:<15}  {:<6.4} {}",
-            e.train_runs,
-            cell(i.block_pos_err, r.map(|r| r.pos_interacting)),
-            cell(i.block_ori_err, r.map(|r| r.ori_interacting)),
-            ms(i.actuator_pos_err),
-            i.actuator_pos_err_script_quirk,
-            quirk_ref,
-        )?;
+        let f = e.folds;
+        interacting.rows.push(vec![
+            whole(e.train_runs),
+            Cell::spread(i.block_pos_err, f, r.map(|r| r.pos_interacting)),
+            Cell::spread(i.block_ori_err, f, r.map(|r| r.ori_interacting)),
+            Cell::spread(i.actuator_pos_err, f, None),
+            Cell::Composed {
+                text: format!(
+                    "{:<6.4} {}",
+                    i.actuator_pos_err_script_quirk,
+                    r.map_or_else(String::new, |r| format!(
+                        "[{:.4}]",
+                        r.actuator_interacting_quirk.0
+                    ))
+                ),
+                fields: vec![
+                    field(i.actuator_pos_err_script_quirk),
+                    r.map_or_else(String::new, |r| field(r.actuator_interacting_quirk.0)),
+                ],
+            },
+        ]);
     }
-    Ok(())
+    vec![all, interacting]
 }
 
-fn positions(out: &mut impl Write, entry: &CurveEntry, model: ModelKind) -> io::Result<()> {
+fn positions(entry: &CurveEntry, model: ModelKind) -> Table {
     let (source, table) = match model {
         ModelKind::Gate => ("§5.3", reference::fixed_three(model)),
         ModelKind::Interaction => ("§5.2", reference::fixed_three(model)),
     };
     // The thesis's table is for its three selected runs only.
     let table = (entry.train_runs == 3).then_some(table);
-    writeln!(out)?;
-    writeln!(
-        out,
-        "{} selected training runs, per test position: mean ± population std over folds [{source}]",
-        entry.train_runs
-    )?;
-    writeln!(
-        out,
-        "{:>3}  {:>7}  {:<33}  {:<33}  {:<15}",
-        "#", "x0 [m]", "position error [m]", "orientation error [rad]", "actuator [m]"
-    )?;
+    let f = entry.folds;
+    let mut t = Table::new(
+        format!("positions-n{}", entry.train_runs),
+        format!(
+            "{}, per test position: mean ± population std over {} [{source}]",
+            plural(entry.train_runs, "selected training run"),
+            plural(f, "fold")
+        ),
+        vec![
+            Column::new("#", 3, true, Kind::Text),
+            Column::new("x0 [m]", 7, true, Kind::Number { decimals: 3 }),
+            error_column("position error [m]"),
+            error_column("orientation error [rad]"),
+            own_error_column("actuator [m]"),
+        ],
+    );
     for (i, p) in entry.blue.per_position.iter().enumerate() {
         let r = table.and_then(|t| t.get(i));
-        writeln!(
-            out,
-            "{:>3}  {:>7.3}  {}  {}  {:<15}",
-            i + 1,
-            p.x0,
-            cell(p.block_pos_err, r.map(|r| r.pos)),
-            cell(p.block_ori_err, r.map(|r| r.ori)),
-            ms(p.actuator_pos_err),
-        )?;
+        t.rows.push(vec![
+            whole(i + 1),
+            Cell::Number(p.x0),
+            Cell::spread(p.block_pos_err, f, r.map(|r| r.pos)),
+            Cell::spread(p.block_ori_err, f, r.map(|r| r.ori)),
+            Cell::spread(p.actuator_pos_err, f, None),
+        ]);
     }
-    summary_line(out, &entry.blue)
+    t.footer.push(summary_line(&entry.blue, f));
+    t
 }
 
-fn summary_line(out: &mut impl Write, blue: &BlockCurve) -> io::Result<()> {
-    writeln!(
-        out,
+fn summary_line(blue: &BlockCurve, folds: usize) -> String {
+    let ms = |m| {
+        text(
+            &Cell::spread(m, folds, None),
+            &Kind::Error { thesis: false },
+        )
+    };
+    format!(
         "  over all positions: position {}, orientation {}, actuator {}",
         ms(blue.block_pos_err),
         ms(blue.block_ori_err),
@@ -191,172 +232,173 @@ fn summary_line(out: &mut impl Write, blue: &BlockCurve) -> io::Result<()> {
     )
 }
 
-fn two_objects(out: &mut impl Write, entry: &CurveEntry) -> io::Result<()> {
+fn two_objects(entry: &CurveEntry) -> Table {
     let table = reference::two_objects(entry.train_runs);
     let source = match entry.train_runs {
         6 => "§6.1",
         7 => "§6.2",
         _ => "no thesis table for this N_train",
     };
-    writeln!(out)?;
-    writeln!(
-        out,
-        "Two objects, {} training runs, per test position: mean ± population std over folds [{source}]",
-        entry.train_runs
-    )?;
-    writeln!(
-        out,
-        "{:>3}  {:>7}  {:<33}  {:<33}  {:<33}  {:<33}",
-        "#",
-        "x0 [m]",
-        "red position [m]",
-        "red orientation [rad]",
-        "blue position [m]",
-        "blue orientation [rad]"
-    )?;
+    let f = entry.folds;
+    let mut t = Table::new(
+        format!("two-objects-n{}", entry.train_runs),
+        format!(
+            "Two objects, {}, per test position: mean ± population std over {} [{source}]",
+            plural(entry.train_runs, "training run"),
+            plural(f, "fold")
+        ),
+        vec![
+            Column::new("#", 3, true, Kind::Text),
+            Column::new("x0 [m]", 7, true, Kind::Number { decimals: 2 }),
+            error_column("red position [m]"),
+            error_column("red orientation [rad]"),
+            error_column("blue position [m]"),
+            error_column("blue orientation [rad]"),
+        ],
+    );
     let red = entry.red.as_ref();
     for (i, blue) in entry.blue.per_position.iter().enumerate() {
         let r = table.and_then(|t| t.get(i));
         let red_at = red.and_then(|c| c.per_position.get(i));
-        let nan = MeanStd {
-            mean: f64::NAN,
-            std: f64::NAN,
-        };
-        writeln!(
-            out,
-            "{:>3}  {:>7.2}  {}  {}  {}  {}",
-            i + 1,
-            blue.x0,
-            cell(
-                red_at.map_or(nan, |p| p.block_pos_err),
-                r.map(|r| r.red_pos)
-            ),
-            cell(
-                red_at.map_or(nan, |p| p.block_ori_err),
-                r.map(|r| r.red_ori)
-            ),
-            cell(blue.block_pos_err, r.map(|r| r.blue_pos)),
-            cell(blue.block_ori_err, r.map(|r| r.blue_ori)),
-        )?;
+        let red_cell =
+            |get: fn(&crate::results::push_task::PositionSummary) -> learner::eval::MeanStd,
+             thesis: Option<Ms>| Cell::Spread {
+                ours: red_at.map(get),
+                folds: f,
+                thesis,
+            };
+        t.rows.push(vec![
+            whole(i + 1),
+            Cell::Number(blue.x0),
+            red_cell(|p| p.block_pos_err, r.map(|r| r.red_pos)),
+            red_cell(|p| p.block_ori_err, r.map(|r| r.red_ori)),
+            Cell::spread(blue.block_pos_err, f, r.map(|r| r.blue_pos)),
+            Cell::spread(blue.block_ori_err, f, r.map(|r| r.blue_ori)),
+        ]);
     }
-    summary_line(out, &entry.blue)
+    t.footer.push(summary_line(&entry.blue, f));
+    t
 }
 
-fn nodes(out: &mut impl Write, results: &[CurveEntry], model: ModelKind) -> io::Result<()> {
-    writeln!(out)?;
-    let get = |n: &NodeSummary, name: &MapName, f: fn(&MapSummary) -> MeanStd| n.map(name).map(f);
+fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
+    let get = |n: &NodeSummary, name: &MapName, f: fn(&MapSummary) -> learner::eval::MeanStd| {
+        n.map(name).map(f)
+    };
+    let count = |ours, folds, thesis| Cell::Spread {
+        ours,
+        folds,
+        thesis,
+    };
     match model {
         ModelKind::Gate => {
-            writeln!(
-                out,
-                "Node counts when training ended: mean (population std) over folds [§4.2; thesis: random training data]"
-            )?;
-            writeln!(
-                out,
-                "{:>7}  {:<34}  {:<34}  {:<34}  {:<34}  {:<16}",
-                "N_train",
-                "object updates",
-                "object nodes",
-                "gate updates",
-                "gate nodes",
-                "actuator nodes"
-            )?;
+            let mut t = Table::new(
+                "nodes",
+                "Node counts when training ended: mean (population std) over folds [§4.2; thesis: random training data]",
+                vec![
+                    n_train_column(),
+                    count_column("object updates"),
+                    count_column("object nodes"),
+                    count_column("gate updates"),
+                    count_column("gate nodes"),
+                    own_count_column("actuator nodes"),
+                ],
+            );
             let predictor = MapName::Predictor(BLUE_ID);
             for e in results {
                 let r = reference::GATE_NODES
                     .iter()
                     .find(|r| r.train_runs == e.train_runs);
-                writeln!(
-                    out,
-                    "{:>7}  {}  {}  {}  {}  {:<16}",
-                    e.train_runs,
-                    count_cell(
+                let f = e.folds;
+                t.rows.push(vec![
+                    whole(e.train_runs),
+                    count(
                         get(&e.nodes, &predictor, |m| m.update_calls),
-                        r.map(|r| r.object_updates)
+                        f,
+                        r.map(|r| r.object_updates),
                     ),
-                    count_cell(
+                    count(
                         get(&e.nodes, &predictor, |m| m.nodes),
-                        r.map(|r| r.object_nodes)
+                        f,
+                        r.map(|r| r.object_nodes),
                     ),
-                    count_cell(
+                    count(
                         get(&e.nodes, &MapName::Gate, |m| m.update_calls),
-                        r.map(|r| Ms(r.gate_updates, 0.0))
+                        f,
+                        r.map(|r| Ms(r.gate_updates, 0.0)),
                     ),
-                    count_cell(
+                    count(
                         get(&e.nodes, &MapName::Gate, |m| m.nodes),
-                        r.map(|r| r.gate_nodes)
+                        f,
+                        r.map(|r| r.gate_nodes),
                     ),
-                    get(&e.nodes, &MapName::Actuator, |m| m.nodes)
-                        .map_or_else(|| "–".to_owned(), count),
-                )?;
+                    count(get(&e.nodes, &MapName::Actuator, |m| m.nodes), f, None),
+                ]);
             }
+            t
         }
         ModelKind::Interaction => {
-            writeln!(
-                out,
+            let mut t = Table::new(
+                "nodes",
                 "Node counts when training ended: mean (population std) over folds [§4.1; thesis: random \
-                 training data; its AC columns are the script's values, docs/spec/experiments.md §7.5]"
-            )?;
-            writeln!(
-                out,
-                "{:>7}  {:<16}  {:<16}  {:<34}  {:<34}  {:<34}  {:<34}  {:<34}",
-                "N_train",
-                "largest AC upd.",
-                "largest AC nodes",
-                "AC updates (script)",
-                "AC nodes (script)",
-                "# ACs",
-                "ACS updates",
-                "ACS nodes"
-            )?;
+                 training data; its AC columns are the script's values, docs/spec/experiments.md §7.5]",
+                vec![
+                    n_train_column(),
+                    own_count_column("largest AC upd."),
+                    own_count_column("largest AC nodes"),
+                    count_column("AC updates (script)"),
+                    count_column("AC nodes (script)"),
+                    count_column("# ACs"),
+                    count_column("ACS updates"),
+                    count_column("ACS nodes"),
+                ],
+            );
             for e in results {
                 let r = reference::INTERACTION_NODES
                     .iter()
                     .find(|r| r.train_runs == e.train_runs);
                 let acs = e.nodes.acs.as_ref();
-                writeln!(
-                    out,
-                    "{:>7}  {:<16}  {:<16}  {}  {}  {}  {}  {}",
-                    e.train_runs,
-                    acs.map_or_else(|| "–".into(), |a| count(a.largest_update_calls)),
-                    acs.map_or_else(|| "–".into(), |a| count(a.largest_nodes)),
-                    count_cell(
+                let f = e.folds;
+                t.rows.push(vec![
+                    whole(e.train_runs),
+                    count(acs.map(|a| a.largest_update_calls), f, None),
+                    count(acs.map(|a| a.largest_nodes), f, None),
+                    count(
                         acs.map(|a| a.script_quirk.update_calls),
-                        r.map(|r| r.ac_updates)
+                        f,
+                        r.map(|r| r.ac_updates),
                     ),
-                    count_cell(acs.map(|a| a.script_quirk.nodes), r.map(|r| r.ac_nodes)),
-                    count_cell(acs.map(|a| a.count), r.map(|r| r.ac_count)),
-                    count_cell(
+                    count(acs.map(|a| a.script_quirk.nodes), f, r.map(|r| r.ac_nodes)),
+                    count(acs.map(|a| a.count), f, r.map(|r| r.ac_count)),
+                    count(
                         get(&e.nodes, &MapName::Acs, |m| m.update_calls),
-                        r.map(|r| Ms(r.acs_updates, 0.0))
+                        f,
+                        r.map(|r| Ms(r.acs_updates, 0.0)),
                     ),
-                    count_cell(
+                    count(
                         get(&e.nodes, &MapName::Acs, |m| m.nodes),
-                        r.map(|r| r.acs_nodes)
+                        f,
+                        r.map(|r| r.acs_nodes),
                     ),
-                )?;
+                ]);
             }
+            t
         }
     }
-    Ok(())
 }
 
 /// The footer every experiment prints: messages, the 2/f requirement,
 /// corrections.
-///
-/// # Errors
-/// Writing to `out`.
-pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
-    writeln!(out)?;
-    match &run.timing {
-        Some(t) => writeln!(
-            out,
-            "{} messages in {:.1} s on {} worker(s); handling {:.3} ms mean, p50 {:.1} µs, \
+#[must_use]
+pub fn run_info(run: &RunInfo) -> Vec<String> {
+    let mut lines = vec![String::new()];
+    lines.push(match &run.timing {
+        Some(t) => format!(
+            "{} in {:.1} s on {}; handling {:.3} ms mean, p50 {:.1} µs, \
              p99 {:.1} µs, {:.3} ms max; {} ({:.4} %) over the {:.0} ms budget \
              [thesis: well under 0.1 %]",
-            run.messages,
+            plural(run.messages as usize, "message"),
             t.wall_seconds,
-            t.workers,
+            plural(t.workers, "worker"),
             t.mean_handling_ms,
             t.p50_handling_us,
             t.p99_handling_us,
@@ -364,19 +406,20 @@ pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
             t.too_slow,
             100.0 * t.too_slow_fraction,
             run.budget_seconds * 1e3
-        )?,
-        None => writeln!(
-            out,
-            "{} messages; handling times not in this document (it is kept free of \
+        ),
+        None => format!(
+            "{}; handling times not in this document (it is kept free of \
              machine-dependent numbers; `pushlearn reproduce` writes them to docs/results/timing.md)",
-            run.messages
-        )?,
-    }
-    writeln!(
-        out,
-        "{} start-position corrections (SetPose), {} dropped messages after resets, {} unparseable states",
-        run.reset_errors, run.ignored, run.parse_errors
-    )
+            plural(run.messages as usize, "message")
+        ),
+    });
+    lines.push(format!(
+        "{} (SetPose), {} after resets, {}",
+        plural(run.reset_errors as usize, "start-position correction"),
+        plural(run.ignored as usize, "dropped message"),
+        plural(run.parse_errors as usize, "unparseable state")
+    ));
+    lines
 }
 
 /// The constant-feedback report: per run, the error of each chained
@@ -385,38 +428,53 @@ pub fn run_info(out: &mut impl Write, run: &RunInfo) -> io::Result<()> {
 /// # Errors
 /// Writing to `out`.
 pub fn feedback(out: &mut impl Write, report: &FeedbackReport, model: ModelKind) -> io::Result<()> {
-    writeln!(
-        out,
-        "Push task with constant feedback, {}, {} Hz, mode {} (qualitative; the thesis shows images, §7)",
-        learner_title(&report.setup, model),
-        report.publish_rate_hz,
-        report.setup.mode
-    )?;
-    for run in &report.runs {
-        writeln!(out)?;
-        writeln!(
-            out,
-            "run from x0 = {:.3}: error of the prediction for each message",
-            run.x0
-        )?;
-        writeln!(
-            out,
-            "{:>7}  {:>12}  {:>12}  {:>12}",
-            "message", "block [m]", "block [rad]", "actuator [m]"
-        )?;
-        for (k, e) in run.errors.iter().enumerate() {
-            let block = e.blocks.get(&BLUE_ID);
-            writeln!(
-                out,
-                "{:>7}  {:>12.4}  {:>12.4}  {:>12.4}",
-                k + 2,
-                block.map_or(f64::NAN, |b| b.pos),
-                block.map_or(f64::NAN, |b| b.ori),
-                e.actuator
-            )?;
-        }
+    feedback_printout(report, model).write_text(out)
+}
+
+/// The constant-feedback report's tables, one per run.
+#[must_use]
+pub fn feedback_printout(report: &FeedbackReport, model: ModelKind) -> Printout {
+    let tables = report
+        .runs
+        .iter()
+        .enumerate()
+        .map(|(k, run)| {
+            let mut t = Table::new(
+                format!("run-{}", k + 1),
+                format!(
+                    "run from x0 = {:.3}: error of the prediction for each message",
+                    run.x0
+                ),
+                vec![
+                    Column::new("message", 7, true, Kind::Text),
+                    Column::new("block [m]", 12, true, Kind::Number { decimals: 4 }),
+                    Column::new("block [rad]", 12, true, Kind::Number { decimals: 4 }),
+                    Column::new("actuator [m]", 12, true, Kind::Number { decimals: 4 }),
+                ],
+            );
+            for (i, e) in run.errors.iter().enumerate() {
+                let block = e.blocks.get(&BLUE_ID);
+                t.rows.push(vec![
+                    whole(i + 2),
+                    Cell::Number(block.map_or(f64::NAN, |b| b.pos)),
+                    Cell::Number(block.map_or(f64::NAN, |b| b.ori)),
+                    Cell::Number(e.actuator),
+                ]);
+            }
+            t
+        })
+        .collect();
+    Printout {
+        stem: format!("push-task-{}-constant-feedback", report.setup.model),
+        head: vec![format!(
+            "Push task with constant feedback, {}, {} Hz, mode {} (qualitative; the thesis shows images, §7)",
+            learner_title(&report.setup, model),
+            report.publish_rate_hz,
+            report.setup.mode
+        )],
+        tables,
+        foot: run_info(&report.run),
     }
-    run_info(out, &report.run)
 }
 
 /// The Move-to-Target report in the layout of the thesis's §8 tables.
@@ -428,35 +486,70 @@ pub fn move_to_target(
     report: &MttReport,
     model: ModelKind,
 ) -> io::Result<()> {
+    move_to_target_printout(report, model).write_text(out)
+}
+
+/// The Move-to-Target report's table.
+#[must_use]
+pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout {
     let source = match model {
         ModelKind::Gate => "§8.2",
         ModelKind::Interaction => "§8.1",
     };
-    writeln!(
-        out,
-        "Move to Target, {}, {} repetitions, at most {} steps, mode {}, seed {}",
+    let head = vec![format!(
+        "Move to Target, {}, {}, at most {} steps, mode {}, seed {}",
         learner_title(&report.setup, model),
-        report.repetitions,
+        plural(report.repetitions, "repetition"),
         report.max_steps,
         report.setup.mode,
         report.setup.seed
-    )?;
-    writeln!(
-        out,
-        "Pos/Ori: mean remaining error of the runs that failed; # steps: mean over all runs \
-         (failures count {}), in brackets over the successful ones; [thesis {source}]",
-        report.max_steps
-    )?;
-    writeln!(
-        out,
-        "{:<28}  {:<12}  {:<16}  {:<16}  {:<36}",
-        "Target (x, y, θ)", "Reached", "Pos [m]", "Ori [rad]", "# steps"
-    )?;
-    let thesis_targets = TARGETS;
+    )];
+    let mut t = Table::new(
+        "targets",
+        format!(
+            "Pos/Ori: mean remaining error of the runs that failed; # steps: mean over all runs \
+             (failures count {}), in brackets over the successful ones; [thesis {source}]",
+            report.max_steps
+        ),
+        vec![
+            composed(
+                "Target (x, y, θ)",
+                28,
+                &["target x [m]", "target y [m]", "target θ [rad]"],
+            ),
+            composed("Reached", 12, &["reached", "runs", "thesis reached"]),
+            composed(
+                "Pos [m]",
+                16,
+                &[
+                    "pos error of failed runs [m]",
+                    "thesis pos error of failed runs [m]",
+                ],
+            ),
+            composed(
+                "Ori [rad]",
+                16,
+                &[
+                    "ori error of failed runs [rad]",
+                    "thesis ori error of failed runs [rad]",
+                ],
+            ),
+            composed(
+                "# steps",
+                36,
+                &[
+                    "steps, all runs",
+                    "steps, successful runs",
+                    "thesis steps, all runs",
+                    "thesis steps, successful runs",
+                ],
+            ),
+        ],
+    );
     for entry in &report.targets {
         let s = &entry.summary;
         let [x, y, theta] = entry.target;
-        let r = thesis_targets
+        let r = TARGETS
             .iter()
             .position(|t| t.x == x && t.y == y && t.theta == theta)
             .filter(|_| report.repetitions == REPETITIONS)
@@ -486,17 +579,46 @@ pub fn move_to_target(
                 )
             },
         );
-        writeln!(
-            out,
-            "{:<28}  {:<12}  {:<16}  {:<16}  {:<36}",
-            format!("({x}, {y}, {theta:.4})"),
-            format!("{}/{} {r_reached}", s.reached, s.runs),
-            format!("{} {r_pos}", opt(s.pos_err_failed, 3)),
-            format!("{} {r_ori}", opt(s.ori_err_failed, 3)),
-            format!("{ours_steps} {r_steps}"),
-        )?;
+        let some = |v: Option<f64>| v.map_or_else(String::new, field);
+        let thesis = |f: &dyn Fn(&reference::MttRef) -> String| r.map_or_else(String::new, f);
+        t.rows.push(vec![
+            Cell::Composed {
+                text: format!("({x}, {y}, {theta:.4})"),
+                fields: vec![field(x), field(y), field(theta)],
+            },
+            Cell::Composed {
+                text: format!("{}/{} {r_reached}", s.reached, s.runs),
+                fields: vec![
+                    s.reached.to_string(),
+                    s.runs.to_string(),
+                    thesis(&|r| r.reached.to_string()),
+                ],
+            },
+            Cell::Composed {
+                text: format!("{} {r_pos}", opt(s.pos_err_failed, 3)),
+                fields: vec![some(s.pos_err_failed), thesis(&|r| some(r.pos))],
+            },
+            Cell::Composed {
+                text: format!("{} {r_ori}", opt(s.ori_err_failed, 3)),
+                fields: vec![some(s.ori_err_failed), thesis(&|r| some(r.ori))],
+            },
+            Cell::Composed {
+                text: format!("{ours_steps} {r_steps}"),
+                fields: vec![
+                    field(s.steps),
+                    some(s.steps_reached),
+                    thesis(&|r| field(r.steps)),
+                    thesis(&|r| some(r.steps_reached)),
+                ],
+            },
+        ]);
     }
-    run_info(out, &report.run)
+    Printout {
+        stem: format!("move-to-target-{}", report.setup.model),
+        head,
+        tables: vec![t],
+        foot: run_info(&report.run),
+    }
 }
 
 #[cfg(test)]

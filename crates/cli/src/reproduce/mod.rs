@@ -267,7 +267,11 @@ pub fn run(
             .collect();
         produced.push(Produced {
             entry: entry.clone(),
-            document: document.without_timing(),
+            // The documents are the page's sources, checked byte for byte:
+            // no machine-dependent timing, and no fold-level detail, which
+            // is for users' own analysis of `--json` and would change (and
+            // multiply the size of) every committed document.
+            document: document.without_timing().without_folds(),
             timing,
         });
     }

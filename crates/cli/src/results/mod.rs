@@ -112,6 +112,12 @@ pub struct MttReport {
     pub repetitions: usize,
     pub max_steps: u64,
     pub targets: Vec<TargetEntry>,
+    /// The actuator's start (x, y) of each training run [m], the same for
+    /// every repetition (each repetition's test run is in `targets[].runs`);
+    /// for users' own analysis of `--json`, absent from the reproduction's
+    /// documents (as [`push_task::CurveEntry::by_fold`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub training_starts: Vec<[f64; 2]>,
     pub run: RunInfo,
 }
 

@@ -143,10 +143,60 @@ pub struct CurveEntry {
     /// over folds the learning-curve "std" hides.
     #[serde(default)]
     pub actuator_pos_err_by_fold: Vec<f64>,
+    /// Every fold's training starts and test-run errors, in fold order, for
+    /// users' own analysis of `--json` (spreads, paired comparisons). Absent
+    /// from the reproduction's documents ([`CurveEntry::without_folds`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub by_fold: Vec<FoldDetail>,
     /// The first fold's test-run end configurations, for the snapshot
     /// figures.
     #[serde(default)]
     pub end_poses: Vec<EndPoses>,
+}
+
+/// One fold of one N_train: what it trained on and how each test run erred.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FoldDetail {
+    pub fold: usize,
+    /// The actuator's start x of each training run, in order [m].
+    pub training_starts: Vec<f64>,
+    /// Means over the fold's test runs: the blue block's position [m] and
+    /// orientation [rad] errors and the actuator's position error [m].
+    pub block_pos_err: f64,
+    pub block_ori_err: f64,
+    pub actuator_pos_err: f64,
+    /// Per test run, in the order of `per_position`: the actuator's error
+    /// and each block's (by id) position and orientation errors.
+    pub runs: Vec<RunErrors>,
+}
+
+impl FoldDetail {
+    fn of(job: &PushJobResult) -> Self {
+        let mean = |f: &dyn Fn(&RunErrors) -> Option<f64>| {
+            MeanStd::of(&job.errors.iter().filter_map(f).collect::<Vec<_>>()).mean
+        };
+        Self {
+            fold: job.fold,
+            training_starts: job.training_starts.clone(),
+            block_pos_err: mean(&|e| e.blocks.get(&BLUE_ID).map(|b| b.pos)),
+            block_ori_err: mean(&|e| e.blocks.get(&BLUE_ID).map(|b| b.ori)),
+            actuator_pos_err: mean(&|e| Some(e.actuator)),
+            runs: job.errors.clone(),
+        }
+    }
+}
+
+impl CurveEntry {
+    /// The entry without [`CurveEntry::by_fold`]: the reproduction's
+    /// documents are the sources of docs/results.md and are checked byte
+    /// for byte, so they hold what the page shows; the fold-level data is
+    /// for `--json` users (and would make every document several times
+    /// larger).
+    #[must_use]
+    pub fn without_folds(mut self) -> Self {
+        self.by_fold = Vec::new();
+        self
+    }
 }
 
 /// Per body, the mean of each key-point score over `runs`.
@@ -256,10 +306,8 @@ pub fn summarise(
                 .then(|| block_curve(&positions, x0, RED_ID))
                 .transpose()?;
             let stats: Vec<&ModelStats> = jobs.iter().map(|j| &j.nodes).collect();
-            let actuator_pos_err_by_fold = jobs
-                .iter()
-                .map(|j| MeanStd::of(&j.errors.iter().map(|e| e.actuator).collect::<Vec<_>>()).mean)
-                .collect();
+            let by_fold: Vec<FoldDetail> = jobs.iter().map(|j| FoldDetail::of(j)).collect();
+            let actuator_pos_err_by_fold = by_fold.iter().map(|f| f.actuator_pos_err).collect();
             Ok(CurveEntry {
                 train_runs: n,
                 blue,
@@ -276,6 +324,7 @@ pub fn summarise(
                     })
                     .filter(|c| c.samples > 0),
                 actuator_pos_err_by_fold,
+                by_fold,
                 end_poses: jobs[0].end_poses.clone(),
             })
         })
@@ -347,6 +396,38 @@ mod tests {
             summarise(&test_positions(), &[BLUE_ID], &[5], &results),
             Err(SummaryError::NoJobs { n_train: 5 })
         ));
+    }
+
+    #[test]
+    fn fold_detail_has_every_run_of_every_fold_and_the_curve_mean() {
+        let results: Vec<PushJobResult> = (0..3)
+            .map(|f| {
+                let mut r = result(2, f, move |i| 0.01 * (i + 7 * f) as f64);
+                r.training_starts = vec![0.1 * f as f64, -0.2];
+                r
+            })
+            .collect();
+        let curve = summarise(&test_positions(), &[BLUE_ID], &[2], &results).unwrap();
+        let e = &curve[0];
+        assert_eq!(e.by_fold.len(), 3);
+        assert!(e.by_fold.iter().all(|f| f.runs.len() == 21));
+        assert_eq!(e.by_fold[1].fold, 1);
+        assert_eq!(e.by_fold[2].training_starts, vec![0.2, -0.2]);
+        let mean = e.by_fold.iter().map(|f| f.block_pos_err).sum::<f64>() / 3.0;
+        assert!((mean - e.blue.block_pos_err.mean).abs() < 1e-12);
+        assert_eq!(
+            e.actuator_pos_err_by_fold,
+            e.by_fold
+                .iter()
+                .map(|f| f.actuator_pos_err)
+                .collect::<Vec<_>>()
+        );
+        // Kept out of the reproduction's documents, and then not written.
+        let stripped = e.clone().without_folds();
+        assert!(stripped.by_fold.is_empty());
+        let json = serde_json::to_value(&stripped).unwrap();
+        assert!(json.get("by_fold").is_none());
+        assert!(serde_json::to_value(e).unwrap()["by_fold"][2]["runs"][20].is_object());
     }
 
     #[test]

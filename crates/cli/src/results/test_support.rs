@@ -112,6 +112,7 @@ pub(crate) fn mtt_report() -> MttReport {
             summary: TargetSummary::of(&[run]),
             nodes_after_training: Default::default(),
         }],
+        training_starts: Vec::new(),
         run: RunInfo::default(),
     }
 }

@@ -9,7 +9,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 use super::protocol::PushJob;
-use crate::experiment::driver::{push_task_blocks, Core, Task};
+use crate::experiment::driver::{push_task_blocks, Core, Task, PUSH_TASK_START_Y};
 use crate::experiment::ExperimentError;
 use crate::results::push_task::{EndPoses, PushJobResult, SelectionCount};
 use crate::results::run_info::{Counters, Timing};
@@ -133,7 +133,7 @@ impl<M: Model> Task<M> for PushTask {
                 Some(x0)
             };
             if let Some(x0) = x0 {
-                core.start_run((x0, 0.0), &push_task_blocks(), true);
+                core.start_run((x0, PUSH_TASK_START_Y), &push_task_blocks(), true);
             }
             return;
         }

@@ -5,6 +5,7 @@ use learner::eval::MeanStd;
 
 use super::draw::{ours, thesis, Grid, Panel, Series, EXTRA};
 use crate::models::ModelKind;
+use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use crate::results::push_task::CurveEntry;
 
@@ -14,6 +15,7 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
         ModelKind::Interaction => "§3.2",
     };
     let n_max = results.iter().map(|e| e.train_runs).max().unwrap_or(1) as f64;
+    let folds = results.iter().map(|e| e.folds).max().unwrap_or(0);
     let refs = |get: fn(&reference::CurveRef) -> Ms| -> Option<Series> {
         thesis(
             results
@@ -37,7 +39,7 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
         series.extend(reference);
         Panel {
             title: title.to_owned(),
-            x_desc: "training runs".to_owned(),
+            x_desc: "training runs (N_train)".to_owned(),
             y_desc: y.to_owned(),
             x_range: 0.0..n_max + 1.0,
             offset: 0.35,
@@ -110,7 +112,8 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
     };
     Grid {
         title: format!(
-            "{model} model, learning curve over {which}: mean ± mean per-position std (thesis {source})"
+            "{model} model, learning curve over {which}, {}: mean ± mean per-position std (thesis {source})",
+            plural(folds, "fold")
         ),
         columns: 3,
         panel_size: (420, 340),

@@ -91,6 +91,54 @@ pub(super) fn prepare(dir: &Path) -> Result<(), PlotError> {
     })
 }
 
+// ----------------------------------------------------------------- titles
+
+/// Font size of a figure's title, and the smallest it is shrunk to before
+/// it is broken onto a second line.
+const TITLE_SIZE: u32 = 17;
+const TITLE_MIN_SIZE: u32 = 13;
+
+/// `title` as the lines it is drawn on: one if it fits (per `fits`), else
+/// two, broken at the space nearest its middle (a title of one word stays
+/// whole).
+fn title_lines(title: &str, fits: impl Fn(&str) -> bool) -> Vec<String> {
+    if fits(title) {
+        return vec![title.to_owned()];
+    }
+    let middle = title.len() / 2;
+    let split = title
+        .match_indices(' ')
+        .map(|(at, _)| at)
+        .min_by_key(|&at| at.abs_diff(middle));
+    match split {
+        Some(at) => vec![title[..at].to_owned(), title[at + 1..].to_owned()],
+        None => vec![title.to_owned()],
+    }
+}
+
+/// Draws `title` across the top of `root` and returns the area below it.
+/// A title wider than the canvas is drawn smaller, and then on two lines,
+/// so that it is never clipped.
+pub(super) fn titled<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<DrawingArea<DB, Shift>, String> {
+    let width = root.dim_in_pixel().0.saturating_sub(16);
+    let fits = |text: &str, size: u32| {
+        root.estimate_text_size(text, &TextStyle::from(("sans-serif", size).into_font()))
+            .is_ok_and(|(w, _)| w <= width)
+    };
+    let size = (TITLE_MIN_SIZE..=TITLE_SIZE)
+        .rev()
+        .find(|&size| fits(title, size))
+        .unwrap_or(TITLE_MIN_SIZE);
+    let mut body = root.clone();
+    for line in title_lines(title, |t| fits(t, size)) {
+        body = body.titled(&line, ("sans-serif", size)).or_text()?;
+    }
+    Ok(body)
+}
+
 // ---------------------------------------------------------------- colours
 
 const OURS: RGBColor = RGBColor(31, 119, 180);
@@ -99,8 +147,8 @@ pub(super) const EXTRA: RGBColor = RGBColor(44, 160, 44);
 const ACTUATOR: RGBColor = RGBColor(60, 60, 60);
 const BLUE_BLOCK: RGBColor = RGBColor(40, 90, 220);
 const RED_BLOCK: RGBColor = RGBColor(220, 50, 40);
-pub(super) const TARGET: RGBColor = RGBColor(120, 120, 120);
-/// Opacity of predicted (and target) bodies in the snapshots.
+pub(super) const TARGET: RGBColor = RGBColor(0, 0, 0);
+/// Opacity of predicted bodies in the snapshots.
 pub(super) const TRANSLUCENT: f64 = 0.3;
 
 /// A distinct colour for the k-th line of a family.
@@ -276,7 +324,7 @@ impl Figure for Grid {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn {
         root.fill(&WHITE).or_text()?;
-        let body = root.titled(&self.title, ("sans-serif", 17)).or_text()?;
+        let body = titled(root, &self.title)?;
         let rows = self.panels.len().div_ceil(self.columns.max(1)).max(1);
         let areas = body.split_evenly((rows, self.columns.max(1)));
         for (panel, area) in self.panels.iter().zip(&areas) {
@@ -289,6 +337,45 @@ impl Figure for Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_titles_break_near_the_middle_and_short_ones_stay_whole() {
+        let fits = |t: &str| t.len() <= 30;
+        assert_eq!(title_lines("a short title", fits), ["a short title"]);
+        let lines = title_lines(
+            "gate model, Move to Target: final block poses over the target",
+            fits,
+        );
+        assert_eq!(
+            lines,
+            [
+                "gate model, Move to Target:",
+                "final block poses over the target"
+            ]
+        );
+        assert_eq!(title_lines("unbreakable", |_| false), ["unbreakable"]);
+    }
+
+    #[test]
+    fn a_title_wider_than_the_canvas_is_drawn_on_two_lines() {
+        font().unwrap();
+        let draw = |width: u32| {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (width, 200)).into_drawing_area();
+                let body = titled(
+                    &root,
+                    "gate model, Move to Target, 5 repetitions per target: the block's final poses and the target",
+                )
+                .unwrap();
+                assert!(body.dim_in_pixel().1 < 200);
+                root.present().unwrap();
+            }
+            svg.matches("<text").count()
+        };
+        assert_eq!(draw(1400), 1);
+        assert_eq!(draw(500), 2);
+    }
 
     #[test]
     fn value_axes_cover_every_bar() {

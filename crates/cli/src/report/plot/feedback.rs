@@ -28,7 +28,7 @@ pub fn feedback(
         .unwrap_or(1) as f64;
     let panel = |title: &str, unit: &str, get: &dyn Fn(&learner::eval::RunErrors) -> f64| Panel {
         title: title.to_owned(),
-        x_desc: "message".to_owned(),
+        x_desc: format!("message (at {} Hz)", report.publish_rate_hz),
         y_desc: format!("error [{unit}]"),
         x_range: 0.0..longest + 1.0,
         offset: 0.0,
@@ -38,7 +38,7 @@ pub fn feedback(
             .iter()
             .enumerate()
             .map(|(k, r)| Series {
-                label: format!("x0 = {:.2}", r.x0),
+                label: format!("run from x0 = {:.2} m", r.x0),
                 colour: palette(k),
                 points: r
                     .errors
@@ -57,7 +57,7 @@ pub fn feedback(
     };
     let grid = Grid {
         title: format!(
-            "{model} model, constant feedback at {} Hz: error of each message's prediction",
+            "{model} model, constant feedback at {} Hz, one run per start (no training phase, no folds): error of each message's prediction",
             report.publish_rate_hz
         ),
         columns: 3,

@@ -7,6 +7,7 @@ use learner::eval::MeanStd;
 
 use super::draw::{palette, prepare, write, Grid, Panel, Series};
 use super::PlotError;
+use crate::report::plural;
 use crate::results::push_task::CurveEntry;
 use crate::results::PushReport;
 
@@ -30,7 +31,7 @@ pub fn learners(
     let folds = curves.iter().map(|(_, r)| r.folds).max().unwrap_or(0);
     let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd| Panel {
         title: title.to_owned(),
-        x_desc: "training runs".to_owned(),
+        x_desc: "training runs (N_train)".to_owned(),
         y_desc: y.to_owned(),
         x_range: 0.0..n_max + 1.0,
         offset: 0.3,
@@ -55,7 +56,8 @@ pub fn learners(
     };
     let grid = Grid {
         title: format!(
-            "push task, all 21 test positions, {folds} folds: mean ± mean per-position std"
+            "push task, all 21 test positions, {}: mean ± mean per-position std",
+            plural(folds, "fold")
         ),
         columns: 3,
         panel_size: (420, 340),

@@ -4,15 +4,18 @@ use std::path::{Path, PathBuf};
 
 use learner::{ObjectState, BLUE_ID};
 
-use super::draw::{palette, prepare, write, Grid, Panel, Series, TARGET, TRANSLUCENT};
-use super::snapshots::{footprints, outline, Body, Snapshot, SnapshotGrid};
+use super::draw::{palette, prepare, write, Grid, Panel, Series, TARGET};
+use super::snapshots::{footprints, outline, Body, LegendEntry, Look, Snapshot, SnapshotGrid};
 use super::PlotError;
+use crate::experiment::RATE_HZ;
 use crate::models::ModelKind;
+use crate::report::plural;
 use crate::results::MttReport;
 
 /// The figures of a Move-to-Target report: the block's errors to the target
 /// over the steps, one line per run and a row per target; and the final
-/// block poses (opaque) over the target pose (translucent).
+/// block poses (one colour per run) under the target pose (an outline on
+/// top, so that runs ending on it do not hide it).
 ///
 /// # Errors
 /// As [`push`](super::push).
@@ -30,7 +33,7 @@ pub fn move_to_target(
         for (what, unit) in [("position", "m"), ("orientation", "rad")] {
             panels.push(Panel {
                 title: format!("target {} ({x}, {y}, {ori:.2}): {what}", t + 1),
-                x_desc: "step".to_owned(),
+                x_desc: format!("step (message at {RATE_HZ} Hz)"),
                 y_desc: format!("error [{unit}]"),
                 x_range: 0.0..max_steps,
                 offset: 0.0,
@@ -71,7 +74,8 @@ pub fn move_to_target(
     write(
         &Grid {
             title: format!(
-                "{model} model, Move to Target: the block's error to the target over the steps"
+                "{model} model, Move to Target, {} per target: the block's error to the target over the steps",
+                plural(report.repetitions, "repetition")
             ),
             columns: 2,
             panel_size: (560, 300),
@@ -95,26 +99,25 @@ pub fn move_to_target(
         .enumerate()
         .map(|(t, target)| {
             let [x, y, theta] = target.target;
-            let mut bodies = vec![Body {
+            let mut bodies: Vec<Body> = target
+                .runs
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| {
+                    let b = r.final_block;
+                    b.x.is_finite() && b.y.is_finite() && b.theta.is_finite()
+                })
+                .map(|(k, r)| Body {
+                    outline: outline(&block_shape, r.final_block),
+                    colour: palette(k),
+                    look: Look::Filled(0.6),
+                })
+                .collect();
+            bodies.push(Body {
                 outline: outline(&block_shape, ObjectState::new(x, y, theta)),
                 colour: TARGET,
-                opacity: TRANSLUCENT,
-            }];
-            bodies.extend(
-                target
-                    .runs
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, r)| {
-                        let b = r.final_block;
-                        b.x.is_finite() && b.y.is_finite() && b.theta.is_finite()
-                    })
-                    .map(|(k, r)| Body {
-                        outline: outline(&block_shape, r.final_block),
-                        colour: palette(k),
-                        opacity: 0.8,
-                    }),
-            );
+                look: Look::Outline,
+            });
             Snapshot {
                 title: format!(
                     "target {} ({}/{} reached)",
@@ -126,12 +129,26 @@ pub fn move_to_target(
             }
         })
         .collect();
+    let mut legend = vec![LegendEntry {
+        label: "target".to_owned(),
+        colour: TARGET,
+        look: Look::Outline,
+    }];
+    legend.extend((0..report.repetitions).map(|k| LegendEntry {
+        label: format!("run {} final pose", k + 1),
+        colour: palette(k),
+        look: Look::Filled(0.6),
+    }));
     write(
         &SnapshotGrid {
-            title: format!("{model} model, Move to Target: final block poses (one colour per run) over the target (grey, translucent)"),
+            title: format!(
+                "{model} model, Move to Target, {} per target: the block's final poses and the target",
+                plural(report.repetitions, "repetition")
+            ),
             columns: report.targets.len().clamp(1, 4),
             side: 260,
             snapshots,
+            legend,
         },
         dir,
         &format!("{stem}-final"),
@@ -142,7 +159,7 @@ pub fn move_to_target(
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::{count, is_png, scratch};
+    use super::super::test_support::{count, is_png, scratch, thick_polylines};
     use super::*;
     use crate::results::move_to_target::{ErrorTrace, MttRun, TargetSummary};
     use crate::results::run_info::RunInfo;
@@ -180,6 +197,7 @@ mod tests {
                     nodes_after_training: Default::default(),
                 },
             ],
+            training_starts: Vec::new(),
             run: RunInfo::default(),
         }
     }
@@ -195,8 +213,27 @@ mod tests {
                 .filter(|p| p.extension().is_some_and(|e| e == "png"))
                 .all(|p| is_png(p)));
             let final_svg = dir.join("move-to-target-gate-final.svg");
-            // The target and each run's final block, per target.
-            assert_eq!(count(&final_svg, "polygon"), 2 * (1 + runs));
+            // Each run's final block, then the target's outline on top of
+            // them, per target.
+            assert_eq!(count(&final_svg, "polygon"), 2 * runs);
+            let text = std::fs::read_to_string(&final_svg).unwrap();
+            let outlines = thick_polylines(&text);
+            assert_eq!(outlines.len(), 2);
+            let last_block = text.rfind("<polygon").unwrap();
+            let last_target = text.rfind("stroke-width=\"2\"").unwrap();
+            assert!(
+                last_target > last_block,
+                "the target is drawn under a block"
+            );
+            for label in [
+                "x [m]",
+                "y [m]",
+                "target",
+                "run 1 final pose",
+                "repetitions per target",
+            ] {
+                assert!(text.contains(label), "no {label:?} in the final poses");
+            }
             count(&dir.join("move-to-target-gate-errors.svg"), "polyline")
         };
         // One more run adds, in each of the 2 × 2 panels, its line and its

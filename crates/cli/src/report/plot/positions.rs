@@ -6,6 +6,7 @@ use learner::{BLUE_ID, RED_ID};
 
 use super::draw::{ours, padded, thesis, Grid, Panel};
 use crate::models::ModelKind;
+use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use crate::results::push_task::{BlockCurve, CurveEntry, PositionSummary};
 use crate::results::PushReport;
@@ -80,8 +81,9 @@ pub(super) fn positions_grid(report: &PushReport, model: ModelKind, entry: &Curv
     panels.extend(position_panels(&entry.blue, "blue block", &refs));
     Grid {
         title: format!(
-            "{model} model, {variant}, {} training runs: per test position, mean ± std over {} folds",
-            entry.train_runs, entry.folds
+            "{model} model, {variant}, {}: per test position, mean ± std over {}",
+            plural(entry.train_runs, "training run"),
+            plural(entry.folds, "fold")
         ),
         columns: 2,
         panel_size: (560, 330),

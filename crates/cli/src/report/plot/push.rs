@@ -68,7 +68,7 @@ mod tests {
     use learner::eval::{BlockError, RunErrors};
     use learner::{ModelStats, ObjectState, Poses, BLUE_ID};
 
-    use super::super::test_support::{count, is_png, scratch};
+    use super::super::test_support::{count, is_png, scratch, thick_polylines};
     use super::*;
     use crate::results::push_task::{summarise, EndPoses, PushJobResult};
     use crate::results::run_info::{Counters, RunInfo};
@@ -171,6 +171,25 @@ mod tests {
         assert_eq!(count(&svg("positions-n3"), "circle"), 42);
         // Snapshots: 21 runs × (actuator + block) × (actual + predicted).
         assert_eq!(count(&svg("snapshots-n1"), "polygon"), 84);
+        // Every figure says how many folds it shows; the snapshots have
+        // metre axes, a legend, and each run's start as outlines (actuator
+        // and block: stroke width 2, as the legend's samples of the curves).
+        let text = |stem: &str| std::fs::read_to_string(svg(stem)).unwrap();
+        assert!(text("curve").contains("2 folds"));
+        assert!(text("positions-n3").contains("over 2 folds"));
+        assert!(text("positions-n1").contains("1 training run:"));
+        let snapshots = text("snapshots-n1");
+        for label in [
+            "x [m]",
+            "y [m]",
+            "start",
+            "actual end",
+            "predicted end",
+            "fold 1 of 2",
+        ] {
+            assert!(snapshots.contains(label), "no {label:?} in the snapshots");
+        }
+        assert_eq!(thick_polylines(&snapshots).len(), 21 * 2);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::draw::{palette, prepare, write, Drawn, Figure, OrText, Series};
+use super::draw::{palette, prepare, titled, write, Drawn, Figure, OrText, Series};
 use super::PlotError;
 
 /// One row of `target/aitm_scaling.csv`, written by `cargo bench -p learner
@@ -96,7 +96,7 @@ impl Figure for LogLog {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn {
         root.fill(&WHITE).or_text()?;
-        let body = root.titled(&self.title, ("sans-serif", 17)).or_text()?;
+        let body = titled(root, &self.title)?;
         let areas = body.split_evenly((1, self.panels.len().max(1)));
         let all = || {
             self.panels

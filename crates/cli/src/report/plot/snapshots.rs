@@ -5,13 +5,16 @@
 use std::ops::Range;
 
 use learner::{ObjectState, Poses, ACTUATOR_ID};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Deserialize;
 
-use super::draw::{body_colour, Drawn, Figure, OrText, TRANSLUCENT};
+use super::draw::{body_colour, titled, Drawn, Figure, OrText, TRANSLUCENT};
 use super::PlotError;
+use crate::experiment::driver::{push_task_blocks, PUSH_TASK_START_Y};
 use crate::models::ModelKind;
+use crate::report::plural;
 use crate::results::push_task::{CurveEntry, EndPoses};
 use crate::results::PushReport;
 
@@ -91,20 +94,40 @@ pub(super) fn outline(shape: &Footprint, pose: ObjectState) -> Vec<(f64, f64)> {
     }
 }
 
+/// How a body is drawn: filled with an opacity, or as an outline only (what
+/// must stay visible over filled bodies: starts, targets).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Look {
+    Filled(f64),
+    Outline,
+}
+
 /// A body drawn in a snapshot.
 #[derive(Clone, Debug)]
 pub(super) struct Body {
     pub(super) outline: Vec<(f64, f64)>,
     pub(super) colour: RGBColor,
-    pub(super) opacity: f64,
+    pub(super) look: Look,
 }
+
+/// An entry of a snapshot figure's legend: a swatch drawn as the bodies it
+/// names.
+#[derive(Clone, Debug)]
+pub(super) struct LegendEntry {
+    pub(super) label: String,
+    pub(super) colour: RGBColor,
+    pub(super) look: Look,
+}
+
+/// Colour of the start outlines.
+const START: RGBColor = RGBColor(20, 20, 20);
 
 pub(super) struct Snapshot {
     pub(super) title: String,
     pub(super) bodies: Vec<Body>,
 }
 
-fn bodies(poses: &Poses, shapes: &[(u32, Footprint)], opacity: f64) -> Vec<Body> {
+fn bodies(poses: &Poses, shapes: &[(u32, Footprint)], look: Look) -> Vec<Body> {
     std::iter::once((ACTUATOR_ID, poses.actuator))
         .chain(poses.blocks.iter().map(|(&id, &s)| (id, s)))
         .filter(|(_, s)| s.x.is_finite() && s.y.is_finite() && s.theta.is_finite())
@@ -112,8 +135,12 @@ fn bodies(poses: &Poses, shapes: &[(u32, Footprint)], opacity: f64) -> Vec<Body>
             let shape = shapes.iter().find(|(i, _)| *i == id)?;
             Some(Body {
                 outline: outline(&shape.1, s),
-                colour: body_colour(id),
-                opacity,
+                colour: if look == Look::Outline {
+                    START
+                } else {
+                    body_colour(id)
+                },
+                look,
             })
         })
         .collect()
@@ -168,12 +195,79 @@ pub(super) struct SnapshotGrid {
     /// Side of one (square) plotting area in pixels.
     pub(super) side: u32,
     pub(super) snapshots: Vec<Snapshot>,
+    pub(super) legend: Vec<LegendEntry>,
 }
 
 const SNAP_MARGIN: u32 = 4;
-const SNAP_X_LABELS: u32 = 22;
-const SNAP_Y_LABELS: u32 = 34;
+const SNAP_X_LABELS: u32 = 34;
+const SNAP_Y_LABELS: u32 = 46;
 const SNAP_TITLE: u32 = 18;
+const LEGEND_HEIGHT: u32 = 22;
+
+fn draw_body<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    body: &Body,
+) -> Drawn {
+    match body.look {
+        Look::Filled(opacity) => chart
+            .draw_series(std::iter::once(Polygon::new(
+                body.outline.clone(),
+                body.colour.mix(opacity).filled(),
+            )))
+            .map(|_| ())
+            .or_text(),
+        Look::Outline => {
+            let mut closed = body.outline.clone();
+            closed.extend(body.outline.first().copied());
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed,
+                    body.colour.stroke_width(2),
+                )))
+                .map(|_| ())
+                .or_text()
+        }
+    }
+}
+
+/// The legend as one centred row of swatches and labels.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+) -> Drawn {
+    const SWATCH: i32 = 18;
+    const GAP: i32 = 6;
+    const SPACE: i32 = 18;
+    let style = TextStyle::from(("sans-serif", 12).into_font());
+    let widths: Vec<i32> = entries
+        .iter()
+        .map(|e| {
+            area.estimate_text_size(&e.label, &style)
+                .map_or(0, |(w, _)| i32::try_from(w).unwrap_or(0))
+        })
+        .collect();
+    let total: i32 = widths.iter().map(|w| SWATCH + GAP + w + SPACE).sum::<i32>() - SPACE;
+    let width = i32::try_from(area.dim_in_pixel().0).unwrap_or(i32::MAX);
+    let mut x = ((width - total) / 2).max(4);
+    for (e, w) in entries.iter().zip(widths) {
+        let corners = [(x, 5), (x + SWATCH, 16)];
+        match e.look {
+            Look::Filled(opacity) => {
+                area.draw(&Rectangle::new(corners, e.colour.mix(opacity).filled()))
+            }
+            Look::Outline => area.draw(&Rectangle::new(corners, e.colour.stroke_width(2))),
+        }
+        .or_text()?;
+        area.draw(&Text::new(
+            e.label.clone(),
+            (x + SWATCH + GAP, 4),
+            style.clone(),
+        ))
+        .or_text()?;
+        x += SWATCH + GAP + w + SPACE;
+    }
+    Ok(())
+}
 
 impl Figure for SnapshotGrid {
     fn size(&self) -> (u32, u32) {
@@ -181,13 +275,17 @@ impl Figure for SnapshotGrid {
         let rows = self.snapshots.len().div_ceil(columns).max(1);
         (
             (self.side + SNAP_Y_LABELS + 2 * SNAP_MARGIN) * columns as u32,
-            (self.side + SNAP_X_LABELS + SNAP_TITLE + 2 * SNAP_MARGIN) * rows as u32 + 30,
+            (self.side + SNAP_X_LABELS + SNAP_TITLE + 2 * SNAP_MARGIN) * rows as u32
+                + 30
+                + LEGEND_HEIGHT,
         )
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn {
         root.fill(&WHITE).or_text()?;
-        let body = root.titled(&self.title, ("sans-serif", 17)).or_text()?;
+        let body = titled(root, &self.title)?;
+        let (legend, body) = body.split_vertically(LEGEND_HEIGHT);
+        draw_legend(&legend, &self.legend)?;
         let columns = self.columns.max(1);
         let rows = self.snapshots.len().div_ceil(columns).max(1);
         let (x_range, y_range) = square_bounds(&self.snapshots);
@@ -213,18 +311,18 @@ impl Figure for SnapshotGrid {
                 .configure_mesh()
                 .x_labels(5)
                 .y_labels(5)
+                .x_desc("x [m]")
+                .y_desc("y [m]")
                 .label_style(("sans-serif", 9))
+                .axis_desc_style(("sans-serif", 10))
                 .light_line_style(WHITE)
                 .bold_line_style(BLACK.mix(0.08))
                 .draw()
                 .or_text()?;
-            chart
-                .draw_series(
-                    snap.bodies
-                        .iter()
-                        .map(|b| Polygon::new(b.outline.clone(), b.colour.mix(b.opacity).filled())),
-                )
-                .or_text()?;
+            // In order: what comes later is drawn on top.
+            for b in &snap.bodies {
+                draw_body(&mut chart, b)?;
+            }
         }
         Ok(())
     }
@@ -240,23 +338,56 @@ pub(super) fn push_snapshots(
         .end_poses
         .iter()
         .map(|e: &EndPoses| {
-            // The prediction on top, translucent, so that both stay visible.
-            let mut bodies = bodies(&e.actual, shapes, 1.0);
-            bodies.extend(self::bodies(&e.predicted, shapes, TRANSLUCENT));
+            // The start under the ends; the prediction on top, translucent,
+            // so that both ends stay visible.
+            let start = Poses {
+                actuator: ObjectState::new(e.x0, PUSH_TASK_START_Y, 0.0),
+                blocks: push_task_blocks()
+                    .into_iter()
+                    .filter(|(id, _)| e.actual.blocks.contains_key(id))
+                    .collect(),
+            };
+            let mut bodies = bodies(&start, shapes, Look::Outline);
+            bodies.extend(self::bodies(&e.actual, shapes, Look::Filled(1.0)));
+            bodies.extend(self::bodies(
+                &e.predicted,
+                shapes,
+                Look::Filled(TRANSLUCENT),
+            ));
             Snapshot {
-                title: format!("x0 = {:.3}", e.x0),
+                title: format!("x0 = {:.3} m", e.x0),
                 bodies,
             }
         })
         .collect();
+    let blue = body_colour(learner::BLUE_ID);
     SnapshotGrid {
         title: format!(
-            "{model} model, {}, {} training runs, fold 1: actual end of each test run (opaque) and the chained prediction (translucent)",
-            report.variant, entry.train_runs
+            "{model} model, {}, {}, fold 1 of {}: each test run's start, actual end and chained prediction",
+            report.variant,
+            plural(entry.train_runs, "training run"),
+            entry.folds
         ),
         columns: 7,
         side: 170,
         snapshots,
+        legend: vec![
+            LegendEntry {
+                label: "start".to_owned(),
+                colour: START,
+                look: Look::Outline,
+            },
+            LegendEntry {
+                label: "actual end".to_owned(),
+                colour: blue,
+                look: Look::Filled(1.0),
+            },
+            LegendEntry {
+                label: "predicted end (chained, translucent)".to_owned(),
+                colour: blue,
+                look: Look::Filled(TRANSLUCENT),
+            },
+        ],
     }
 }
 
@@ -285,7 +416,7 @@ mod tests {
             .insert(BLUE_ID, ObjectState::new(0.2, 0.9, 1.0));
         let snap = Snapshot {
             title: String::new(),
-            bodies: bodies(&poses, &shapes, 1.0),
+            bodies: bodies(&poses, &shapes, Look::Filled(1.0)),
         };
         let (x, y) = square_bounds(std::slice::from_ref(&snap));
         assert!((x.end - x.start - (y.end - y.start)).abs() < 1e-12);
