@@ -4,11 +4,13 @@
 //!   connections and command validation, used by the world daemon and every
 //!   client alike;
 //! * [`client`]: an async client for the world daemon;
-//! * [`duration`]: the `SECONDS` of every binary's command line.
+//! * [`duration`]: the `SECONDS` of every binary's command line;
+//! * [`recording`]: the file format of recorded sessions (record, replay).
 //!
 //! The application (learner daemon, experiments, reports, viewer, `ctl`) is
 //! the `pushlearn-cli` crate in `crates/cli`; the world is `sim-plugin`.
 
 pub mod client;
 pub mod duration;
+pub mod recording;
 pub mod wire;
