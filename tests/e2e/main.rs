@@ -14,6 +14,7 @@ mod docs;
 mod experiment;
 mod learner;
 mod python;
+mod record;
 mod reliability;
 mod reproduce;
 mod viewer;

@@ -1,0 +1,180 @@
+//! `pushlearn ctl record` and `pushlearn-sim replay` end to end: a learner
+//! recorded through the proxy, then replayed, must learn the same model.
+
+use std::net::SocketAddr;
+use std::process::Command;
+
+use crate::daemon::{binary, Daemon};
+use crate::experiment::{succeeded, TempDir};
+use crate::process::{run, text, Background};
+
+/// A child that prints `listening on ADDR` first, and that address.
+fn listening(command: Command, name: &'static str) -> (Background, SocketAddr) {
+    let (mut process, line) = Background::start(command, name);
+    match line
+        .trim_end()
+        .strip_prefix("listening on ")
+        .and_then(|a| a.parse().ok())
+    {
+        Some(addr) => (process, addr),
+        None => panic!(
+            "{name} did not say where it listens (first line {line:?}); its log:\n{}",
+            process.stop()
+        ),
+    }
+}
+
+fn recorder(world: SocketAddr, file: &str) -> (Background, SocketAddr) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args([
+        "ctl",
+        "--sim",
+        &world.to_string(),
+        "record",
+        file,
+        "--listen",
+        "127.0.0.1:0",
+    ]);
+    listening(command, "ctl record")
+}
+
+fn replay(file: &str, extra: &[&str]) -> (Background, SocketAddr) {
+    let mut command = Command::new(binary());
+    command
+        .args(["replay", file, "--listen", "127.0.0.1:0"])
+        .args(extra)
+        // Plain `key=value` fields in the log, to search it.
+        .env("NO_COLOR", "1");
+    listening(command, "pushlearn-sim replay")
+}
+
+/// `pushlearn learn` against `addr`; its `model: …` line.
+fn learn(addr: SocketAddr, messages: &str) -> String {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args([
+        "learn",
+        "--connect",
+        &addr.to_string(),
+        "--action",
+        "0,0.5",
+        "--messages",
+        messages,
+        "--reconnect-for",
+        "0",
+    ]);
+    let stdout = succeeded(&run(command));
+    assert!(
+        stdout.contains(&format!("stopped (message limit): {messages} messages")),
+        "{stdout}"
+    );
+    stdout
+        .lines()
+        .find(|l| l.starts_with("model: "))
+        .unwrap_or_else(|| panic!("no model line in\n{stdout}"))
+        .to_owned()
+}
+
+#[test]
+fn a_learner_replayed_from_a_recording_learns_the_same_model() {
+    let dir = TempDir::new("record");
+    let file = dir.file("push.plrec");
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let (mut proxy, proxy_addr) = recorder(world.addr, &file);
+    let recorded = learn(proxy_addr, "200");
+    let (status, log) = proxy.wait();
+    assert!(status.success(), "the recorder failed: {log}");
+    assert!(log.contains("states) and"), "{log}");
+
+    let (mut server, replay_addr) = replay(&file, &[]);
+    let replayed = learn(replay_addr, "200");
+    assert_eq!(
+        replayed, recorded,
+        "the same states must teach the same model"
+    );
+    // A second client gets the recording from its start again.
+    assert_eq!(learn(replay_addr, "200"), recorded);
+    let log = server.stop();
+    assert!(
+        log.contains("differing=0"),
+        "the learner did as recorded:\n{log}"
+    );
+
+    // A learner that goes on longer than the recording is told it ended.
+    let (mut server, replay_addr) = replay(&file, &[]);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args([
+        "learn",
+        "--connect",
+        &replay_addr.to_string(),
+        "--action",
+        "0.1,0.5",
+        "--messages",
+        "500",
+        "--reconnect-for",
+        "0",
+    ]);
+    let out = run(command);
+    let log = server.stop();
+    assert!(
+        log.contains("end of the recording"),
+        "stdout:\n{}\nstderr:\n{}\nreplay log:\n{log}",
+        text(&out.stdout),
+        text(&out.stderr)
+    );
+    assert!(
+        log.contains("the client's move (its frame") && log.contains("has diverged"),
+        "another action is a divergence:\n{log}"
+    );
+    assert_eq!(
+        log.matches("the client's move").count(),
+        1,
+        "logged once per kind:\n{log}"
+    );
+}
+
+#[test]
+fn replay_refuses_garbage_and_wrong_versions_naming_the_file() {
+    let dir = TempDir::new("replay-bad");
+    let garbage = dir.file("garbage.plrec");
+    std::fs::write(&garbage, b"not a recording at all").expect("write");
+    let mut command = Command::new(binary());
+    command.args(["replay", &garbage]);
+    let out = run(command);
+    let stderr = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains(&format!("{garbage}: not a pushlearn recording")),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+
+    let version = dir.file("version.plrec");
+    std::fs::write(&version, b"PLRECORD\x00\x00\x00\x07\x00\x00\x00\x00").expect("write");
+    let mut command = Command::new(binary());
+    command.args(["replay", &version]);
+    let stderr = text(&run(command).stderr);
+    assert!(
+        stderr.contains(&format!(
+            "{version}: recording format version 7, but this build reads version 1 only"
+        )),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_truncated_recording_replays_what_is_whole_and_warns_once() {
+    let dir = TempDir::new("replay-cut");
+    let file = dir.file("cut.plrec");
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let (mut proxy, proxy_addr) = recorder(world.addr, &file);
+    learn(proxy_addr, "20");
+    assert!(proxy.wait().0.success());
+    let bytes = std::fs::read(&file).expect("the recording");
+    std::fs::write(&file, &bytes[..bytes.len() - 7]).expect("cut it");
+
+    let (mut server, replay_addr) = replay(&file, &[]);
+    // Only the last record is lost: the first 10 states are whole.
+    learn(replay_addr, "10");
+    let log = server.stop();
+    assert_eq!(log.matches("ends inside a record").count(), 1, "{log}");
+}
