@@ -25,6 +25,10 @@ use pushlearn::wire::{validate, InvalidCommand, ServerConnection, TimingMode, Wi
 use tokio::net::{TcpListener, TcpStream};
 use tokio::time::Instant;
 
+/// How long a realtime replay goes on answering a client after the last
+/// recorded state, while the client keeps sending.
+const END_GRACE: Duration = Duration::from_secs(1);
+
 /// What a replay serves and how.
 #[derive(Debug)]
 pub struct Replay {
@@ -146,6 +150,14 @@ impl Replay {
                 .map(|(at, _)| if self.fast { start } else { start + *at });
             if !self.lockstep && due.is_none() {
                 session.end_of_recording();
+                // The recorded client went on briefly after the last state
+                // (a learner stops its actuator and waits for the answer):
+                // answer this one until it closes or falls silent.
+                while let Ok(message) = tokio::time::timeout(END_GRACE, connection.read()).await {
+                    let Some(message) = message? else { break };
+                    let (replies, _) = session.on_message(&message);
+                    connection.write_all(&replies).await?;
+                }
                 break;
             }
             tokio::select! {

@@ -178,3 +178,28 @@ fn a_truncated_recording_replays_what_is_whole_and_warns_once() {
     let log = server.stop();
     assert_eq!(log.matches("ends inside a record").count(), 1, "{log}");
 }
+
+#[test]
+fn a_realtime_recording_replays_at_its_pace_or_fast() {
+    let dir = TempDir::new("replay-realtime");
+    let file = dir.file("realtime.plrec");
+    let world = Daemon::start(&["--mode", "realtime", "--real-time-rate", "2000"]);
+    let (mut proxy, proxy_addr) = recorder(world.addr, &file);
+    // 50 states at 100 Hz: 500 steps, 0.25 s of wall-clock time at 2000 steps/s.
+    let recorded = learn(proxy_addr, "50");
+    assert!(proxy.wait().0.success());
+
+    let (mut paced, addr) = replay(&file, &[]);
+    let start = std::time::Instant::now();
+    assert_eq!(learn(addr, "50"), recorded, "the same states, in order");
+    let took = start.elapsed();
+    assert!(
+        took >= std::time::Duration::from_millis(200),
+        "replayed at the recorded pace, not at once: {took:?}"
+    );
+    let log = paced.stop();
+    assert!(log.contains("end of the recording"), "{log}");
+
+    let (_fast, addr) = replay(&file, &["--fast"]);
+    assert_eq!(learn(addr, "50"), recorded, "--fast changes the pace only");
+}

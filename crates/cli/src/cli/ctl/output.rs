@@ -190,6 +190,12 @@ fn row(state: &pb::WorldState, model: &pb::ModelState) -> String {
 fn cell(value: f64, width: usize, decimals: usize) -> String {
     let fixed = format!("{value:>width$.decimals$}");
     if fixed.chars().count() <= width {
+        // -1e-12 rounds to "-0.00000": the sign is noise, not information.
+        if fixed.trim_start().starts_with('-')
+            && fixed.chars().all(|c| !c.is_ascii_digit() || c == '0')
+        {
+            return fixed.replacen('-', " ", 1);
+        }
         return fixed;
     }
     for digits in (0..decimals).rev() {
@@ -252,6 +258,9 @@ mod tests {
         }
         assert_eq!(cell(0.30000000000000004, 9, 4), "   0.3000");
         assert_eq!(cell(-1e300, 9, 4), "-1.00e300");
+        assert_eq!(cell(-1e-12, 9, 4), "   0.0000");
+        assert_eq!(cell(-0.00004, 9, 4), "   0.0000");
+        assert_eq!(cell(-0.00006, 9, 4), "  -0.0001");
         assert_eq!(name_cell("blockAShadowTarget").chars().count(), NAME);
         assert_eq!(name_cell("aVeryLongBodyNameIndeed"), "aVeryLongBodyName…");
     }
