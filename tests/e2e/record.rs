@@ -48,7 +48,13 @@ fn replay(file: &str, extra: &[&str]) -> (Background, SocketAddr) {
     listening(command, "pushlearn-sim replay")
 }
 
-/// `pushlearn learn` against `addr`; its `model: …` line.
+/// `pushlearn learn --shadows` against `addr`; its `model: …` line.
+///
+/// The model line holds counts only (updates, inserts, nodes), which a
+/// slightly different state need not change; the shadows are the model's
+/// predictions, sent as SetPose, so a replay whose states differ from the
+/// recorded ones makes them differ from the recorded SetPoses, and the
+/// replay counts that (`differing=`).
 fn learn(addr: SocketAddr, messages: &str) -> String {
     let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
     command.args([
@@ -57,6 +63,7 @@ fn learn(addr: SocketAddr, messages: &str) -> String {
         &addr.to_string(),
         "--action",
         "0,0.5",
+        "--shadows",
         "--messages",
         messages,
         "--reconnect-for",
@@ -94,9 +101,17 @@ fn a_learner_replayed_from_a_recording_learns_the_same_model() {
     // A second client gets the recording from its start again.
     assert_eq!(learn(replay_addr, "200"), recorded);
     let log = server.stop();
+    // The learner sent exactly the recorded commands, its predictions
+    // (shadows) included: it saw exactly the recorded states.
+    assert!(log.contains("differing=0"), "{log}");
     assert!(
-        log.contains("differing=0"),
+        !log.contains("diverged"),
         "the learner did as recorded:\n{log}"
+    );
+    assert!(
+        log.match_indices("differing=")
+            .all(|(i, _)| log[i..].starts_with("differing=0\n")),
+        "{log}"
     );
 
     // A learner that goes on longer than the recording is told it ended.
