@@ -218,3 +218,64 @@ fn a_realtime_recording_replays_at_its_pace_or_fast() {
     let (_fast, addr) = replay(&file, &["--fast"]);
     assert_eq!(learn(addr, "50"), recorded, "--fast changes the pace only");
 }
+
+#[test]
+fn an_observer_recording_holds_the_published_states_and_replays_them() {
+    let dir = TempDir::new("observer");
+    let file = dir.file("observed.plrec");
+    let world = Daemon::start(&["--mode", "realtime", "--real-time-rate", "2000"]);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args([
+        "ctl",
+        "--sim",
+        &world.addr.to_string(),
+        "record",
+        &file,
+        "--count",
+        "5",
+    ]);
+    let out = run(command);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let recording =
+        pushlearn::recording::read_file(std::path::Path::new(&file)).expect("a recording");
+    assert!(
+        !recording.header.commands,
+        "an observer records no commands"
+    );
+    assert_eq!(recording.header.hello.scene, "one_block");
+    let recorded: Vec<u64> = recording
+        .records
+        .iter()
+        .filter_map(|r| match &r.frame {
+            pushlearn::recording::Frame::World(m) => match &m.payload {
+                Some(pushlearn::wire::pb::server_message::Payload::WorldState(s)) => {
+                    Some(s.publish_seq)
+                }
+                _ => None,
+            },
+            pushlearn::recording::Frame::Client(_) => None,
+        })
+        .collect();
+    assert_eq!(recorded.len(), 5, "{recorded:?}");
+
+    let (_server, addr) = replay(&file, &["--fast"]);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args([
+        "ctl",
+        "--sim",
+        &addr.to_string(),
+        "--json",
+        "watch",
+        "--count",
+        "5",
+    ]);
+    let watched: Vec<u64> = succeeded(&run(command))
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).expect("JSON")["publish_seq"]
+                .as_u64()
+                .expect("publish_seq")
+        })
+        .collect();
+    assert_eq!(watched, recorded);
+}
