@@ -86,7 +86,7 @@ pub enum ClientError {
         after: Duration,
     },
     /// The world answered command `seq` with an `Error`.
-    #[error("the world refused command {seq}: {message}")]
+    #[error("the world refused a command: {message}")]
     Refused {
         /// The refused command's seq.
         seq: u64,

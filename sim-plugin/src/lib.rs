@@ -7,9 +7,11 @@
 //! * [`sweep`](mod@sweep): the calibration sweep of `docs/spec/world.md` §10;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
 //! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
-//!   (`docs/protocol.md`).
+//!   (`docs/protocol.md`);
+//! * [`replay`]: a recorded session served as if it were the world.
 
 pub mod push_run;
+pub mod replay;
 pub mod scene;
 pub mod server;
 pub mod sweep;

@@ -30,8 +30,9 @@ pub enum BodyName {
 /// A ghost pose's name: `{of}Shadow{suffix}`.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub struct Ghost {
-    /// The body the ghost stands for (`blockA` of `blockAShadow`); it need
-    /// not exist, and may be empty.
+    /// The body the ghost stands for (`blockA` of `blockAShadow`). Any
+    /// text parses (even empty); a world refuses a ghost whose body its
+    /// scene lacks ([`crate::wire::InvalidCommand::GhostOfUnknownBody`]).
     pub of: String,
     pub kind: GhostKind,
 }

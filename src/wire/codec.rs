@@ -79,6 +79,13 @@ impl WireError {
     }
 }
 
+/// The framing alone, envelopes left as bytes: for a proxy or recorder that
+/// must pass frames on unchanged (decoding and re-encoding would drop fields
+/// a newer peer added). Enforces [`MAX_FRAME_SIZE`] like the typed codecs.
+pub fn raw_frame_codec() -> LengthDelimitedCodec {
+    length_codec()
+}
+
 fn length_codec() -> LengthDelimitedCodec {
     LengthDelimitedCodec::builder()
         .length_field_length(LENGTH_PREFIX_SIZE)

@@ -12,7 +12,8 @@
 //!   command on arrival (a client runs them before sending);
 //! * [`message`]: constructors such as [`pb::ClientMessage::move_`];
 //! * [`orientation`]: a planar yaw as the wire's quaternion, and back;
-//! * [`BodyName`]: a body's or a ghost's name, parsed.
+//! * [`BodyName`]: a body's or a ghost's name, parsed;
+//! * [`speed`]: the actuator's speed limit, as the world applies it.
 
 pub mod body_name;
 pub mod codec;
@@ -20,13 +21,15 @@ pub mod connection;
 pub mod message;
 pub mod orientation;
 pub mod pb;
+pub mod speed;
 pub mod validate;
 
 pub use body_name::{BodyName, Ghost, GhostKind, GHOST_MARKER, TARGET_GHOST_SUFFIX};
 pub use codec::{
-    decode_stream, encode_frame, FrameDecoder, FrameEncoder, WireError, LENGTH_PREFIX_SIZE,
-    MAX_FRAME_SIZE,
+    decode_stream, encode_frame, raw_frame_codec, FrameDecoder, FrameEncoder, WireError,
+    LENGTH_PREFIX_SIZE, MAX_FRAME_SIZE,
 };
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
+pub use speed::clamp_speed;
 pub use validate::{validate, InvalidCommand};

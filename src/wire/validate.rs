@@ -77,6 +77,18 @@ pub enum InvalidCommand {
         /// The scene's bodies, for the message.
         known: Vec<String>,
     },
+    /// World-dependent: a ghost (`<body>Shadow…`) of a body the scene does
+    /// not have. Refused rather than published, since a ghost is drawn and
+    /// identified as its body (with that body's id).
+    #[error("set_pose: ghost '{name}' is of body '{body}', which this world lacks (this world has: {})", known.join(", "))]
+    GhostOfUnknownBody {
+        /// The ghost's name as sent.
+        name: String,
+        /// The body it names, the part before `Shadow`.
+        body: String,
+        /// The scene's bodies, for the message.
+        known: Vec<String>,
+    },
     /// World-dependent: Advance sent to a world in realtime mode.
     #[error("advance: only valid in lockstep mode, but this world runs in realtime mode")]
     AdvanceInRealtime,

@@ -119,7 +119,10 @@ fn single_commands_take_effect() {
 
     succeeded(&ctl(daemon.addr, &["pause"]));
     let stderr = failed(&ctl(daemon.addr, &["advance"]));
-    assert!(stderr.contains("advance: the world is paused"), "{stderr}");
+    assert!(
+        stderr.contains("world refused advance: the world is paused"),
+        "{stderr}"
+    );
     succeeded(&ctl(daemon.addr, &["unpause"]));
     assert_eq!(advance(&daemon)["step"], 200);
 }
@@ -131,15 +134,180 @@ fn refusal_is_printed_and_fails() {
         daemon.addr,
         &["set-pose", "blockC", "0", "0.3", "0.05", "0"],
     ));
-    assert!(
-        stderr.contains("the world refused command")
-            && stderr
-                .contains("set_pose: unknown body 'blockC' (this world has: actuator, blockA)"),
-        "{stderr}"
+    // The command as typed and the world's reason, once; no seq.
+    assert_eq!(
+        stderr,
+        "error: world refused set-pose: unknown body 'blockC' (this world has: actuator, blockA)\n"
     );
     let stderr = failed(&ctl(daemon.addr, &["advance"]));
+    assert_eq!(
+        stderr,
+        "error: world refused advance: only valid in lockstep mode, but this world runs in realtime mode\n"
+    );
+}
+
+#[test]
+fn the_old_addr_flag_still_works_but_is_not_advertised() {
+    let daemon = Daemon::start(LOCKSTEP);
+    let addr = daemon.addr.to_string();
+    for flag in ["--sim", "--addr"] {
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+        command.args(["ctl", flag, &addr, "info"]);
+        let out = crate::process::run(command);
+        assert!(
+            succeeded(&out).contains("scene:        one_block"),
+            "{flag}"
+        );
+    }
+    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args(["ctl", "--help"]);
+    let help = succeeded(&crate::process::run(command));
+    assert!(help.contains("--sim <HOST:PORT>"), "{help}");
+    assert!(!help.contains("--addr"), "{help}");
+}
+
+#[test]
+fn negative_numbers_are_values_and_a_negative_rate_is_named() {
+    let daemon = Daemon::start(LOCKSTEP);
+    let stderr = failed(&ctl(daemon.addr, &["rate", "-10"]));
+    assert!(stderr.contains("'-10' is not a publish rate"), "{stderr}");
+    assert!(!stderr.contains("'-1'"), "{stderr}");
+    let stderr = failed(&ctl(daemon.addr, &["advance", "-3"]));
+    assert!(stderr.contains("'-3' is not a count"), "{stderr}");
+    let out = succeeded(&ctl(
+        daemon.addr,
+        &["set-pose", "blockA", "-0.1", "0.25", "0.05", "-0.5"],
+    ));
+    assert_eq!(
+        out,
+        "set-pose: blockA at (-0.1, 0.25, 0.05) m, yaw -0.5 rad\n"
+    );
+    let out = succeeded(&ctl(daemon.addr, &["move", "-0.3", "-0.1"]));
+    assert_eq!(out, "move: actuator velocity (-0.3, -0.1) m/s\n");
+    let (_, [vx, vy]) = planar(&advance(&daemon), "actuator");
     assert!(
-        stderr.contains("advance: only valid in lockstep mode"),
+        (vx + 0.3).abs() < 1e-3 && (vy + 0.1).abs() < 1e-3,
+        "{vx}, {vy}"
+    );
+}
+
+#[test]
+fn commands_confirm_what_the_world_applied_and_say_when_it_clamped() {
+    let daemon = Daemon::start(LOCKSTEP);
+    assert_eq!(
+        succeeded(&ctl(daemon.addr, &["move", "0.3", "0"])),
+        "move: actuator velocity (0.3, 0) m/s\n"
+    );
+    assert_eq!(
+        succeeded(&ctl(daemon.addr, &["move", "1e300", "0"])),
+        "move: actuator velocity (0.5, 0) m/s, clamped from (1e300, 0) m/s to the world's speed limit 0.5 m/s\n"
+    );
+    let (_, [vx, _]) = planar(&advance(&daemon), "actuator");
+    assert!((vx - 0.5).abs() < 1e-3, "the world applied the limit: {vx}");
+    assert_eq!(
+        succeeded(&ctl(daemon.addr, &["rate", "10"])),
+        "rate: 10 Hz (a state every 100 steps of 0.001 s)\n"
+    );
+    assert_eq!(
+        succeeded(&ctl(
+            daemon.addr,
+            &["set-pose", "actuator", "0", "0", "0.03", "7"]
+        )),
+        "set-pose: actuator at (0, 0, 0.03) m, yaw 7 rad (= 0.716815 rad)\n"
+    );
+    let stderr = failed(&ctl(
+        daemon.addr,
+        &["set-pose", "blockA", "0", "0.25", "0.05", "1e300"],
+    ));
+    assert!(stderr.contains("yaw '1e300' is out of range"), "{stderr}");
+    assert!(
+        succeeded(&ctl(daemon.addr, &["info"])).contains("speed limit:  0.5 m/s"),
+        "info shows the limit"
+    );
+    for (command, limit) in [("move", "0.5 m/s"), ("set-pose", "1000 m")] {
+        let mut help = std::process::Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+        help.args(["ctl", command, "--help"]);
+        let help = succeeded(&crate::process::run(help));
+        assert!(help.contains(limit), "{command} --help:\n{help}");
+    }
+    // JSON output stays one state per line: no confirmations in it.
+    assert_eq!(
+        succeeded(&ctl(daemon.addr, &["--json", "move", "0", "0"])),
+        ""
+    );
+}
+
+#[test]
+fn a_ghost_of_a_body_the_scene_lacks_is_refused() {
+    let daemon = Daemon::start(LOCKSTEP);
+    let stderr = failed(&ctl(
+        daemon.addr,
+        &["set-pose", "blockBShadow", "0", "0.5", "0.05", "0"],
+    ));
+    assert_eq!(
+        stderr,
+        "error: world refused set-pose: ghost 'blockBShadow' is of body 'blockB', which this world lacks (this world has: actuator, blockA)\n"
+    );
+    succeeded(&ctl(
+        daemon.addr,
+        &["set-pose", "blockAShadow", "0", "0.5", "0.05", "0"],
+    ));
+    let state = advance(&daemon);
+    let ghost = state["bodies"]
+        .as_array()
+        .and_then(|b| b.iter().find(|b| b["name"] == "blockAShadow"))
+        .unwrap_or_else(|| panic!("no ghost in {state}"));
+    assert_eq!(ghost["id"], 15, "a ghost carries its body's id");
+    let two = Daemon::start(&["--mode", "lockstep", "--scene", "two_blocks"]);
+    succeeded(&ctl(
+        two.addr,
+        &["set-pose", "blockBShadow", "0", "0.5", "0.05", "0"],
+    ));
+}
+
+#[test]
+fn watch_filters_bodies_and_keeps_its_columns() {
+    let daemon = Daemon::start(REALTIME);
+    let script = Script::new(
+        "columns",
+        "set-pose blockA -999.123456 0.25 0.05 3\n\
+         set-pose blockAShadowTarget 0.1 0.2 0.05 0\n\
+         watch --count 3 --body blockA --body blockAShadowTarget\n",
+    );
+    let out = succeeded(&ctl(daemon.addr, &["run", script.arg()]));
+    let table: Vec<&str> = out.lines().skip(2).collect();
+    assert_eq!(
+        table.len(),
+        1 + 3 * 2,
+        "header and two bodies per state:\n{out}"
+    );
+    let width = table[0].chars().count();
+    assert!(
+        table.iter().all(|l| l.chars().count() == width),
+        "every line as wide as the header:\n{out}"
+    );
+    assert!(table[1..].iter().all(|l| !l.contains("actuator")), "{out}");
+    assert!(table[1].contains("-999.12346"), "{out}");
+
+    let states = json_states(&ctl(
+        daemon.addr,
+        &["--json", "watch", "--count", "2", "--body", "actuator"],
+    ));
+    for state in &states {
+        let names: Vec<&Value> = state["bodies"]
+            .as_array()
+            .expect("bodies")
+            .iter()
+            .map(|b| &b["name"])
+            .collect();
+        assert_eq!(names, ["actuator"], "{state}");
+    }
+    let stderr = failed(&ctl(
+        daemon.addr,
+        &["watch", "--count", "1", "--body", "blockZ"],
+    ));
+    assert!(
+        stderr.contains("watch: no body 'blockZ' in this world (it has: actuator, blockA"),
         "{stderr}"
     );
 }

@@ -15,6 +15,7 @@ mod experiment;
 mod first_hour;
 mod learner;
 mod python;
+mod record;
 mod reliability;
 mod reproduce;
 mod viewer;

@@ -67,12 +67,12 @@ pub fn run(mut command: Command) -> Output {
     }
 }
 
-/// `pushlearn ctl --addr ADDR ARGS...`
+/// `pushlearn ctl --sim ADDR ARGS...`
 pub fn ctl(addr: std::net::SocketAddr, args: &[&str]) -> Output {
     let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
     command
         .arg("ctl")
-        .arg("--addr")
+        .arg("--sim")
         .arg(addr.to_string())
         .args(args);
     run(command)
@@ -126,6 +126,26 @@ impl Background {
     /// The child's process id.
     pub fn pid(&self) -> u32 {
         self.child.id()
+    }
+
+    /// Waits up to [`CHILD_LIMIT`] for the child to end by itself; its exit
+    /// status and log. Panics if it does not end.
+    pub fn wait(&mut self) -> (std::process::ExitStatus, String) {
+        let deadline = Instant::now() + CHILD_LIMIT;
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(status)) => return (status, self.stop()),
+                Ok(None) if Instant::now() < deadline => thread::sleep(Duration::from_millis(10)),
+                Ok(None) => {
+                    let log = self.stop();
+                    panic!(
+                        "{} did not end within {CHILD_LIMIT:?}; its log:\n{log}",
+                        self.name
+                    )
+                }
+                Err(err) => panic!("waiting for {}: {err}", self.name),
+            }
+        }
     }
 
     /// Kills the child and returns its log.

@@ -5,12 +5,15 @@
 //! [`sim_plugin::server`].
 
 use std::io::Write;
-use std::net::IpAddr;
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use sim_plugin::replay::Replay;
 use sim_plugin::scene::DEFAULT_SCENE;
 use sim_plugin::server::{
     Config, Latency, Server, Timing, DEFAULT_CLIENT_QUEUE, DEFAULT_MAX_CLIENTS, DEFAULT_PORT,
@@ -64,6 +67,35 @@ enum Cmd {
                       its translation from the start and its rotation."
     )]
     Sweep(SweepArgs),
+    /// Serve a recording (`pushlearn ctl record`) to clients as if it were the world.
+    #[command(
+        long_about = "Serve a recording made by `pushlearn ctl record` to clients as if it were \
+                      the world (docs/protocol.md §9).\n\n\
+                      Every client gets the recorded Hello, then the recorded states: in a \
+                      lock-step recording one per Advance, otherwise at their recorded pace (or at \
+                      once with --fast). Commands are answered as the world answered the recorded \
+                      ones; where they differ from the recorded commands they are counted and \
+                      logged (once per kind), so you can see that a learner diverged from the \
+                      recording. At the end of the recording the connection is closed (a further \
+                      Advance is answered with an Error saying so). Prints `listening on \
+                      ADDRESS:PORT` like serve; stops on SIGINT or SIGTERM.",
+        after_help = "Examples:\n  \
+            pushlearn ctl record run.plrec --listen 127.0.0.1:12000   # then a learner on :12000\n  \
+            pushlearn-sim replay run.plrec --listen 127.0.0.1:0"
+    )]
+    Replay(ReplayArgs),
+}
+
+#[derive(Debug, Args)]
+struct ReplayArgs {
+    /// The recording.
+    file: PathBuf,
+    /// Address to listen on; port 0 picks a free one (read it from the `listening on` line).
+    #[arg(long, value_name = "HOST:PORT", default_value = "127.0.0.1:11345")]
+    listen: SocketAddr,
+    /// Serve a realtime recording as fast as the client reads, without its recorded pauses.
+    #[arg(long)]
+    fast: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -142,6 +174,7 @@ fn main() -> ExitCode {
     let default_level = match cli.command {
         None | Some(Cmd::Serve(_)) => "info",
         Some(Cmd::Sweep(_)) => "warn",
+        Some(Cmd::Replay(_)) => "info",
     };
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -155,6 +188,7 @@ fn main() -> ExitCode {
         None => run_serve(&cli.serve),
         Some(Cmd::Serve(args)) => run_serve(&args),
         Some(Cmd::Sweep(args)) => run_sweep(&args),
+        Some(Cmd::Replay(args)) => run_replay(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -246,6 +280,40 @@ fn shutdown_signal() -> anyhow::Result<impl std::future::Future<Output = ()>> {
             tracing::error!("cannot listen for Ctrl-C: {e}");
             std::future::pending::<()>().await;
         }
+    })
+}
+
+fn run_replay(args: &ReplayArgs) -> anyhow::Result<()> {
+    let name = args.file.display().to_string();
+    let recording = pushlearn::recording::read_file(&args.file)?;
+    if let Some(cut) = recording.truncated {
+        tracing::warn!(
+            "{name} ends inside a record (byte {}, {} bytes of it): replaying the {} whole records before it",
+            cut.offset,
+            cut.present,
+            recording.records.len()
+        );
+    }
+    let replay = Replay::new(recording, name.clone(), args.fast);
+    tracing::info!("{name}: {} states", replay.states());
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .context("cannot start the async runtime")?;
+    runtime.block_on(async {
+        let listener = tokio::net::TcpListener::bind(args.listen)
+            .await
+            .with_context(|| format!("cannot listen on {}", args.listen))?;
+        let shutdown = shutdown_signal()?;
+        let mut out = std::io::stdout().lock();
+        writeln!(out, "listening on {}", listener.local_addr()?)?;
+        out.flush()?;
+        drop(out);
+        tokio::select! {
+            () = shutdown => tracing::info!("shutting down"),
+            served = Arc::new(replay).serve(listener) => served.context("accepting clients")?,
+        }
+        Ok(())
     })
 }
 

@@ -58,14 +58,24 @@ fn set_pose(model: &pb::ModelState, scene: &Scene) -> Result<Command, Refusal> {
     let name = BodyName::parse(&model.name);
     // Named in the wire's words (which list the scene's bodies) rather than
     // the world's, so every refusal of an unknown body reads the same.
-    if let BodyName::Body(body) = &name {
-        if scene.body_index(body).is_none() {
+    let known = || scene.bodies.iter().map(|b| b.name.clone()).collect();
+    match &name {
+        BodyName::Body(body) if scene.body_index(body).is_none() => {
             return Err(InvalidCommand::UnknownBody {
                 name: body.clone(),
-                known: scene.bodies.iter().map(|b| b.name.clone()).collect(),
+                known: known(),
             }
             .into());
         }
+        BodyName::Ghost(ghost) if scene.body_index(&ghost.of).is_none() => {
+            return Err(InvalidCommand::GhostOfUnknownBody {
+                name: model.name.clone(),
+                body: ghost.of.clone(),
+                known: known(),
+            }
+            .into());
+        }
+        BodyName::Body(_) | BodyName::Ghost(_) => {}
     }
     let pose = model.pose.unwrap_or_default();
     let q = pose.orientation.unwrap_or_default();
@@ -129,6 +139,7 @@ pub(super) fn hello(
             .collect(),
         shapes: scene.bodies.iter().map(shape).collect(),
         latency_max_steps,
+        max_speed: Some(scene.drive.max_speed),
     }
 }
 
@@ -268,10 +279,29 @@ mod tests {
             "set_pose: unknown body 'blockB' (this world has: actuator, blockA)"
         );
         let ghost = operation(
-            &pb::ClientMessage::set_pose(1, "blockBShadow", [0.0; 3], 0.0),
+            &pb::ClientMessage::set_pose(1, "blockAShadowTarget", [0.0; 3], 0.0),
             &scene(),
         );
         assert!(ghost.is_ok(), "{ghost:?}");
+    }
+
+    #[test]
+    fn ghosts_of_absent_bodies_are_refused_naming_the_body() {
+        assert_eq!(
+            refusal(&pb::ClientMessage::set_pose(
+                1,
+                "blockBShadow",
+                [0.0; 3],
+                0.0
+            )),
+            "set_pose: ghost 'blockBShadow' is of body 'blockB', which this world lacks \
+             (this world has: actuator, blockA)"
+        );
+        assert_eq!(
+            refusal(&pb::ClientMessage::set_pose(1, "Shadow", [0.0; 3], 0.0)),
+            "set_pose: ghost 'Shadow' is of body '', which this world lacks \
+             (this world has: actuator, blockA)"
+        );
     }
 
     #[test]

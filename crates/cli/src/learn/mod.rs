@@ -490,6 +490,24 @@ mod tests {
     }
 
     #[test]
+    fn shadows_skip_bodies_the_world_lacks() {
+        // The world refuses a ghost of a body its scene lacks (blockBShadow
+        // in one_block): a body without a start height gets none.
+        let only_actuator: StartHeights = [(learner::ACTUATOR_ID, 0.03)].into_iter().collect();
+        let mut l = Learner::new(
+            Probe::default(),
+            Policy::Fixed(Action::new(0.0, 0.5)),
+            true,
+            1,
+        );
+        let sent = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &only_actuator)
+                .unwrap(),
+        );
+        assert_eq!(sent, ["move(0,0.5)", "pose(actuatorShadow,0,0.005)"]);
+    }
+
+    #[test]
     fn a_fixed_action_learns_from_every_state_and_sends_shadows() {
         let mut l = Learner::new(
             Probe::default(),

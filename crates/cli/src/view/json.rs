@@ -328,6 +328,7 @@ mod tests {
                 geometry: Some(Geometry::BoxSize(pb::Vector3d::new(0.5, 0.1, 0.1))),
             }],
             latency_max_steps: None,
+            max_speed: None,
         };
         let got = value(&Outgoing::hello("127.0.0.1:1", &hello));
         assert_eq!(got["type"], "hello");

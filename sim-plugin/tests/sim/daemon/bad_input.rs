@@ -161,22 +161,22 @@ async fn more_than_64_ghosts_are_refused_until_a_reset() {
     let mut client = connect(&server).await;
     for i in 0..64 {
         client
-            .command(Payload::set_pose(format!("g{i}Shadow"), [0.0; 3], 0.0))
+            .command(Payload::set_pose(format!("blockAShadow{i}"), [0.0; 3], 0.0))
             .await
             .expect("a ghost within the limit");
     }
     let err = client
-        .command(Payload::set_pose("lastShadow", [0.0; 3], 0.0))
+        .command(Payload::set_pose("blockAShadowLast", [0.0; 3], 0.0))
         .await
         .expect_err("one ghost too many");
     assert!(err.to_string().contains("too many ghost poses"), "{err}");
     client
-        .command(Payload::set_pose("g0Shadow", [1.0, 0.0, 0.0], 0.0))
+        .command(Payload::set_pose("blockAShadow0", [1.0, 0.0, 0.0], 0.0))
         .await
         .expect("moving a known ghost is fine");
     client.command(Payload::reset()).await.expect("reset");
     client
-        .command(Payload::set_pose("lastShadow", [0.0; 3], 0.0))
+        .command(Payload::set_pose("blockAShadowLast", [0.0; 3], 0.0))
         .await
         .expect("room again after the reset");
     let state = client

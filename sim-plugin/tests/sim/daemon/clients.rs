@@ -171,7 +171,7 @@ async fn lockstep_never_waits_for_a_slow_reader() {
     driver
         .command(Payload::set_poses((0..64).map(|i| {
             (
-                format!("g{i}Shadow"),
+                format!("blockAShadow{i}"),
                 pb::Pose::from_position_yaw([0.0, 0.0, 0.05], 0.0),
             )
         })))

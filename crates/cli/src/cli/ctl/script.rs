@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use pushlearn::wire::{pb, validate};
 
-use super::Action;
+use super::{check_yaw, Action};
 
 /// One script command and where it came from.
 #[derive(Debug, Clone, PartialEq)]
@@ -186,7 +186,16 @@ fn parse_line(
             x: cursor.real("X")?,
             y: cursor.real("Y")?,
             z: cursor.real("Z")?,
-            yaw: cursor.real("YAW")?,
+            yaw: {
+                let column = cursor
+                    .rest
+                    .clone()
+                    .next()
+                    .map_or(cursor.end_column, |w| w.column);
+                let yaw = cursor.real("YAW")?;
+                check_yaw(yaw)
+                    .map_err(|message| cursor.error(column, format!("set-pose: {message}")))?
+            },
         },
         "move" => Action::Move {
             vx: cursor.real("VX")?,
@@ -209,9 +218,18 @@ fn parse_line(
                     format!("watch: expected --count, found '{}'", flag.text),
                 ));
             }
-            Action::Watch {
-                count: Some(cursor.number("N", "a whole number")?),
+            let count = Some(cursor.number("N", "a whole number")?);
+            let mut bodies = Vec::new();
+            while let Some(flag) = cursor.rest.next() {
+                if flag.text != "--body" {
+                    return Err(cursor.error(
+                        flag.column,
+                        format!("watch: expected --body, found '{}'", flag.text),
+                    ));
+                }
+                bodies.push(cursor.word("NAME after --body")?.text.to_owned());
             }
+            Action::Watch { count, bodies }
         }
         "run" => return Err(cursor.error(first.column, "run: scripts cannot run other scripts")),
         other => {
@@ -267,6 +285,7 @@ unpause
 advance
 advance 20
 watch --count 5
+watch --count 2 --body blockA --body actuatorShadow
 info
 ";
         assert_eq!(
@@ -293,7 +312,14 @@ info
                 Action::Unpause,
                 Action::Advance { n: 1 },
                 Action::Advance { n: 20 },
-                Action::Watch { count: Some(5) },
+                Action::Watch {
+                    count: Some(5),
+                    bodies: Vec::new()
+                },
+                Action::Watch {
+                    count: Some(2),
+                    bodies: vec!["blockA".into(), "actuatorShadow".into()]
+                },
                 Action::Info,
             ]
         );
@@ -379,6 +405,25 @@ info
         let err = error("watch 5");
         assert_eq!((err.line, err.column), (1, 7));
         assert_eq!(err.message, "watch: expected --count, found '5'");
+    }
+
+    #[test]
+    fn a_yaw_too_large_to_mean_a_rotation_is_refused() {
+        let err = error("set-pose blockA 0 0.25 0.05 1e300");
+        assert_eq!((err.line, err.column), (1, 29));
+        assert_eq!(
+            err.message,
+            "set-pose: yaw 1e300 rad is out of range: |yaw| must be at most 1000 rad"
+        );
+        assert_eq!(actions("set-pose blockA 0 0.25 0.05 -1000").len(), 1);
+    }
+
+    #[test]
+    fn watch_body_needs_a_name() {
+        let err = error("watch --count 1 --body");
+        assert_eq!(err.message, "watch: missing NAME after --body");
+        let err = error("watch --count 1 blockA");
+        assert_eq!(err.message, "watch: expected --body, found 'blockA'");
     }
 
     #[test]
