@@ -152,6 +152,16 @@ pub(super) const TARGET: RGBColor = RGBColor(0, 0, 0);
 pub(super) const TRANSLUCENT: f64 = 0.3;
 
 /// A distinct colour for the k-th line of a family.
+/// A position tick in metres, to 0.1 m: the ticks of a range around 0
+/// land on −0.0 as often as on 0.0, and "-0.0" is noise.
+pub(super) fn metres_tick(v: &f64) -> String {
+    let text = format!("{v:.1}");
+    match text.strip_prefix('-') {
+        Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_owned(),
+        _ => text,
+    }
+}
+
 pub(super) fn palette(k: usize) -> RGBColor {
     const COLOURS: [RGBColor; 10] = [
         RGBColor(31, 119, 180),
@@ -375,6 +385,15 @@ mod tests {
         };
         assert_eq!(draw(1400), 1);
         assert_eq!(draw(500), 2);
+    }
+
+    #[test]
+    fn a_metre_tick_has_no_negative_zero() {
+        assert_eq!(metres_tick(&-0.0), "0.0");
+        assert_eq!(metres_tick(&-0.04), "0.0");
+        assert_eq!(metres_tick(&-0.05000001), "-0.1");
+        assert_eq!(metres_tick(&0.5), "0.5");
+        assert_eq!(metres_tick(&-0.5), "-0.5");
     }
 
     #[test]

@@ -10,7 +10,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Deserialize;
 
-use super::draw::{body_colour, titled, Drawn, Figure, OrText, TRANSLUCENT};
+use super::draw::{body_colour, metres_tick, titled, Drawn, Figure, OrText, TRANSLUCENT};
 use super::PlotError;
 use crate::experiment::driver::{push_task_blocks, PUSH_TASK_START_Y};
 use crate::models::ModelKind;
@@ -313,6 +313,8 @@ impl Figure for SnapshotGrid {
                 .y_labels(5)
                 .x_desc("x [m]")
                 .y_desc("y [m]")
+                .x_label_formatter(&metres_tick)
+                .y_label_formatter(&metres_tick)
                 .label_style(("sans-serif", 9))
                 .axis_desc_style(("sans-serif", 10))
                 .light_line_style(WHITE)
