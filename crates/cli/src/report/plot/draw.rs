@@ -51,7 +51,9 @@ pub(super) trait Figure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn;
 }
 
-/// Writes `figure` as `dir/stem.png` and `dir/stem.svg`.
+/// Writes `figure` as `dir/stem.png` and `dir/stem.svg`, each whole: drawn
+/// under a temporary name (the PNG encoder picks its format by the
+/// extension, so it stays `.png`) or in memory, then renamed into place.
 pub(super) fn write(
     figure: &impl Figure,
     dir: &Path,
@@ -64,20 +66,28 @@ pub(super) fn write(
         let path = path.to_path_buf();
         move |reason| PlotError::Draw { path, reason }
     };
+    let partial_png = dir.join(format!(".{stem}.partial.png"));
     {
-        let root = BitMapBackend::new(&png, figure.size()).into_drawing_area();
+        let root = BitMapBackend::new(&partial_png, figure.size()).into_drawing_area();
         figure
             .draw(&root)
             .and_then(|()| root.present().or_text())
             .map_err(failed(&png))?;
     }
+    std::fs::rename(&partial_png, &png).map_err(|err| {
+        let _ = std::fs::remove_file(&partial_png);
+        failed(&png)(err.to_string())
+    })?;
+    let mut text = String::new();
     {
-        let root = SVGBackend::new(&svg, figure.size()).into_drawing_area();
+        let root = SVGBackend::with_string(&mut text, figure.size()).into_drawing_area();
         figure
             .draw(&root)
             .and_then(|()| root.present().or_text())
             .map_err(failed(&svg))?;
     }
+    crate::output::write_atomically(&svg, text.as_bytes())
+        .map_err(|err| failed(&svg)(err.to_string()))?;
     written.push(png);
     written.push(svg);
     Ok(())
