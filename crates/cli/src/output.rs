@@ -48,14 +48,11 @@ pub fn check_file(path: &Path, flag: &'static str) -> Result<(), OutputError> {
             path: path.to_path_buf(),
         });
     }
-    let probe = dir.join(format!(".pushlearn-write-check-{}", std::process::id()));
-    std::fs::write(&probe, b"")
-        .and_then(|()| std::fs::remove_file(&probe))
-        .map_err(|source| OutputError::NotWritable {
-            flag,
-            path: path.to_path_buf(),
-            source,
-        })
+    probe(dir).map_err(|source| OutputError::NotWritable {
+        flag,
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// Writes `bytes` to `path` through a temporary file beside it, renamed
@@ -82,6 +79,11 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
 /// The directory cannot be created or written, with the reason.
 pub fn check_writable_dir(dir: &Path) -> io::Result<()> {
     std::fs::create_dir_all(dir)?;
+    probe(dir)
+}
+
+/// Writes and removes a file in `dir`: whether it takes new files.
+fn probe(dir: &Path) -> io::Result<()> {
     let probe = dir.join(format!(".pushlearn-probe-{}", std::process::id()));
     std::fs::write(&probe, b"")?;
     std::fs::remove_file(&probe)

@@ -145,23 +145,7 @@ pub fn load_model<M: Model>(path: &Path, expected: &Settings) -> Result<(M, u64)
     };
     let bytes = std::fs::read(&snapshot).map_err(io_error(&snapshot))?;
     let stored = snapshot::stored_settings(&bytes, &snapshot)?;
-    let made_otherwise = [
-        ("model", stored.model.clone(), expected.model.clone()),
-        (
-            "publish rate",
-            stored.publish_rate_hz.to_string(),
-            expected.publish_rate_hz.to_string(),
-        ),
-        (
-            "model options",
-            stored.model_options.clone(),
-            expected.model_options.clone(),
-        ),
-    ]
-    .into_iter()
-    .filter(|(_, stored, now)| stored != now)
-    .map(|(what, stored, now)| format!("{what}: stored {stored}, now {now}"))
-    .collect::<Vec<_>>();
+    let made_otherwise = expected.differences_in(&stored, MAKING_THE_MODEL);
     if !made_otherwise.is_empty() {
         return Err(StateError::OtherModel {
             path: path.to_path_buf(),
@@ -183,41 +167,58 @@ pub fn load_model<M: Model>(path: &Path, expected: &Settings) -> Result<(M, u64)
     }
 }
 
+/// The settings that made a model: a kept model (`load_model`) must match
+/// in these, whatever the new daemon's policy and seed.
+const MAKING_THE_MODEL: &[&str] = &["model", "publish rate", "model options"];
+
 impl Settings {
+    /// Each setting by name, as (name, stored, now).
+    fn compared(&self, stored: &Settings) -> [(&'static str, String, String); 7] {
+        [
+            ("model", stored.model.clone(), self.model.clone()),
+            (
+                "publish rate",
+                stored.publish_rate_hz.to_string(),
+                self.publish_rate_hz.to_string(),
+            ),
+            (
+                "policy",
+                format!("{:?}", stored.policy),
+                format!("{:?}", self.policy),
+            ),
+            (
+                "shadows",
+                stored.shadows.to_string(),
+                self.shadows.to_string(),
+            ),
+            ("seed", stored.seed.to_string(), self.seed.to_string()),
+            (
+                "model options",
+                stored.model_options.clone(),
+                self.model_options.clone(),
+            ),
+            (
+                "episodes",
+                format!("{:?}", stored.episodes),
+                format!("{:?}", self.episodes),
+            ),
+        ]
+    }
+
     fn differences(&self, stored: &Settings) -> Vec<String> {
-        let mut out = Vec::new();
-        let mut differ = |what: &str, stored: String, now: String| {
-            if stored != now {
-                out.push(format!("{what}: stored {stored}, now {now}"));
-            }
-        };
-        differ("model", stored.model.clone(), self.model.clone());
-        differ(
-            "publish rate",
-            stored.publish_rate_hz.to_string(),
-            self.publish_rate_hz.to_string(),
-        );
-        differ(
-            "policy",
-            format!("{:?}", stored.policy),
-            format!("{:?}", self.policy),
-        );
-        differ(
-            "shadows",
-            stored.shadows.to_string(),
-            self.shadows.to_string(),
-        );
-        differ("seed", stored.seed.to_string(), self.seed.to_string());
-        differ(
-            "model options",
-            stored.model_options.clone(),
-            self.model_options.clone(),
-        );
-        differ(
-            "episodes",
-            format!("{:?}", stored.episodes),
-            format!("{:?}", self.episodes),
-        );
-        out
+        self.differences_where(stored, |_| true)
+    }
+
+    /// [`Settings::differences`] in the settings named `names` only.
+    fn differences_in(&self, stored: &Settings, names: &[&str]) -> Vec<String> {
+        self.differences_where(stored, |what| names.contains(&what))
+    }
+
+    fn differences_where(&self, stored: &Settings, pick: impl Fn(&str) -> bool) -> Vec<String> {
+        self.compared(stored)
+            .into_iter()
+            .filter(|(what, stored, now)| pick(what) && stored != now)
+            .map(|(what, stored, now)| format!("{what}: stored {stored}, now {now}"))
+            .collect()
     }
 }
