@@ -6,7 +6,7 @@
 #   scripts/ensure-deps.sh --test     also what the test suite needs: Debian's chromium
 #                                     (the viewer's browser test) and the Python package's
 #                                     virtual environment .venv (maturin, pytest, numpy,
-#                                     scikit-learn, protobuf, ruff, mypy)
+#                                     scikit-learn, protobuf, gymnasium, ruff, mypy)
 set -euo pipefail
 
 want_test=0
@@ -62,7 +62,7 @@ if [ "$want_test" = 1 ]; then
     echo "ensure-deps: creating the Python virtual environment .venv"
     python3 -m venv .venv
   fi
-  if ! .venv/bin/python -c 'import maturin, pytest, numpy, sklearn, google.protobuf, ruff, mypy' >/dev/null 2>&1; then
+  if ! .venv/bin/python -c 'import maturin, pytest, numpy, sklearn, google.protobuf, gymnasium, ruff, mypy' >/dev/null 2>&1; then
     echo "ensure-deps: installing the Python test packages into .venv"
     .venv/bin/python -m pip install --quiet --upgrade pip
     .venv/bin/python -m pip install --quiet -r python/requirements-test.txt

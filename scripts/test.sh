@@ -21,6 +21,6 @@ target/release/pushlearn reproduce --page-only --check
 PATH="$PWD/.venv/bin:$PATH" .venv/bin/python -m pip install --quiet --no-build-isolation .
 .venv/bin/ruff format --check python examples/python
 .venv/bin/ruff check python examples/python
-(cd python && MYPYPATH=tests ../.venv/bin/mypy --strict --ignore-missing-imports pushlearn tests ../examples/python/push.py)
+(cd python && MYPYPATH=tests ../.venv/bin/mypy --strict --ignore-missing-imports pushlearn tests ../examples/python)
 PUSHLEARN_REQUIRE_SIM=1 PUSHLEARN_SIM_BIN="$PWD/target/release/pushlearn-sim" PUSHLEARN_BIN="$PWD/target/release/pushlearn" \
   .venv/bin/python -m pytest -q python/tests

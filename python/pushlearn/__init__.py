@@ -10,7 +10,10 @@ baselines, ``numpy`` and ``scikit-learn``):
   ``pushlearn-sim`` (:mod:`pushlearn.sim`);
 * :mod:`pushlearn.baselines`: k-nearest-neighbour and Gaussian-process
   forward models as learners;
-* :mod:`pushlearn.models`: the Rust gate and interaction models as learners.
+* :mod:`pushlearn.models`: the Rust gate and interaction models as learners;
+* :mod:`pushlearn.envs`: the world as Gymnasium environments
+  (``pushlearn/PushBlock-v0``, ``pushlearn/PushTwoBlocks-v0``), registered
+  on import when Gymnasium is installed.
 
 ``GateModel``, ``InteractionModel`` and ``Aitm`` are the Rust models
 themselves, from the native extension ``pushlearn._native``; they are
@@ -101,6 +104,21 @@ class _Package(types.ModuleType):
 
 
 sys.modules[__name__].__class__ = _Package
+
+
+def _register_gymnasium_envs() -> None:
+    # Gymnasium 1.x loads no plugins: a package registers its environments
+    # when it is imported (``gymnasium.register_envs(pushlearn)`` documents it).
+    try:
+        import gymnasium  # noqa: F401
+    except ImportError:
+        return
+    from .envs import register_envs
+
+    register_envs()
+
+
+_register_gymnasium_envs()
 
 
 def __getattr__(name: str) -> Any:

@@ -15,6 +15,10 @@ from typing import Any, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
+SOURCE_CHECKOUT: str
+"""The repository checkout the extension was built from (its ``target/release``
+holds the ``pushlearn-sim`` the Gymnasium environments look for last)."""
+
 # One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
 _Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]
 

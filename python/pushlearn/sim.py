@@ -321,18 +321,26 @@ class SimClient:
     # -- sending -------------------------------------------------------------
 
     def _send(self, **payload: Any) -> int:
-        seq = self._next_seq
-        if seq >= _U64:
+        return self._send_all([payload])[0]
+
+    def _send_all(self, payloads: list[dict[str, Any]]) -> list[int]:
+        """Sends one ``ClientMessage`` per payload in a single write; their seqs."""
+        first = self._next_seq
+        if first + len(payloads) > _U64:
             raise OverflowError("the seq numbers are exhausted (2⁶⁴ − 1 commands)")
-        message = pushlearn_pb2.ClientMessage(seq=seq, **payload)
+        seqs = list(range(first, first + len(payloads)))
+        data = b"".join(
+            framing.encode_frame(pushlearn_pb2.ClientMessage(seq=seq, **payload))
+            for seq, payload in zip(seqs, payloads, strict=True)
+        )
         try:
-            self._sock.sendall(framing.encode_frame(message))
+            self._sock.sendall(data)
         except OSError as err:
             raise ConnectionError(
                 f"sending to the world at {self._address} failed: {err}"
             ) from err
-        self._next_seq += 1
-        return seq
+        self._next_seq += len(payloads)
+        return seqs
 
     def reset(self) -> int:
         """Resets every body to its start pose (the stored actuator command is kept:
@@ -365,12 +373,7 @@ class SimClient:
 
     def move(self, vx: float, vy: float) -> int:
         """Sets the actuator's velocity to ``(vx, vy)`` m/s, world frame. Returns the seq."""
-        _finite(vx=vx, vy=vy)
-        command = pushlearn_pb2.ActuatorCommand(
-            cmd=pushlearn_pb2.ActuatorCommand.MOVE,
-            direction=pushlearn_pb2.Vector3d(x=vx, y=vy, z=0.0),
-        )
-        return self._send(actuator=command)
+        return self._send(actuator=_move_command(vx, vy))
 
     def pause(self) -> int:
         """Pauses stepping. Returns the seq."""
@@ -404,6 +407,25 @@ class SimClient:
         seq = self._send(control=pushlearn_pb2.SimControl(advance=True))
         self._outstanding_advances += 1
         return seq
+
+    def move_and_observe(self, vx: float, vy: float) -> State:
+        """Sends ``move(vx, vy)`` and returns the first state with it in force.
+
+        In lock-step mode the Move and the Advance that runs the world to its
+        next publish go out in one write (one system call instead of two, the
+        Gymnasium environments' step); otherwise this is
+        ``next_state(after=move(vx, vy))``.
+        """
+        if not self.lockstep or self._outstanding_advances or self._buffered:
+            return self.next_state(after=self.move(vx, vy))
+        move, _ = self._send_all(
+            [
+                {"actuator": _move_command(vx, vy)},
+                {"control": pushlearn_pb2.SimControl(advance=True)},
+            ]
+        )
+        self._outstanding_advances += 1
+        return self.next_state(after=move)
 
     def latency_seed(self, seed: int) -> int:
         """Reseeds the world's latency emulation (lock-step with latency only). Returns the seq."""
@@ -530,6 +552,15 @@ class SimClient:
             f"SimClient({self._address}, scene={self.hello.scene!r}, "
             f"mode={self.hello.timing_mode!r}, rate={self.publish_rate} Hz)"
         )
+
+
+def _move_command(vx: float, vy: float) -> Any:
+    """The ``ActuatorCommand`` of a Move of ``(vx, vy)`` m/s; ValueError if not finite."""
+    _finite(vx=vx, vy=vy)
+    return pushlearn_pb2.ActuatorCommand(
+        cmd=pushlearn_pb2.ActuatorCommand.MOVE,
+        direction=pushlearn_pb2.Vector3d(x=vx, y=vy, z=0.0),
+    )
 
 
 def _within(timeout: float | None) -> str:

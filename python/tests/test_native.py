@@ -670,10 +670,24 @@ def stub_classes() -> dict[str, set[str]]:
     }
 
 
+def stub_constants() -> set[str]:
+    tree = ast.parse(STUB.read_text(encoding="utf-8"))
+    return {
+        node.target.id
+        for node in tree.body
+        if isinstance(node, ast.AnnAssign)
+        and isinstance(node.target, ast.Name)
+        and not node.target.id.startswith("_")
+    }
+
+
 def test_the_stub_matches_the_module() -> None:
     stub = stub_classes()
     exported = {name for name in dir(_native) if not name.startswith("_")}
-    assert set(stub) == exported
+    assert set(stub) | stub_constants() == exported
+    assert pathlib.Path(
+        _native.SOURCE_CHECKOUT, "crates", "python", "Cargo.toml"
+    ).is_file()
     for name, methods in stub.items():
         cls = getattr(_native, name)
         public = {m for m in vars(cls) if not m.startswith("_")}

@@ -45,5 +45,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyInteractionModel>()?;
     m.add_class::<models::PyInteractionWorld>()?;
     m.add_class::<aitm::PyAitm>()?;
+    // Where the extension was built: the Gymnasium environments look for the
+    // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
+    // and `PATH`, so that `pip install .` after `cargo build --release` needs
+    // no further set-up.
+    m.add("SOURCE_CHECKOUT", concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))?;
     Ok(())
 }

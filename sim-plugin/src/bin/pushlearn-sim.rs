@@ -149,6 +149,12 @@ struct ServeArgs {
     /// A client whose queue stays full this long is disconnected.
     #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = parse_seconds)]
     slow_client_timeout: Duration,
+    /// Stop, as on SIGTERM, when standard input reaches its end: a program
+    /// that starts the world with a pipe as its stdin (the Python package's
+    /// Gymnasium environments do) then takes it down with itself, even when
+    /// it is killed with SIGKILL and cannot stop it.
+    #[arg(long)]
+    stop_with_stdin: bool,
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
@@ -240,6 +246,7 @@ fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
         // Handlers go in before the line below: whoever reads it may signal
         // at once, and an uninstalled SIGTERM would kill us uncleanly.
         let shutdown = shutdown_signal()?;
+        let stdin_closed = stdin_closed(args.stop_with_stdin);
         // The one line on stdout, for scripts and tests that start the daemon
         // on port 0 and need to know where it is.
         let mut out = std::io::stdout().lock();
@@ -250,11 +257,47 @@ fn run_serve(args: &ServeArgs) -> anyhow::Result<()> {
             () = shutdown => {
                 tracing::info!("shutting down");
             }
+            () = stdin_closed => {
+                tracing::info!("standard input closed: shutting down");
+            }
             () = server.stopped() => {}
         }
         server.shutdown().await?;
         Ok(())
     })
+}
+
+/// The future that completes once standard input reaches its end (or fails),
+/// if `watch`; else one that never does. A plain thread reads it: tokio's
+/// stdin reads on a blocking-pool thread that would hold the runtime's
+/// shutdown until the read returned.
+fn stdin_closed(watch: bool) -> impl std::future::Future<Output = ()> {
+    let on_close = watch.then(|| {
+        let (closed, on_close) = tokio::sync::oneshot::channel::<()>();
+        std::thread::spawn(move || {
+            use std::io::Read;
+            let mut sink = [0u8; 256];
+            let mut stdin = std::io::stdin().lock();
+            loop {
+                match stdin.read(&mut sink) {
+                    Ok(0) => break,
+                    Ok(_) => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                    Err(_) => break,
+                }
+            }
+            let _ = closed.send(());
+        });
+        on_close
+    });
+    async move {
+        match on_close {
+            Some(on_close) => {
+                let _ = on_close.await;
+            }
+            None => std::future::pending::<()>().await,
+        }
+    }
 }
 
 /// Installs the SIGINT (Ctrl-C) and SIGTERM handlers now and returns the

@@ -93,6 +93,52 @@ fn the_binary_serves_on_a_free_port_and_stops_cleanly_on_sigterm() {
     assert!(status.success(), "exit status after SIGTERM: {status:?}");
 }
 
+#[test]
+fn with_stop_with_stdin_the_world_serves_while_its_stdin_is_open_and_stops_when_it_closes() {
+    let mut child = pushlearn_sim()
+        .args(["serve", "--port", "0", "--mode", "lockstep", "--stop-with-stdin"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start pushlearn-sim");
+    let stdin = child.stdin.take().expect("piped stdin");
+    let mut stdout = BufReader::new(child.stdout.take().expect("piped stdout"));
+    let mut line = String::new();
+    stdout.read_line(&mut line).expect("the listening line");
+    let addr: SocketAddr = line
+        .trim_end()
+        .strip_prefix("listening on ")
+        .and_then(|a| a.parse().ok())
+        .unwrap_or_else(|| panic!("unexpected first line: {line:?}"));
+    // Still serving a while after start-up: the open pipe keeps it up.
+    thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().expect("wait").is_none(), "stopped early");
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    runtime.block_on(async {
+        let mut client = SimClient::connect(addr).await.expect("connect");
+        let state = client
+            .command_and_wait_applied(Payload::advance())
+            .await
+            .expect("advance");
+        assert_eq!(state.step, 10);
+    });
+    drop(stdin);
+    let status = wait(&mut child);
+    assert!(status.success(), "exit status after stdin closed: {status:?}");
+    let mut log = String::new();
+    child
+        .stderr
+        .take()
+        .expect("piped stderr")
+        .read_to_string(&mut log)
+        .expect("stderr");
+    assert!(log.contains("standard input closed"), "{log}");
+}
+
 fn refused(args: &[&str]) -> String {
     let mut child = pushlearn_sim()
         .args(args)

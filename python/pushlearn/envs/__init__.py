@@ -1,0 +1,40 @@
+"""Gymnasium environments of the pushing world (``docs/gym.md``).
+
+Importing :mod:`pushlearn` registers them when Gymnasium is installed
+(``pip install '.[gym]'``)::
+
+    import gymnasium as gym
+    import pushlearn
+
+    gym.register_envs(pushlearn)              # keeps linters from calling the import unused
+    env = gym.make("pushlearn/PushBlock-v0")  # starts its own pushlearn-sim
+
+``pushlearn/PushBlock-v0`` is the thesis's Move to Target with one block,
+``pushlearn/PushTwoBlocks-v0`` the two-block scene with a target per block;
+both are truncated after the thesis's 3000 messages.
+"""
+
+from __future__ import annotations
+
+__all__ = ["ENV_IDS", "register_envs"]
+
+ENV_IDS = ("pushlearn/PushBlock-v0", "pushlearn/PushTwoBlocks-v0")
+"""The registered environment ids."""
+
+_ENTRY_POINTS = {
+    "pushlearn/PushBlock-v0": "pushlearn.envs.push:PushBlockEnv",
+    "pushlearn/PushTwoBlocks-v0": "pushlearn.envs.push:PushTwoBlocksEnv",
+}
+
+
+def register_envs() -> None:
+    """Registers :data:`ENV_IDS` with Gymnasium (once; later calls do nothing)."""
+    import gymnasium
+
+    from .push import MAX_STEPS
+
+    for env_id, entry_point in _ENTRY_POINTS.items():
+        if env_id not in gymnasium.registry:
+            gymnasium.register(
+                id=env_id, entry_point=entry_point, max_episode_steps=MAX_STEPS
+            )

@@ -1,0 +1,556 @@
+"""The pushing world as Gymnasium goal environments (``docs/gym.md``).
+
+``PushBlockEnv`` is the thesis's Move to Target task: push the blue block
+``blockA`` from its start (0, 0.25, 0 rad), the actuator starting at (0, 0),
+to a target pose. ``PushTwoBlocksEnv`` adds the red block ``blockB`` and a
+target for each block. Both follow the goal-environment conventions of
+gymnasium-robotics: a dict observation (``observation``, ``achieved_goal``,
+``desired_goal``), :meth:`compute_reward` on batches of goals and
+``info["is_success"]``.
+
+One step is one world message: the action is sent as a Move and the
+environment waits for the first state with it in force, 10 physics steps of
+1 ms later at the built-in scenes' 100 Hz. Underneath runs ``pushlearn-sim``
+in lock-step mode, so the same seed and the same actions give the same
+observations bit for bit.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any, ClassVar, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+from ..learner import ACTUATOR_NAME, State
+from ..local_world import LocalWorld
+from ..sim import SimClient
+from .render import Canvas, Drawn
+
+__all__ = [
+    "ACTUATOR_SPEED",
+    "MAX_STEPS",
+    "REACHED",
+    "THESIS_TARGETS",
+    "PushBlockEnv",
+    "PushTwoBlocksEnv",
+    "TargetRegion",
+]
+
+ACTUATOR_SPEED = 0.5
+"""m/s per unit of action: the thesis's actuator speed (every training push is
+0.5 m/s; the world scales longer commands down to 0.5 m/s)."""
+
+MAX_STEPS = 3000
+"""Messages before an episode is truncated: the thesis's longest test run."""
+
+REACHED = 0.01
+"""The thesis's reached criterion: the norm of a block's (Δx, Δy, Δθ) to its
+target, metres and radians together, below this."""
+
+THESIS_TARGETS: tuple[tuple[float, float, float], ...] = (
+    (0.6, 0.7, -2.1),
+    (-0.6, 0.7, 0.75),
+    (-0.6, -0.7, 0.0),
+    (0.6, -0.7, math.pi),
+)
+"""The blue block's four target poses of the thesis's Move to Target (x, y, θ)."""
+
+Observation = dict[str, Any]
+"""``observation``, ``achieved_goal`` and ``desired_goal``, each a float64 array."""
+
+
+class TargetRegion:
+    """Where sampled targets lie: block centres in a rectangle, any yaw.
+
+    The actuator can reach every side of a block whose centre lies in it:
+    the farthest position it pushes from is within 1.1 m of the origin, and
+    the world lets it move within 2.3 m (``docs/world.md``). A target is at
+    least ``min_travel`` m from its block's start, so no episode begins
+    solved, and two blocks' targets are at least ``min_apart`` m apart, so
+    they do not overlap.
+    """
+
+    def __init__(
+        self,
+        x: tuple[float, float] = (-0.7, 0.7),
+        y: tuple[float, float] = (-0.8, 0.8),
+        min_travel: float = 0.3,
+        min_apart: float = 0.5,
+    ) -> None:
+        self.x = x
+        self.y = y
+        self.min_travel = min_travel
+        self.min_apart = min_apart
+
+    def sample(
+        self, rng: np.random.Generator, starts: Sequence[tuple[float, float]]
+    ) -> list[tuple[float, float, float]]:
+        """One target per start, drawn from ``rng`` by rejection (uniform over the allowed set)."""
+        targets: list[tuple[float, float, float]] = []
+        for sx, sy in starts:
+            while True:
+                x = float(rng.uniform(*self.x))
+                y = float(rng.uniform(*self.y))
+                theta = float(rng.uniform(-math.pi, math.pi))
+                if math.hypot(x - sx, y - sy) < self.min_travel:
+                    continue
+                if any(
+                    math.hypot(x - t[0], y - t[1]) < self.min_apart for t in targets
+                ):
+                    continue
+                targets.append((x, y, theta))
+                break
+        return targets
+
+    def __repr__(self) -> str:
+        return (
+            f"TargetRegion(x={self.x}, y={self.y}, min_travel={self.min_travel}, "
+            f"min_apart={self.min_apart})"
+        )
+
+
+def _wrap(angle: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
+    return np.asarray(np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi)
+
+
+def goal_distances(
+    achieved_goal: npt.ArrayLike, desired_goal: npt.ArrayLike
+) -> npt.NDArray[np.float64]:
+    """Each block's distance to its target, ``‖(Δx, Δy, wrap(Δθ))‖``, over batches.
+
+    Goals have shape ``(..., 3k)`` for k blocks; the result ``(..., k)``.
+    The angle difference is wrapped into [−π, π), so a yaw of π and one of
+    −π are the same pose (the thesis compared raw angles; its four targets
+    lie where that makes no difference).
+    """
+    achieved = np.asarray(achieved_goal, dtype=np.float64)
+    desired = np.asarray(desired_goal, dtype=np.float64)
+    if achieved.shape != desired.shape or achieved.shape[-1] % 3:
+        raise ValueError(
+            f"goals must have one shape (..., 3k); got {achieved.shape} and {desired.shape}"
+        )
+    a = achieved.reshape(*achieved.shape[:-1], -1, 3)
+    d = desired.reshape(*desired.shape[:-1], -1, 3)
+    delta = a - d
+    delta[..., 2] = _wrap(delta[..., 2])
+    return np.asarray(np.sqrt(np.sum(delta * delta, axis=-1)))
+
+
+def _goal_distances_one(
+    achieved: Sequence[float], desired: Sequence[float]
+) -> list[float]:
+    """:func:`goal_distances` of one goal in plain floats, the same operations in
+    the same order (so the same bits): a step's path, where numpy's cost per
+    call on 3-vectors exceeds the arithmetic many times."""
+    distances = []
+    for i in range(0, len(achieved), 3):
+        dx = achieved[i] - desired[i]
+        dy = achieved[i + 1] - desired[i + 1]
+        dtheta = (achieved[i + 2] - desired[i + 2] + math.pi) % (
+            2.0 * math.pi
+        ) - math.pi
+        distances.append(math.sqrt(dx * dx + dy * dy + dtheta * dtheta))
+    return distances
+
+
+class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
+    """What both environments share; the subclasses name the scene and the blocks.
+
+    Options (keywords of ``gymnasium.make``):
+
+    * ``targets``: where the episodes' targets come from (see the subclass);
+      ``region`` a :class:`TargetRegion` for ``targets="region"``;
+    * ``reward_type``: ``"sparse"`` (−1 per step until success, then 0) or
+      ``"dense"`` (minus the distance, :func:`goal_distances`);
+    * ``terminate_on_success`` (default true): end the episode when the
+      target is reached, as the thesis's runs end; false keeps going, as
+      gymnasium-robotics' goal environments do;
+    * ``latency_max`` (default 2, the experiments' default): the lock-step
+      latency emulation's largest delay of a Move in physics steps, ``None``
+      for none;
+    * ``sim``: ``"HOST:PORT"`` of a running world to use instead of starting
+      one (its scene and latency must match); ``sim_bin`` the
+      ``pushlearn-sim`` to start (:func:`pushlearn.local_world.find_sim_binary`);
+    * ``show_target``: also publish the targets as the world's target ghosts,
+      which ``pushlearn view --sim ADDRESS`` draws as outlines;
+    * ``image_size``: the side of ``rgb_array`` pictures in pixels (480);
+      ``timeout``: seconds to wait for the world before an error (30).
+
+    The episode length is ``gymnasium.make``'s ``max_episode_steps``
+    (default :data:`MAX_STEPS`, the thesis's 3000 messages).
+    """
+
+    # Not a ClassVar: gymnasium.Env declares it an instance variable.
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 100}  # noqa: RUF012
+
+    scene: ClassVar[str]
+    """The world's scene."""
+    blocks: ClassVar[tuple[str, ...]]
+    """The blocks with a target, in the order of the goals."""
+    default_targets: ClassVar[str]
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        targets: str | Sequence[Sequence[float]] | None = None,
+        region: TargetRegion | None = None,
+        reward_type: str = "sparse",
+        terminate_on_success: bool = True,
+        latency_max: int | None = 2,
+        sim: str | None = None,
+        sim_bin: str | None = None,
+        show_target: bool = False,
+        image_size: int = 480,
+        timeout: float = 30.0,
+    ) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
+        if reward_type not in ("sparse", "dense"):
+            raise ValueError(
+                f"reward_type must be 'sparse' or 'dense', got {reward_type!r}"
+            )
+        if latency_max is not None and (
+            isinstance(latency_max, bool)
+            or not isinstance(latency_max, int)
+            or latency_max < 0
+        ):
+            raise ValueError(
+                f"latency_max must be a number of steps ≥ 0 or None, got {latency_max!r}"
+            )
+        self.render_mode = render_mode
+        self.reward_type = reward_type
+        self.terminate_on_success = terminate_on_success
+        self.region = region if region is not None else TargetRegion()
+        self.targets = self._check_targets(
+            self.default_targets if targets is None else targets
+        )
+        """``"thesis"``, ``"region"`` or the fixed target list episodes draw from."""
+        self.show_target = show_target
+        self._world: LocalWorld | None = None
+        self._client: SimClient | None = None
+        self._state: State | None = None
+        self._target_values: tuple[float, ...] = (0.0,) * (3 * len(self.blocks))
+        self._closed = False
+
+        if sim is None:
+            self._world = LocalWorld(
+                scene=self.scene, latency_max=latency_max, sim_bin=sim_bin
+            )
+            self._client = self._world.connect(timeout)
+        else:
+            host, _, port = sim.rpartition(":")
+            if not host or not port.isdigit():
+                raise ValueError(f"sim must be HOST:PORT, got {sim!r}")
+            self._client = SimClient.connect(host.strip("[]"), int(port), timeout)
+            self._check_world(sim, latency_max)
+        hello = self._client.hello
+        self.latency_max = hello.latency_max_steps
+        """The world's latency emulation (largest delay of a Move in steps; ``None``: none)."""
+        self._shapes = hello.shapes
+        self._starts = {body.name: body for body in hello.bodies}
+
+        # Positions and velocities are unbounded (the world has no walls);
+        # yaws lie in [−π, π].
+        n = len(self.blocks)
+        inf = np.inf
+        low = np.array([-inf] * 4 + [-inf, -inf, -math.pi, -inf, -inf, -inf] * n)
+        goal_low = np.array([-inf, -inf, -math.pi] * n)
+        self.observation_space = spaces.Dict(
+            {
+                "observation": spaces.Box(low, -low, dtype=np.float64),
+                "achieved_goal": spaces.Box(goal_low, -goal_low, dtype=np.float64),
+                "desired_goal": spaces.Box(goal_low, -goal_low, dtype=np.float64),
+            }
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self._canvas = Canvas(image_size) if render_mode == "rgb_array" else None
+
+    # -- checks ------------------------------------------------------------------
+
+    def _check_targets(
+        self, targets: str | Sequence[Sequence[float]]
+    ) -> str | tuple[tuple[float, ...], ...]:
+        if isinstance(targets, str):
+            allowed = ("thesis", "region") if len(self.blocks) == 1 else ("region",)
+            if targets not in allowed:
+                raise ValueError(
+                    f"targets must be one of {allowed} or a list of goals, got {targets!r}"
+                )
+            return targets
+        checked = tuple(self._check_goal(goal, "a target") for goal in targets)
+        if not checked:
+            raise ValueError("targets is empty: give at least one goal")
+        return checked
+
+    def _check_goal(self, goal: Any, what: str) -> tuple[float, ...]:
+        values = np.asarray(goal, dtype=np.float64).reshape(-1)
+        if values.shape != (3 * len(self.blocks),):
+            raise ValueError(
+                f"{what} must have {3 * len(self.blocks)} numbers (x, y, θ for "
+                f"{', '.join(self.blocks)}), got {np.asarray(goal).shape}"
+            )
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"{what} must be finite numbers, got {values.tolist()}")
+        return tuple(float(v) for v in values)
+
+    def _check_world(self, sim: str, latency_max: int | None) -> None:
+        assert self._client is not None
+        hello = self._client.hello
+        problems = []
+        if hello.scene != self.scene:
+            problems.append(
+                f"its scene is {hello.scene!r}, this environment needs {self.scene!r}"
+            )
+        if hello.latency_max_steps != latency_max:
+
+            def say(value: int | None) -> str:
+                return (
+                    "no latency emulation" if value is None else f"latency_max {value}"
+                )
+
+            problems.append(
+                f"it has {say(hello.latency_max_steps)}, this environment was asked for "
+                f"{say(latency_max)} (pass latency_max={hello.latency_max_steps!r}, or start the "
+                "world with the matching --latency-max)"
+            )
+        names = {body.name for body in hello.bodies}
+        missing = [name for name in (ACTUATOR_NAME, *self.blocks) if name not in names]
+        if missing:
+            problems.append(f"it has no {', '.join(missing)}")
+        if problems:
+            self._client.close()
+            raise ValueError(f"the world at {sim} does not fit: " + "; ".join(problems))
+
+    # -- the Gymnasium API -------------------------------------------------------
+
+    @property
+    def state(self) -> State:
+        """The last world state, with every body as the world sent it (for models
+        that parse the world themselves, such as :class:`pushlearn.GateModel`)."""
+        if self._state is None:
+            raise RuntimeError("no world state yet: call reset() first")
+        return self._state
+
+    @property
+    def address(self) -> str:
+        """The world's ``HOST:PORT`` (``pushlearn view --sim ADDRESS`` watches it)."""
+        return self._live_client().address
+
+    @property
+    def world_pid(self) -> int | None:
+        """The process id of the world this environment started (``None`` when it connected to one)."""
+        return None if self._world is None else self._world.pid
+
+    def _live_client(self) -> SimClient:
+        if self._client is None:
+            raise RuntimeError("the environment is closed")
+        return self._client
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Puts the world back to its start and draws a target.
+
+        ``seed`` seeds the environment's generator, which draws the target (unless
+        ``options`` gives one) and then the world's latency seed, so the same
+        seed and actions give the same episode bit for bit. ``options``:
+        ``"target"``, this episode's goal (x, y, θ per block); ``"actuator"``,
+        the actuator's start (x, y) instead of (0, 0), e.g. for training pushes.
+        """
+        super().reset(seed=seed)
+        client = self._live_client()
+        options = dict(options or {})
+        unknown = sorted(set(options) - {"target", "actuator"})
+        if unknown:
+            raise ValueError(
+                f"unknown reset options {unknown}: the options are 'target' and 'actuator'"
+            )
+        if "target" in options:
+            target = self._check_goal(options["target"], "options['target']")
+        else:
+            target = self._draw_target()
+        actuator = options.get("actuator")
+        if actuator is not None:
+            ax, ay = (
+                float(v) for v in np.asarray(actuator, dtype=np.float64).reshape(2)
+            )
+            if not (math.isfinite(ax) and math.isfinite(ay)):
+                raise ValueError(f"options['actuator'] must be finite, got {(ax, ay)}")
+        latency_seed = int(self.np_random.integers(0, 2**63))
+        self._target_values = target
+
+        client.move(0.0, 0.0)
+        last = client.reset()
+        if self.latency_max is not None:
+            last = client.latency_seed(latency_seed)
+        if actuator is not None:
+            last = client.set_pose(ACTUATOR_NAME, ax, ay, 0.03)
+        if self.show_target:
+            for i, name in enumerate(self.blocks):
+                x, y, theta = self._target_values[3 * i : 3 * i + 3]
+                last = client.set_pose(f"{name}ShadowTarget", x, y, 0.05, theta)
+        self._state = client.next_state(after=last)
+        return self._observe(self._state)
+
+    def step(
+        self, action: npt.ArrayLike
+    ) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Sends the action as a Move of ``ACTUATOR_SPEED · action`` m/s (clipped to
+        [−1, 1] first) and returns the first state with it in force."""
+        client = self._live_client()
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        values = np.asarray(action, dtype=np.float64)
+        if values.shape != (2,):
+            raise ValueError(f"an action has shape (2,), got {values.shape}")
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"an action must be finite, got {values.tolist()}")
+        vx, vy = (float(v) * ACTUATOR_SPEED for v in np.clip(values, -1.0, 1.0))
+        self._state = client.move_and_observe(vx, vy)
+        observation, info = self._observe(self._state)
+        if self.reward_type == "sparse":
+            reward = 0.0 if info["is_success"] else -1.0
+        else:
+            reward = -info["distance"]
+        terminated = info["is_success"] and self.terminate_on_success
+        return observation, reward, terminated, False, info
+
+    def compute_reward(
+        self, achieved_goal: npt.ArrayLike, desired_goal: npt.ArrayLike, info: Any
+    ) -> npt.NDArray[np.float64]:
+        """The reward of goals, for one or a batch (shape ``(..., 3k)``).
+
+        Sparse: −1 until every block meets the reached criterion, then 0.
+        Dense: minus the sum of the blocks' distances (:func:`goal_distances`).
+        """
+        distances = goal_distances(achieved_goal, desired_goal)
+        if self.reward_type == "sparse":
+            return np.asarray(
+                -(~np.all(distances < REACHED, axis=-1)).astype(np.float64)
+            )
+        return np.asarray(-np.sum(distances, axis=-1))
+
+    def render(self) -> npt.NDArray[np.uint8] | None:
+        """An ``rgb_array`` picture of the world from above (``None`` without a render mode)."""
+        if self._canvas is None:
+            return None
+        if self._state is None:
+            raise RuntimeError("call reset() before render()")
+        goal = self._target_values
+        things = [
+            Drawn(
+                name,
+                self._shapes[name],
+                goal[3 * i],
+                goal[3 * i + 1],
+                goal[3 * i + 2],
+                True,
+            )
+            for i, name in enumerate(self.blocks)
+            if name in self._shapes
+        ]
+        for body in self._state.bodies:
+            if body.name in self._shapes and "Shadow" not in body.name:
+                things.append(
+                    Drawn(
+                        body.name,
+                        self._shapes[body.name],
+                        body.position[0],
+                        body.position[1],
+                        body.yaw,
+                    )
+                )
+        return self._canvas.draw(things)
+
+    def close(self) -> None:
+        """Disconnects and stops the world this environment started; safe to call again."""
+        if self._client is not None:
+            self._client.close()
+            self._client = None
+        if self._world is not None:
+            self._world.close()
+            self._world = None
+
+    # -- observations ------------------------------------------------------------
+
+    def _draw_target(self) -> tuple[float, ...]:
+        if self.targets == "thesis":
+            return THESIS_TARGETS[int(self.np_random.integers(len(THESIS_TARGETS)))]
+        if self.targets == "region":
+            starts = [self._starts[name].position[:2] for name in self.blocks]
+            return tuple(
+                v
+                for target in self.region.sample(self.np_random, starts)
+                for v in target
+            )
+        assert not isinstance(self.targets, str)
+        return self.targets[int(self.np_random.integers(len(self.targets)))]
+
+    def _observe(self, state: State) -> tuple[Observation, dict[str, Any]]:
+        """The observation of ``state`` and its ``info``: whether every block meets the
+        reached criterion, and the sum of their distances to their targets."""
+        by_name = {body.name: body for body in state.bodies}
+        actuator = by_name[ACTUATOR_NAME]
+        row = [*actuator.position[:2], *_planar_velocity(actuator)]
+        goal: list[float] = []
+        for name in self.blocks:
+            block = by_name[name]
+            pose = (block.position[0], block.position[1], block.yaw)
+            goal += pose
+            spin = 0.0 if block.ang_vel is None else block.ang_vel[2]
+            row += [*pose, *_planar_velocity(block), spin]
+        distances = _goal_distances_one(goal, self._target_values)
+        observation = {
+            "observation": np.array(row, dtype=np.float64),
+            "achieved_goal": np.array(goal, dtype=np.float64),
+            "desired_goal": np.array(self._target_values, dtype=np.float64),
+        }
+        info = {
+            "is_success": all(d < REACHED for d in distances),
+            "distance": sum(distances),
+        }
+        return observation, info
+
+
+def _planar_velocity(body: Any) -> tuple[float, float]:
+    return (0.0, 0.0) if body.lin_vel is None else (body.lin_vel[0], body.lin_vel[1])
+
+
+class PushBlockEnv(_PushEnv):
+    """``pushlearn/PushBlock-v0``: the blue block to a target pose (the thesis's Move to Target).
+
+    Observation ``observation`` (10 floats): the actuator's x, y, vx, vy, then
+    the block's x, y, θ, vx, vy, ω (m, rad, m/s, rad/s, world frame);
+    ``achieved_goal`` the block's (x, y, θ), ``desired_goal`` the target.
+    Targets (``targets=``): ``"thesis"`` (default) draws one of the thesis's
+    four per episode, ``"region"`` samples :class:`TargetRegion`, a list of
+    (x, y, θ) draws from it. See :class:`_PushEnv` for the other options.
+    """
+
+    scene = "one_block"
+    blocks = ("blockA",)
+    default_targets = "thesis"
+
+
+class PushTwoBlocksEnv(_PushEnv):
+    """``pushlearn/PushTwoBlocks-v0``: the blue and the red block, each to its own target.
+
+    Observation ``observation`` (16 floats): the actuator's x, y, vx, vy, then
+    for ``blockA`` and then ``blockB`` x, y, θ, vx, vy, ω; the goals are
+    (x, y, θ) of both blocks in that order, and success needs both.
+    Targets are sampled from :class:`TargetRegion` (default) or drawn from
+    a list of 6-number goals.
+    """
+
+    scene = "two_blocks"
+    blocks = ("blockA", "blockB")
+    default_targets = "region"
