@@ -408,16 +408,20 @@ class SimClient:
         self._outstanding_advances += 1
         return seq
 
-    def move_and_observe(self, vx: float, vy: float) -> State:
-        """Sends ``move(vx, vy)`` and returns the first state with it in force.
+    def move_and_advance(self, vx: float, vy: float) -> int:
+        """Lock-step mode: sends ``move(vx, vy)`` and the Advance that runs the world to
+        its next publish, in one write, and returns the Move's seq.
 
-        In lock-step mode the Move and the Advance that runs the world to its
-        next publish go out in one write (one system call instead of two, the
-        Gymnasium environments' step); otherwise this is
-        ``next_state(after=move(vx, vy))``.
+        Read the state with ``next_state(after=seq)``. A program driving several
+        worlds starts them all stepping this way before it waits for any (the
+        Gymnasium vector environment does). Raises ``ValueError`` on a realtime
+        world, which needs no Advance.
         """
-        if not self.lockstep or self._outstanding_advances or self._buffered:
-            return self.next_state(after=self.move(vx, vy))
+        if not self.lockstep:
+            raise ValueError(
+                f"move_and_advance needs a lock-step world; {self._address} runs in "
+                f"{self.hello.timing_mode} mode (use move and next_state)"
+            )
         move, _ = self._send_all(
             [
                 {"actuator": _move_command(vx, vy)},
@@ -425,7 +429,19 @@ class SimClient:
             ]
         )
         self._outstanding_advances += 1
-        return self.next_state(after=move)
+        return move
+
+    def move_and_observe(self, vx: float, vy: float) -> State:
+        """Sends ``move(vx, vy)`` and returns the first state with it in force.
+
+        In lock-step mode the Move and its Advance go out in one write
+        (:meth:`move_and_advance`: one system call instead of two, the
+        Gymnasium environments' step); otherwise, or while Advances are
+        outstanding, this is ``next_state(after=move(vx, vy))``.
+        """
+        if not self.lockstep or self._outstanding_advances or self._buffered:
+            return self.next_state(after=self.move(vx, vy))
+        return self.next_state(after=self.move_and_advance(vx, vy))
 
     def latency_seed(self, seed: int) -> int:
         """Reseeds the world's latency emulation (lock-step with latency only). Returns the seq."""

@@ -352,6 +352,44 @@ def test_a_vector_env_runs_one_world_per_env_and_stops_them_all(sim_bin: Path) -
     assert all(process_gone(pid) for pid in pids)
 
 
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_native_vector_env_steps_as_gymnasiums_sync_vector_env_bit_for_bit(
+    env_id: str, sim_bin: Path
+) -> None:
+    # A short time limit, so that truncation and the next step's autoreset happen.
+    kwargs: dict[str, Any] = {"sim_bin": str(sim_bin), "max_episode_steps": 25}
+    native = gym.make_vec(env_id, num_envs=3, **kwargs)
+    sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync", **kwargs)
+    try:
+        assert type(native).__name__.endswith("VectorEnv") and native is not sync
+        pids = cast(Any, native).world_pids
+        assert len(set(pids)) == 3
+        rng = np.random.default_rng(2)
+        first = native.reset(seed=4), sync.reset(seed=4)
+        for (obs_native, _), (obs_sync, _) in [first]:
+            for key in obs_sync:
+                assert obs_native[key].tobytes() == obs_sync[key].tobytes()
+        truncated_seen = 0
+        for _ in range(60):
+            actions = rng.uniform(-1, 1, (3, 2)).astype(np.float32)
+            a = native.step(actions)
+            b = sync.step(actions)
+            for key in b[0]:
+                assert a[0][key].tobytes() == b[0][key].tobytes(), key
+            for x, y in zip(a[1:4], b[1:4], strict=True):
+                assert x.tolist() == y.tolist()
+            assert a[4]["is_success"].tolist() == b[4]["is_success"].tolist()
+            truncated_seen += int(a[3].sum())
+        assert truncated_seen == 6  # each env at steps 25 and 51
+        with pytest.raises(ValueError, match="not finite"):
+            native.step(np.array([[0, 0], [math.nan, 0], [0, 0]], dtype=np.float32))
+        native.step(np.zeros((3, 2), dtype=np.float32))  # still serving
+    finally:
+        native.close()
+        sync.close()
+    assert all(process_gone(pid) for pid in pids)
+
+
 def test_a_running_world_can_be_used_when_it_fits(
     start_sim: Callable[..., Daemon], make: Callable[..., Any]
 ) -> None:

@@ -12,6 +12,8 @@ Importing :mod:`pushlearn` registers them when Gymnasium is installed
 ``pushlearn/PushBlock-v0`` is the thesis's Move to Target with one block,
 ``pushlearn/PushTwoBlocks-v0`` the two-block scene with a target per block;
 both are truncated after the thesis's 3000 messages.
+``gymnasium.make_vec(ID, num_envs=N)`` gives a native vector environment
+(:mod:`pushlearn.envs.vector`): N worlds stepped together from one process.
 """
 
 from __future__ import annotations
@@ -22,8 +24,11 @@ ENV_IDS = ("pushlearn/PushBlock-v0", "pushlearn/PushTwoBlocks-v0")
 """The registered environment ids."""
 
 _ENTRY_POINTS = {
-    "pushlearn/PushBlock-v0": "pushlearn.envs.push:PushBlockEnv",
-    "pushlearn/PushTwoBlocks-v0": "pushlearn.envs.push:PushTwoBlocksEnv",
+    "pushlearn/PushBlock-v0": ("push:PushBlockEnv", "vector:PushBlockVectorEnv"),
+    "pushlearn/PushTwoBlocks-v0": (
+        "push:PushTwoBlocksEnv",
+        "vector:PushTwoBlocksVectorEnv",
+    ),
 }
 
 
@@ -33,8 +38,11 @@ def register_envs() -> None:
 
     from .push import MAX_STEPS
 
-    for env_id, entry_point in _ENTRY_POINTS.items():
+    for env_id, (single, vector) in _ENTRY_POINTS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(
-                id=env_id, entry_point=entry_point, max_episode_steps=MAX_STEPS
+                id=env_id,
+                entry_point=f"{__name__}.{single}",
+                vector_entry_point=f"{__name__}.{vector}",
+                max_episode_steps=MAX_STEPS,
             )

@@ -406,16 +406,36 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
     ) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
         """Sends the action as a Move of ``ACTUATOR_SPEED · action`` m/s (clipped to
         [−1, 1] first) and returns the first state with it in force."""
+        return self._finish_step(self._start_step(action))
+
+    def _start_step(self, action: npt.ArrayLike) -> int:
+        """Checks and sends the action (with its Advance, in lock-step); the Move's seq.
+
+        :meth:`step` in two halves, so that a vector environment can start
+        all its worlds stepping before it waits for any.
+        """
         client = self._live_client()
         if self._state is None:
             raise RuntimeError("call reset() before step()")
         values = np.asarray(action, dtype=np.float64)
         if values.shape != (2,):
             raise ValueError(f"an action has shape (2,), got {values.shape}")
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"an action must be finite, got {values.tolist()}")
-        vx, vy = (float(v) * ACTUATOR_SPEED for v in np.clip(values, -1.0, 1.0))
-        self._state = client.move_and_observe(vx, vy)
+        # Plain floats from here: numpy's per-call cost on two numbers is
+        # most of a step's Python time.
+        ax, ay = float(values[0]), float(values[1])
+        if not (math.isfinite(ax) and math.isfinite(ay)):
+            raise ValueError(f"an action must be finite, got {[ax, ay]}")
+        vx = min(max(ax, -1.0), 1.0) * ACTUATOR_SPEED
+        vy = min(max(ay, -1.0), 1.0) * ACTUATOR_SPEED
+        if client.lockstep:
+            return client.move_and_advance(vx, vy)
+        return client.move(vx, vy)
+
+    def _finish_step(
+        self, move: int
+    ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        """The step's result once the state with the Move ``move`` in force arrives."""
+        self._state = self._live_client().next_state(after=move)
         observation, info = self._observe(self._state)
         if self.reward_type == "sparse":
             reward = 0.0 if info["is_success"] else -1.0

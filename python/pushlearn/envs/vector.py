@@ -1,0 +1,193 @@
+"""Native vector environments: N pushing worlds stepped together from one process.
+
+``gymnasium.make_vec("pushlearn/PushBlock-v0", num_envs=8)`` makes one (the
+ids' vector entry point; ``vectorization_mode="async"`` still gives
+Gymnasium's ``AsyncVectorEnv``). Each sub-environment is a
+:class:`~pushlearn.envs.push.PushBlockEnv` (or ``PushTwoBlocksEnv``) with a
+lock-step world of its own; a step sends every world its Move and Advance
+first and only then reads the states, so the worlds step in parallel while
+this process waits, with no process per environment and no pipes between
+them. Autoreset follows Gymnasium's default, ``NEXT_STEP``: the step after
+an episode ended resets that sub-environment (its action is ignored, its
+reward is 0).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from .push import MAX_STEPS, PushBlockEnv, PushTwoBlocksEnv, _PushEnv
+
+__all__ = ["PushBlockVectorEnv", "PushTwoBlocksVectorEnv"]
+
+
+class _PushVectorEnv(
+    VectorEnv[dict[str, Any], npt.NDArray[np.float32], npt.NDArray[Any]]
+):
+    """``num_envs`` sub-environments of :attr:`env_class`; keywords go to each."""
+
+    env_class: type[_PushEnv]
+
+    def __init__(
+        self,
+        num_envs: int,
+        *,
+        max_episode_steps: int | None = MAX_STEPS,
+        render_mode: str | None = None,
+        **kwargs: Any,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+            raise ValueError(f"num_envs must be a whole number ≥ 1, got {num_envs!r}")
+        if max_episode_steps is not None and max_episode_steps < 1:
+            raise ValueError(
+                f"max_episode_steps must be ≥ 1 or None, got {max_episode_steps}"
+            )
+        self.num_envs = num_envs
+        self.max_episode_steps = max_episode_steps
+        """Steps before a sub-environment's episode is truncated (``None``: never)."""
+        self.render_mode = render_mode
+        self.metadata = {
+            **self.env_class.metadata,
+            "autoreset_mode": AutoresetMode.NEXT_STEP,
+        }
+        self.envs: list[_PushEnv] = []
+        try:
+            for _ in range(num_envs):
+                self.envs.append(self.env_class(render_mode=render_mode, **kwargs))
+        except BaseException:
+            self.close_extras()
+            raise
+        first = self.envs[0]
+        self.single_observation_space = first.observation_space
+        self.single_action_space = first.action_space
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self._elapsed = np.zeros(num_envs, dtype=np.int64)
+        self._autoreset = np.zeros(num_envs, dtype=np.bool_)
+
+    def reset(
+        self,
+        *,
+        seed: int | list[int | None] | None = None,
+        options: dict[str, Any] | None = None,
+    ) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Resets every sub-environment; an int ``seed`` seeds them ``seed``, ``seed + 1``, …"""
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, int):
+            seeds = [seed + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"{len(seeds)} seeds for {self.num_envs} environments")
+        infos: dict[str, Any] = {}
+        observations = []
+        for i, (env, env_seed) in enumerate(zip(self.envs, seeds, strict=True)):
+            observation, info = env.reset(seed=env_seed, options=options)
+            observations.append(observation)
+            infos = self._add_info(infos, info, i)
+        self._elapsed[:] = 0
+        self._autoreset[:] = False
+        return _stacked(observations), infos
+
+    def step(
+        self, actions: npt.ArrayLike
+    ) -> tuple[
+        dict[str, Any],
+        npt.NDArray[np.float64],
+        npt.NDArray[np.bool_],
+        npt.NDArray[np.bool_],
+        dict[str, Any],
+    ]:
+        """Steps every sub-environment: all Moves sent first, then all states read."""
+        batch = np.asarray(actions)
+        if batch.shape != (self.num_envs, 2):
+            raise ValueError(
+                f"actions must have shape ({self.num_envs}, 2), got {batch.shape}"
+            )
+        # Checked whole before anything is sent, so a bad row sends nothing.
+        bad = [i for i in range(self.num_envs) if not np.all(np.isfinite(batch[i]))]
+        if bad:
+            raise ValueError(f"the actions of environments {bad} are not finite")
+        moves: list[int | None] = []
+        for i, env in enumerate(self.envs):
+            moves.append(None if self._autoreset[i] else env._start_step(batch[i]))
+        rewards = np.zeros(self.num_envs, dtype=np.float64)
+        terminations = np.zeros(self.num_envs, dtype=np.bool_)
+        truncations = np.zeros(self.num_envs, dtype=np.bool_)
+        infos: list[dict[str, Any]] = []
+        observations = []
+        for i, (env, move) in enumerate(zip(self.envs, moves, strict=True)):
+            if move is None:
+                observation, info = env.reset()
+                self._elapsed[i] = 0
+            else:
+                observation, rewards[i], terminations[i], _, info = env._finish_step(
+                    move
+                )
+                self._elapsed[i] += 1
+                truncations[i] = (
+                    self.max_episode_steps is not None
+                    and self._elapsed[i] >= self.max_episode_steps
+                    and not terminations[i]
+                )
+            observations.append(observation)
+            infos.append(info)
+        self._autoreset = terminations | truncations
+        return (
+            _stacked(observations),
+            rewards,
+            terminations,
+            truncations,
+            _batched(infos),
+        )
+
+    def render(self) -> tuple[Any, ...] | None:
+        """Each sub-environment's picture (``rgb_array``), or ``None`` without a render mode."""
+        if self.render_mode is None:
+            return None
+        return tuple(env.render() for env in self.envs)
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Closes every sub-environment and stops its world."""
+        for env in self.envs:
+            env.close()
+
+    @property
+    def world_pids(self) -> list[int | None]:
+        """The process ids of the sub-environments' worlds."""
+        return [env.world_pid for env in self.envs]
+
+
+def _batched(infos: list[dict[str, Any]]) -> dict[str, Any]:
+    """The sub-environments' infos in Gymnasium's vector form (``VectorEnv._add_info``'s):
+    an array per key and a ``_key`` mask; every info here has the same keys."""
+    batch: dict[str, Any] = {}
+    for key in infos[0]:
+        batch[key] = np.array([info[key] for info in infos])
+        batch[f"_{key}"] = np.ones(len(infos), dtype=np.bool_)
+    return batch
+
+
+def _stacked(observations: list[dict[str, Any]]) -> dict[str, Any]:
+    """The sub-environments' observations as one batch: fresh arrays, each
+    ``(num_envs, …)``, as ``gymnasium.vector.utils.concatenate`` builds them
+    for these spaces, without its dispatch or a copy out of a reused buffer."""
+    return {key: np.stack([o[key] for o in observations]) for key in observations[0]}
+
+
+class PushBlockVectorEnv(_PushVectorEnv):
+    """``num_envs`` × ``pushlearn/PushBlock-v0``, stepped together."""
+
+    env_class = PushBlockEnv
+
+
+class PushTwoBlocksVectorEnv(_PushVectorEnv):
+    """``num_envs`` × ``pushlearn/PushTwoBlocks-v0``, stepped together."""
+
+    env_class = PushTwoBlocksEnv
