@@ -49,6 +49,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
     // and `PATH`, so that `pip install .` after `cargo build --release` needs
     // no further set-up.
-    m.add("SOURCE_CHECKOUT", concat!(env!("CARGO_MANIFEST_DIR"), "/../.."))?;
+    m.add(
+        "SOURCE_CHECKOUT",
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../.."),
+    )?;
     Ok(())
 }

@@ -96,7 +96,14 @@ fn the_binary_serves_on_a_free_port_and_stops_cleanly_on_sigterm() {
 #[test]
 fn with_stop_with_stdin_the_world_serves_while_its_stdin_is_open_and_stops_when_it_closes() {
     let mut child = pushlearn_sim()
-        .args(["serve", "--port", "0", "--mode", "lockstep", "--stop-with-stdin"])
+        .args([
+            "serve",
+            "--port",
+            "0",
+            "--mode",
+            "lockstep",
+            "--stop-with-stdin",
+        ])
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -128,7 +135,10 @@ fn with_stop_with_stdin_the_world_serves_while_its_stdin_is_open_and_stops_when_
     });
     drop(stdin);
     let status = wait(&mut child);
-    assert!(status.success(), "exit status after stdin closed: {status:?}");
+    assert!(
+        status.success(),
+        "exit status after stdin closed: {status:?}"
+    );
     let mut log = String::new();
     child
         .stderr
