@@ -1,4 +1,4 @@
-"""How many environment steps per second this machine does (``docs/performance.md`` §9).
+"""How many environment steps per second this machine does (``docs/performance.md`` §6).
 
 ::
 
