@@ -71,16 +71,20 @@ pub enum Improvement {
     SharedBlocks,
     /// The actuator's forward model averages its samples (η = 0.1).
     AdaptActuator,
+    /// The block forward models' nodes average the changes they win
+    /// (η_out = 0.1).
+    AverageOutputs,
     /// Every change (what `--model gate+` has).
     All,
 }
 
 impl Improvement {
     /// Every single change, in the order of reports and tables.
-    pub const EACH: [Improvement; 5] = [
+    pub const EACH: [Improvement; 6] = [
         Improvement::Unrounded,
         Improvement::Interpolate,
         Improvement::AdaptActuator,
+        Improvement::AverageOutputs,
         Improvement::ForwardCheck,
         Improvement::SharedBlocks,
     ];
@@ -94,6 +98,7 @@ impl Improvement {
             Improvement::ForwardCheck => "forward-check",
             Improvement::SharedBlocks => "shared-blocks",
             Improvement::AdaptActuator => "adapt-actuator",
+            Improvement::AverageOutputs => "average-outputs",
             Improvement::All => "all",
         }
     }
@@ -105,6 +110,7 @@ impl Improvement {
             Improvement::ForwardCheck => on.forward_check = true,
             Improvement::SharedBlocks => on.shared_blocks = true,
             Improvement::AdaptActuator => on.adapt_actuator = true,
+            Improvement::AverageOutputs => on.average_outputs = true,
             Improvement::All => *on = Improvements::ALL,
         }
     }
@@ -116,6 +122,7 @@ impl Improvement {
             Improvement::ForwardCheck => on.forward_check,
             Improvement::SharedBlocks => on.shared_blocks,
             Improvement::AdaptActuator => on.adapt_actuator,
+            Improvement::AverageOutputs => on.average_outputs,
             Improvement::All => on == Improvements::ALL,
         }
     }
@@ -249,8 +256,8 @@ pub struct ModelOptions {
     pub no_angular_velocity: bool,
 
     /// Changes beyond the thesis for the gate model, comma-separated:
-    /// unrounded, interpolate, adapt-actuator, forward-check, shared-blocks,
-    /// or all (which
+    /// unrounded, interpolate, adapt-actuator, average-outputs,
+    /// forward-check, shared-blocks, or all (which
     /// is `--model gate+`). Not the thesis's model: reports name it
     /// `gate+CHANGE+…` (docs/models.md, "Beyond the thesis").
     #[arg(long, value_name = "CHANGE,…", value_enum, value_delimiter = ',')]

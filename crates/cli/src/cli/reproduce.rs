@@ -216,6 +216,15 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     reproduce::write_files(&dir, &files)?;
     if let Some(timing) = only_timing {
         print!("{timing}");
+        // timing.md keeps the last full run's lines and, after them, the
+        // last --only run's (replacing an earlier one).
+        let path = dir.join(TIMING);
+        let old = std::fs::read_to_string(&path).unwrap_or_default();
+        let full = old.split(ONLY_TIMING_MARK).next().unwrap_or_default();
+        reproduce::write_atomically(
+            &path,
+            &format!("{}\n{ONLY_TIMING_MARK}\n\n{timing}", full.trim_end()),
+        )?;
         if let Some(page) = &page {
             let figures = draw_figures(root, &results, page)?;
             reproduce::write_atomically(&root.join(PAGE), page)?;
@@ -272,6 +281,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
 /// a figure the page shows that no experiment draws is an error.
 /// The baselines' learning curves beside the thesis's models.
 const BASELINE_FIGURE: &str = "baselines-curve";
+/// Where timing.md's lines of the last `--only` run begin.
+const ONLY_TIMING_MARK: &str = "<!-- the last `pushlearn reproduce --only` run -->";
+
 /// The learning curves of every model of "Beyond the thesis".
 const BEYOND_FIGURE: &str = "beyond-curves";
 

@@ -77,7 +77,16 @@ pub struct Improvements {
     /// commanded action, then predicts the mean step rather than whichever
     /// (possibly latency-shortened) step it stored first.
     pub adapt_actuator: bool,
+    /// The block forward models move their winner's output towards every
+    /// sample it wins (η_out = [`AVERAGED_OUTPUT_RATE`], inputs and local
+    /// linear maps fixed), so that a node holds a running mean of the
+    /// changes it stands for, not the single sample that created it.
+    pub average_outputs: bool,
 }
+
+/// η_out of the block forward models with `average-outputs` (the draft's
+/// smaller rate, as [`ADAPTED_ACTUATOR_RATE`]).
+pub const AVERAGED_OUTPUT_RATE: f64 = 0.1;
 
 /// η of the actuator's forward model with `adapt-actuator`: the smaller of
 /// the two non-zero rates of the thesis draft's tables (0.1 and 0.2).
@@ -91,6 +100,7 @@ impl Improvements {
         forward_check: true,
         shared_blocks: true,
         adapt_actuator: true,
+        average_outputs: true,
     };
 
     /// Whether any change is on.
@@ -203,9 +213,12 @@ impl GateParams {
         } else {
             QueryMode::BestTwo
         };
-        let forward = AitmParams::regressor(mode)
-            .with_learning_rate(self.forward_learning_rate)
-            .check()?;
+        let mut forward =
+            AitmParams::regressor(mode).with_learning_rate(self.forward_learning_rate);
+        if self.improvements.average_outputs {
+            forward.eta_out = AVERAGED_OUTPUT_RATE;
+        }
+        let forward = forward.check()?;
         let actuator = if self.improvements.adapt_actuator {
             AitmParams::regressor(mode)
                 .with_learning_rate(ADAPTED_ACTUATOR_RATE)

@@ -29,7 +29,7 @@ pub use algorithm::{
 pub use errors::GateError;
 pub use hyperparams::{
     flags, GateConfig, GateParams, Improvements, VelocityFeatures, ADAPTED_ACTUATOR_RATE,
-    FLAG_PREDICTION_BOOST,
+    AVERAGED_OUTPUT_RATE, FLAG_PREDICTION_BOOST,
 };
 pub use planner::{PASS_MAX, PASS_MIN};
 pub use world::GateWorld;
