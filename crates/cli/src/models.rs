@@ -1,6 +1,6 @@
 //! The two learners, selectable by name wherever a model is used.
 
-use learner::gate::VelocityFeatures;
+use learner::gate::{Improvements, VelocityFeatures};
 use learner::interaction::SelectorKind;
 use learner::{GateConfig, GateParams, InteractionConfig, InteractionParams};
 use serde::{Deserialize, Serialize};
@@ -13,6 +13,11 @@ pub enum ModelKind {
     Gate,
     /// Interaction-state model with Abstract Collections (`docs/spec/interaction-model.md`).
     Interaction,
+    /// The gate model with every change beyond the thesis (`--improve`,
+    /// `docs/models.md` "Beyond the thesis"); not the thesis's model.
+    #[value(name = "gate+")]
+    #[serde(rename = "gate+")]
+    GatePlus,
 }
 
 impl ModelKind {
@@ -22,6 +27,103 @@ impl ModelKind {
         match self {
             ModelKind::Gate => "gate",
             ModelKind::Interaction => "interaction",
+            ModelKind::GatePlus => "gate+",
+        }
+    }
+
+    /// The thesis's model this one is, or is built on: the gate model for
+    /// `gate+`. Tables, figures and the thesis's reference numbers follow it.
+    #[must_use]
+    pub fn family(self) -> ModelKind {
+        match self {
+            ModelKind::Gate | ModelKind::GatePlus => ModelKind::Gate,
+            ModelKind::Interaction => ModelKind::Interaction,
+        }
+    }
+
+    /// The model a report's `model` names: `gate`, `interaction`, `gate+`,
+    /// or the gate model with some changes (`gate+unrounded+interpolate`,
+    /// [`ModelOptions::report_name`]); `None` for other names (external
+    /// learners).
+    #[must_use]
+    pub fn of_report_name(name: &str) -> Option<ModelKind> {
+        <ModelKind as clap::ValueEnum>::from_str(name, false)
+            .ok()
+            .or_else(|| name.starts_with("gate+").then_some(ModelKind::GatePlus))
+    }
+}
+
+/// One change of the improved gate model (`docs/models.md` "Beyond the
+/// thesis"), by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Improvement {
+    /// Features, changes and predictions at full precision, not rounded to
+    /// 3 decimals.
+    Unrounded,
+    /// Forward models blend the winner with all its neighbours instead of
+    /// the two nearest nodes.
+    Interpolate,
+    /// The planner ranks the inverse model's push and variants of it with
+    /// the forward model.
+    ForwardCheck,
+    /// One forward and inverse model for every block, block ids left out of
+    /// the features.
+    SharedBlocks,
+    /// The actuator's forward model averages its samples (η = 0.1).
+    AdaptActuator,
+    /// The block forward models' nodes average the changes they win
+    /// (η_out = 0.1).
+    AverageOutputs,
+    /// Every change (what `--model gate+` has).
+    All,
+}
+
+impl Improvement {
+    /// Every single change, in the order of reports and tables.
+    pub const EACH: [Improvement; 6] = [
+        Improvement::Unrounded,
+        Improvement::Interpolate,
+        Improvement::AdaptActuator,
+        Improvement::AverageOutputs,
+        Improvement::ForwardCheck,
+        Improvement::SharedBlocks,
+    ];
+
+    /// The name on the command line.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Improvement::Unrounded => "unrounded",
+            Improvement::Interpolate => "interpolate",
+            Improvement::ForwardCheck => "forward-check",
+            Improvement::SharedBlocks => "shared-blocks",
+            Improvement::AdaptActuator => "adapt-actuator",
+            Improvement::AverageOutputs => "average-outputs",
+            Improvement::All => "all",
+        }
+    }
+
+    fn set(self, on: &mut Improvements) {
+        match self {
+            Improvement::Unrounded => on.unrounded = true,
+            Improvement::Interpolate => on.interpolate = true,
+            Improvement::ForwardCheck => on.forward_check = true,
+            Improvement::SharedBlocks => on.shared_blocks = true,
+            Improvement::AdaptActuator => on.adapt_actuator = true,
+            Improvement::AverageOutputs => on.average_outputs = true,
+            Improvement::All => *on = Improvements::ALL,
+        }
+    }
+
+    fn is_in(self, on: Improvements) -> bool {
+        match self {
+            Improvement::Unrounded => on.unrounded,
+            Improvement::Interpolate => on.interpolate,
+            Improvement::ForwardCheck => on.forward_check,
+            Improvement::SharedBlocks => on.shared_blocks,
+            Improvement::AdaptActuator => on.adapt_actuator,
+            Improvement::AverageOutputs => on.average_outputs,
+            Improvement::All => on == Improvements::ALL,
         }
     }
 }
@@ -152,6 +254,14 @@ pub struct ModelOptions {
     /// "NoAV" rows).
     #[arg(long)]
     pub no_angular_velocity: bool,
+
+    /// Changes beyond the thesis for the gate model, comma-separated:
+    /// unrounded, interpolate, adapt-actuator, average-outputs,
+    /// forward-check, shared-blocks, or all (which
+    /// is `--model gate+`). Not the thesis's model: reports name it
+    /// `gate+CHANGE+…` (docs/models.md, "Beyond the thesis").
+    #[arg(long, value_name = "CHANGE,…", value_enum, value_delimiter = ',')]
+    pub improve: Vec<Improvement>,
 }
 
 fn parse_rate(text: &str) -> Result<f64, String> {
@@ -189,6 +299,8 @@ pub enum ModelOptionsError {
     NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
+    #[error("--improve adds changes to --model gate; gate+ already has every one")]
+    ImproveOnGatePlus,
 }
 
 impl ModelOptions {
@@ -203,13 +315,55 @@ impl ModelOptions {
     /// never resumed under other options.
     #[must_use]
     pub fn canonical(&self) -> String {
-        format!(
+        let mut line = format!(
             "config {}, eta {}, selector {}, no-angular-velocity {}",
             self.config_number(),
             self.eta,
             self.selector.as_str(),
             self.no_angular_velocity
-        )
+        );
+        // Only when set, so that memory stored before --improve existed
+        // still compares equal.
+        let on = self.improvements();
+        if on.any() {
+            let names: Vec<&str> = Improvement::EACH
+                .into_iter()
+                .filter(|i| i.is_in(on))
+                .map(Improvement::as_str)
+                .collect();
+            line.push_str(&format!(", improve {}", names.join("+")));
+        }
+        line
+    }
+
+    /// The changes of --improve.
+    #[must_use]
+    pub fn improvements(&self) -> Improvements {
+        let mut on = Improvements::default();
+        for i in &self.improve {
+            i.set(&mut on);
+        }
+        on
+    }
+
+    /// The name reports give a built-in model under these options: the
+    /// model's own, or for the gate model with changes `gate+` (all) or
+    /// `gate+CHANGE+…` in the order of [`Improvement::EACH`].
+    #[must_use]
+    pub fn report_name(&self, kind: ModelKind) -> String {
+        let on = self.improvements();
+        if kind != ModelKind::Gate || !on.any() {
+            return kind.as_str().to_owned();
+        }
+        if on == Improvements::ALL {
+            return ModelKind::GatePlus.as_str().to_owned();
+        }
+        let mut name = String::from("gate");
+        for i in Improvement::EACH.into_iter().filter(|i| i.is_in(on)) {
+            name.push('+');
+            name.push_str(i.as_str());
+        }
+        name
     }
 
     /// Refuses what only configures a built-in model: --eta, --selector,
@@ -234,6 +388,9 @@ impl ModelOptions {
         }
         if self.no_angular_velocity {
             return refuse("--no-angular-velocity");
+        }
+        if !self.improve.is_empty() {
+            return refuse("--improve");
         }
         let model_bits = flags::USE_DYNS
             | flags::HARDCODEDACT
@@ -266,12 +423,26 @@ impl ModelOptions {
         }
         let mut params = GateParams::from_config_number(self.number_at(publish_rate_hz))?;
         params.forward_learning_rate = self.eta;
+        params.improvements = self.improvements();
         if self.no_angular_velocity {
             if params.velocity_features != VelocityFeatures::LinearAngular {
                 return Err(ModelOptionsError::NoVelocities);
             }
             params.velocity_features = VelocityFeatures::Linear;
         }
+        Ok(params.check()?)
+    }
+
+    /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
+    ///
+    /// # Errors
+    /// As [`ModelOptions::gate`], and --improve, which gate+ does not take.
+    pub fn gate_plus(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
+        if !self.improve.is_empty() {
+            return Err(ModelOptionsError::ImproveOnGatePlus);
+        }
+        let mut params = *self.gate(publish_rate_hz)?.params();
+        params.improvements = Improvements::ALL;
         Ok(params.check()?)
     }
 
@@ -283,9 +454,13 @@ impl ModelOptions {
         &self,
         publish_rate_hz: u32,
     ) -> Result<InteractionConfig, ModelOptionsError> {
-        if self.no_angular_velocity {
+        if self.no_angular_velocity || !self.improve.is_empty() {
             return Err(ModelOptionsError::NotForModel {
-                option: "--no-angular-velocity",
+                option: if self.no_angular_velocity {
+                    "--no-angular-velocity"
+                } else {
+                    "--improve"
+                },
                 model: ModelKind::Interaction,
             });
         }
@@ -319,6 +494,9 @@ impl ModelKind {
             ModelKind::Interaction => job.run(learner::InteractionModel::new(
                 options.interaction(publish_rate_hz)?,
             )),
+            ModelKind::GatePlus => {
+                job.run(learner::GateModel::new(options.gate_plus(publish_rate_hz)?))
+            }
         })
     }
 }
@@ -377,6 +555,73 @@ mod tests {
         assert_eq!(i.eps_noise(), InteractionConfig::hz10().eps_noise());
         assert_eq!(i.selector(), SelectorKind::Tree);
         assert_eq!(i.ac().params().eta_out, 0.2);
+    }
+
+    #[test]
+    fn improvements_name_the_model_and_reach_the_gate_model() {
+        let none = options(&[]);
+        assert_eq!(none.report_name(ModelKind::Gate), "gate");
+        assert_eq!(none.report_name(ModelKind::GatePlus), "gate+");
+        assert!(!none.gate(100).unwrap().params().improvements.any());
+        let two = options(&["--improve", "forward-check,unrounded"]);
+        // The order of Improvement::EACH, whatever the command line's.
+        assert_eq!(
+            two.report_name(ModelKind::Gate),
+            "gate+unrounded+forward-check"
+        );
+        let on = two.gate(100).unwrap().params().improvements;
+        assert!(on.unrounded && on.forward_check && !on.interpolate);
+        let all = options(&["--improve", "all"]);
+        assert_eq!(all.report_name(ModelKind::Gate), "gate+");
+        assert_eq!(
+            options(&[]).gate_plus(100).unwrap().params().improvements,
+            Improvements::ALL
+        );
+        assert_eq!(all.gate(100).unwrap(), options(&[]).gate_plus(100).unwrap());
+        assert_eq!(
+            ModelKind::of_report_name("gate+"),
+            Some(ModelKind::GatePlus)
+        );
+        assert_eq!(
+            ModelKind::of_report_name("gate+unrounded"),
+            Some(ModelKind::GatePlus)
+        );
+        assert_eq!(ModelKind::of_report_name("gate"), Some(ModelKind::Gate));
+        assert_eq!(ModelKind::of_report_name("knn"), None);
+        assert_eq!(ModelKind::GatePlus.family(), ModelKind::Gate);
+    }
+
+    #[test]
+    fn memory_stored_without_improvements_still_compares_equal() {
+        let line = options(&[]).canonical();
+        assert_eq!(
+            line,
+            "config 0, eta 0, selector aitm, no-angular-velocity false"
+        );
+        assert_eq!(
+            options(&["--improve", "interpolate"]).canonical(),
+            format!("{line}, improve interpolate")
+        );
+    }
+
+    #[test]
+    fn improve_is_refused_where_it_does_not_apply() {
+        let o = options(&["--improve", "unrounded"]);
+        assert!(matches!(
+            o.gate_plus(100),
+            Err(ModelOptionsError::ImproveOnGatePlus)
+        ));
+        assert!(matches!(
+            o.interaction(100),
+            Err(ModelOptionsError::NotForModel {
+                option: "--improve",
+                ..
+            })
+        ));
+        assert!(matches!(
+            o.check_external(),
+            Err(ModelOptionsError::NotForExternal { .. })
+        ));
     }
 
     #[test]

@@ -457,7 +457,7 @@ impl Ready {
     ) -> Result<Self, SpecError> {
         Ok(match choice {
             LearnerChoice::Builtin(kind) => {
-                kind.as_str().clone_into(&mut plan.model);
+                plan.model = options.report_name(*kind);
                 plan.learner = None;
                 Ready::Builtin(*kind)
             }
@@ -545,5 +545,5 @@ impl WithModel for MoveToTarget<'_> {
 /// The model a document of ours names (the gate model's tables for any
 /// other name, which only a hand-edited file has).
 fn model_of(setup: &Setup) -> ModelKind {
-    <ModelKind as clap::ValueEnum>::from_str(&setup.model, false).unwrap_or(ModelKind::Gate)
+    ModelKind::of_report_name(&setup.model).unwrap_or(ModelKind::Gate)
 }

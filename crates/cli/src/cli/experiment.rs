@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::ObjectState;
-use pushlearn_cli::experiment::move_to_target::MAX_STEPS;
+use pushlearn_cli::experiment::move_to_target::{MAX_STEPS, TEST_BLOCK_START};
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
@@ -16,7 +16,7 @@ use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, World
 use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
 use pushlearn_cli::models::{LearnerChoice, ModelKind, ModelOptions};
-use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
+use pushlearn_cli::results::move_to_target::{sampled_targets, REPETITIONS, TARGETS};
 use pushlearn_cli::spec::Spec;
 
 /// Run one of the thesis's experiments and print its table beside the
@@ -218,6 +218,13 @@ struct MoveToTargetArgs {
     /// more [default: the thesis's four targets].
     #[arg(long, value_name = "X,Y,ORI", allow_hyphen_values = true, value_parser = parse_pose)]
     target: Vec<ObjectState>,
+
+    /// N targets drawn from the reachable region instead (block centres
+    /// with x in [−0.7, 0.7) m, y in [−0.8, 0.8) m, any yaw, at least 0.3 m
+    /// from the block's start; the Gymnasium environments' region,
+    /// docs/gym.md), seeded by --seed.
+    #[arg(long, value_name = "N", conflicts_with = "target", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    sample_targets: Option<u32>,
 
     /// Test runs per target, each with a freshly trained model.
     #[arg(long, default_value_t = REPETITIONS as u32, value_parser = clap::value_parser!(u32).range(1..))]
@@ -447,10 +454,14 @@ fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
     Spec::MoveToTarget {
         model: args.learner.choice(),
         options: args.options.clone(),
-        targets: if args.target.is_empty() {
-            TARGETS.to_vec()
-        } else {
-            args.target.clone()
+        targets: match args.sample_targets {
+            Some(n) => sampled_targets(
+                n as usize,
+                args.world.seed,
+                (TEST_BLOCK_START.x, TEST_BLOCK_START.y),
+            ),
+            None if args.target.is_empty() => TARGETS.to_vec(),
+            None => args.target.clone(),
         },
         repetitions: args.repetitions as usize,
         max_steps: args.max_steps,

@@ -35,7 +35,8 @@ use pushlearn_cli::reproduce::{
     pushlearn reproduce                    regenerate everything (a few minutes on 2 cores)\n  \
     pushlearn reproduce --check            fail, naming the first differing value, if the committed results are stale\n  \
     pushlearn reproduce --quick --check    the reduced check CI runs (docs/results/quick/)\n  \
-    pushlearn reproduce --quick            regenerate docs/results/quick/ after a change that moves a number")]
+    pushlearn reproduce --quick            regenerate docs/results/quick/ after a change that moves a number\n  \
+    pushlearn reproduce --only 'beyond-*'  rerun the \"Beyond the thesis\" experiments, the rest from the committed documents")]
 pub struct ReproduceArgs {
     /// The reduced reproduction (2 folds, fewer training runs, 1 Move to
     /// Target repetition) into docs/results/quick/: no figures, no page.
@@ -52,6 +53,15 @@ pub struct ReproduceArgs {
     /// of writing; fails, naming each stale file's first differing value.
     #[arg(long)]
     check: bool,
+
+    /// Run only these experiments (document names without `.json`,
+    /// comma-separated; a trailing `*` matches every name with that
+    /// prefix) and take every other document the page needs from the
+    /// committed ones: for a change that moves only some numbers. Writes
+    /// only their documents, the page and its figures; timing.md keeps the
+    /// last full run's lines (this run's are printed).
+    #[arg(long, value_name = "NAME,…", value_delimiter = ',', conflicts_with_all = ["quick", "page_only"])]
+    only: Vec<String>,
 
     /// The repository root [default: the current directory].
     #[arg(long, value_name = "DIR", default_value = ".")]
@@ -116,6 +126,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     if !args.page_only {
         use_repository_python(root);
     }
+    let chosen = chosen_entries(&entries, &args.only)?;
+    // With --only, the timing of what ran (the loaded documents have none).
+    let mut only_timing = None;
     let results = if args.page_only {
         reproduce::load(&entries, &dir)?
     } else {
@@ -124,7 +137,22 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
             sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
             workers: args.workers.map_or(cpus, |n| n as usize),
         };
-        run_with_bars(&entries, &settings)?
+        match &chosen {
+            None => run_with_bars(&entries, &settings)?,
+            Some(chosen) => {
+                let ran = run_with_bars(chosen, &settings)?;
+                only_timing = Some(ran.timing_page(&format!(
+                    "pushlearn reproduce --only {}",
+                    args.only.join(",")
+                )));
+                let others: Vec<manifest::Entry> = entries
+                    .iter()
+                    .filter(|e| !chosen.contains(e))
+                    .cloned()
+                    .collect();
+                reproduce::merge(&entries, ran, reproduce::load(&others, &dir)?)
+            }
+        }
     };
     let page = template.map(|t| page::generate(&t, &results)).transpose()?;
     let command = if args.quick {
@@ -164,7 +192,16 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         );
         return Ok(());
     }
-    let files = results.files()?;
+    let mut files = results.files()?;
+    if let Some(chosen) = &chosen {
+        // Only what this run produced: the other documents are the
+        // committed ones, read back, and stay as they are.
+        files.retain(|(name, _)| {
+            chosen
+                .iter()
+                .any(|e| name.strip_suffix(".json") == Some(e.name.as_str()))
+        });
+    }
     if args.check {
         check(root, &dir, Some(&files), page.as_deref())?;
         println!(
@@ -177,6 +214,31 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         return Ok(());
     }
     reproduce::write_files(&dir, &files)?;
+    if let Some(timing) = only_timing {
+        print!("{timing}");
+        // timing.md keeps the last full run's lines and, after them, the
+        // last --only run's (replacing an earlier one).
+        let path = dir.join(TIMING);
+        let old = std::fs::read_to_string(&path).unwrap_or_default();
+        let full = old.split(ONLY_TIMING_MARK).next().unwrap_or_default();
+        reproduce::write_atomically(
+            &path,
+            &format!("{}\n{ONLY_TIMING_MARK}\n\n{timing}", full.trim_end()),
+        )?;
+        if let Some(page) = &page {
+            let figures = draw_figures(root, &results, page)?;
+            reproduce::write_atomically(&root.join(PAGE), page)?;
+            println!(
+                "{command} --only: {} experiments in {:.1} s; wrote {} documents to {}, {figures} figures and {}",
+                files.len(),
+                results.wall_seconds,
+                files.len(),
+                dir.display(),
+                root.join(PAGE).display()
+            );
+        }
+        return Ok(());
+    }
     for stale in stale_documents(&dir, &files)? {
         std::fs::remove_file(&stale)
             .with_context(|| format!("removing the stale {}", stale.display()))?;
@@ -219,6 +281,11 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
 /// a figure the page shows that no experiment draws is an error.
 /// The baselines' learning curves beside the thesis's models.
 const BASELINE_FIGURE: &str = "baselines-curve";
+/// Where timing.md's lines of the last `--only` run begin.
+const ONLY_TIMING_MARK: &str = "<!-- the last `pushlearn reproduce --only` run -->";
+
+/// The learning curves of every model of "Beyond the thesis".
+const BEYOND_FIGURE: &str = "beyond-curves";
 
 fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize> {
     let figure_dir = root.join(FIGURES_DIR);
@@ -233,10 +300,15 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
             .plot(&scratch)
             .with_context(|| format!("drawing the figures of {}", p.entry.name))?;
     }
-    // Figures across documents: the baselines beside the thesis's models.
+    // Figures across documents: the baselines beside the thesis's models,
+    // and every model of "Beyond the thesis" on one plot.
     if let Ok(curves) = page::baseline_curves(results) {
         pushlearn_cli::report::plot::learners(&curves, &scratch, BASELINE_FIGURE)
             .context("drawing the baselines' figure")?;
+    }
+    if let Ok(curves) = page::beyond_curves(results) {
+        pushlearn_cli::report::plot::learners(&curves, &scratch, BEYOND_FIGURE)
+            .context("drawing the figure of \"Beyond the thesis\"")?;
     }
     let mut shown: Vec<&str> = page
         .match_indices("](figures/")
@@ -258,6 +330,37 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
     }
     std::fs::remove_dir_all(&scratch).with_context(|| format!("removing {}", scratch.display()))?;
     Ok(shown.len())
+}
+
+/// The entries `--only` names, in the manifest's order; `None` without
+/// `--only`. A pattern that matches nothing is an error listing the names.
+fn chosen_entries(
+    entries: &[manifest::Entry],
+    patterns: &[String],
+) -> Result<Option<Vec<manifest::Entry>>> {
+    if patterns.is_empty() {
+        return Ok(None);
+    }
+    let matches = |pattern: &str, name: &str| match pattern.strip_suffix('*') {
+        Some(prefix) => name.starts_with(prefix),
+        None => name == pattern,
+    };
+    for pattern in patterns {
+        if !entries.iter().any(|e| matches(pattern, &e.name)) {
+            let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+            bail!(
+                "--only {pattern}: no experiment of the reproduction is called that; they are: {}",
+                names.join(", ")
+            );
+        }
+    }
+    Ok(Some(
+        entries
+            .iter()
+            .filter(|e| patterns.iter().any(|p| matches(p, &e.name)))
+            .cloned()
+            .collect(),
+    ))
 }
 
 /// Runs the reproduction with one progress bar per experiment (on stderr,
@@ -398,4 +501,34 @@ fn stale_documents(dir: &Path, files: &[(String, String)]) -> Result<Vec<PathBuf
     }
     stale.sort();
     Ok(stale)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_picks_names_and_prefixes_in_the_manifests_order_and_refuses_unknown_ones() {
+        let entries = manifest::full();
+        assert!(chosen_entries(&entries, &[]).unwrap().is_none());
+        let picked = chosen_entries(
+            &entries,
+            &["beyond-sampled-*".to_owned(), "push-task-gate".to_owned()],
+        )
+        .unwrap()
+        .unwrap();
+        let names: Vec<&str> = picked.iter().map(|e| e.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "push-task-gate",
+                "beyond-sampled-gate",
+                "beyond-sampled-gate-plus"
+            ]
+        );
+        let error = chosen_entries(&entries, &["beyond-typo".to_owned()])
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("--only beyond-typo") && error.contains("beyond-push-gate-plus"));
+    }
 }

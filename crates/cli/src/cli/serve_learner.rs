@@ -81,10 +81,10 @@ fn serve_one(args: &ServeLearnerArgs, input: impl std::io::Read, output: impl Wr
     let (seq, start) = requests.start()?;
     let job = Job {
         identity: Identity {
-            name: args.model.as_str().to_owned(),
+            name: args.options.report_name(args.model),
             version: env!("CARGO_PKG_VERSION").to_owned(),
             // `learner::features::ActuatorYaw`: the gate model's rule.
-            ignores_actuator_yaw: args.model == ModelKind::Gate,
+            ignores_actuator_yaw: args.model.family() == ModelKind::Gate,
         },
         seq,
         requests,

@@ -38,7 +38,7 @@ pub const TRAINING_RUNS: [((f64, f64), Action); 8] = [
 pub const TEST_START: (f64, f64) = (0.0, 0.0);
 
 /// The blue block's start in every run.
-const TEST_BLOCK_START: ObjectState = ObjectState::new(0.0, 0.25, 0.0);
+pub const TEST_BLOCK_START: ObjectState = ObjectState::new(0.0, 0.25, 0.0);
 
 /// Expected block starts of every run (§4.3; the red block's entry, which
 /// differs from the push task's, only matters in a two-block scene).

@@ -411,7 +411,7 @@ mod tests {
         // Every row's options configure its model.
         for r in &rows {
             let ok = match r.model {
-                ModelKind::Gate => r.options.gate(100).is_ok(),
+                ModelKind::Gate | ModelKind::GatePlus => r.options.gate(100).is_ok(),
                 ModelKind::Interaction => r.options.interaction(100).is_ok(),
             };
             assert!(ok, "{}", r.name);

@@ -81,7 +81,7 @@ pub struct MttRef {
 #[must_use]
 pub fn curve(model: crate::models::ModelKind, train_runs: usize) -> Option<&'static CurveRef> {
     let table: &[CurveRef] = match model {
-        crate::models::ModelKind::Gate => &GATE_CURVE,
+        crate::models::ModelKind::Gate | crate::models::ModelKind::GatePlus => &GATE_CURVE,
         crate::models::ModelKind::Interaction => &INTERACTION_CURVE,
     };
     table.iter().find(|r| r.train_runs == train_runs)
@@ -91,7 +91,7 @@ pub fn curve(model: crate::models::ModelKind, train_runs: usize) -> Option<&'sta
 #[must_use]
 pub fn fixed_three(model: crate::models::ModelKind) -> &'static [PositionRef; 21] {
     match model {
-        crate::models::ModelKind::Gate => &GATE_FIXED_THREE,
+        crate::models::ModelKind::Gate | crate::models::ModelKind::GatePlus => &GATE_FIXED_THREE,
         crate::models::ModelKind::Interaction => &INTERACTION_FIXED_THREE,
     }
 }
@@ -110,7 +110,7 @@ pub fn two_objects(train_runs: usize) -> Option<&'static [TwoObjectRef; 21]> {
 #[must_use]
 pub fn move_to_target(model: crate::models::ModelKind) -> &'static [MttRef; 4] {
     match model {
-        crate::models::ModelKind::Gate => &GATE_MTT,
+        crate::models::ModelKind::Gate | crate::models::ModelKind::GatePlus => &GATE_MTT,
         crate::models::ModelKind::Interaction => &INTERACTION_MTT,
     }
 }

@@ -105,7 +105,7 @@ pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
 
 fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
     let source = match model {
-        ModelKind::Gate => "§3.4",
+        ModelKind::Gate | ModelKind::GatePlus => "§3.4",
         ModelKind::Interaction => "§3.2",
     };
     let mut all = Table::new(
@@ -182,7 +182,7 @@ fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
 
 fn positions(entry: &CurveEntry, model: ModelKind) -> Table {
     let (source, table) = match model {
-        ModelKind::Gate => ("§5.3", reference::fixed_three(model)),
+        ModelKind::Gate | ModelKind::GatePlus => ("§5.3", reference::fixed_three(model)),
         ModelKind::Interaction => ("§5.2", reference::fixed_three(model)),
     };
     // The thesis's table is for its three selected runs only.
@@ -290,7 +290,7 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
         thesis,
     };
     match model {
-        ModelKind::Gate => {
+        ModelKind::Gate | ModelKind::GatePlus => {
             let mut t = Table::new(
                 "nodes",
                 "Node counts when training ended: mean (population std) over folds [§4.2; thesis: random training data]",
@@ -493,7 +493,7 @@ pub fn move_to_target(
 #[must_use]
 pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout {
     let source = match model {
-        ModelKind::Gate => "§8.2",
+        ModelKind::Gate | ModelKind::GatePlus => "§8.2",
         ModelKind::Interaction => "§8.1",
     };
     let head = vec![format!(

@@ -9,8 +9,8 @@ use learner::interaction::SelectorKind;
 use crate::experiment::move_to_target::MAX_STEPS;
 use crate::experiment::push_task::protocol::Variant;
 use crate::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
-use crate::models::{ModelKind, ModelOptions};
-use crate::results::move_to_target::{REPETITIONS, TARGETS};
+use crate::models::{Improvement, ModelKind, ModelOptions};
+use crate::results::move_to_target::{sampled_targets, REPETITIONS, TARGETS};
 use crate::spec::Spec;
 
 /// The seeds whose spread `docs/results.md` shows beside seed 1 for the
@@ -84,6 +84,10 @@ impl Entry {
             if options.selector != default.selector {
                 let _ = write!(line, " --selector {}", options.selector.as_str());
             }
+            if !options.improve.is_empty() {
+                let names: Vec<&str> = options.improve.iter().map(|i| i.as_str()).collect();
+                let _ = write!(line, " --improve {}", names.join(","));
+            }
         };
         match &self.spec {
             Spec::PushTask {
@@ -114,11 +118,18 @@ impl Entry {
             Spec::MoveToTarget {
                 model,
                 options: o,
+                targets,
                 repetitions,
                 max_steps,
-                ..
             } => {
                 let _ = write!(line, "move-to-target {model}");
+                if *targets == sampled(targets.len(), self.seed) {
+                    let _ = write!(line, " --sample-targets {}", targets.len());
+                } else if targets[..] != TARGETS[..] {
+                    for t in targets {
+                        let _ = write!(line, " --target={},{},{}", t.x, t.y, t.theta);
+                    }
+                }
                 if *repetitions != REPETITIONS {
                     let _ = write!(line, " --repetitions {repetitions}");
                 }
@@ -148,6 +159,91 @@ impl Entry {
 }
 
 const MODELS: [ModelKind; 2] = [ModelKind::Gate, ModelKind::Interaction];
+
+/// `n` targets of `--sample-targets n` with `--seed seed`.
+fn sampled(n: usize, seed: u64) -> Vec<learner::ObjectState> {
+    let start = crate::experiment::move_to_target::TEST_BLOCK_START;
+    sampled_targets(n, seed, (start.x, start.y))
+}
+
+/// The numbers of training runs of "Beyond the thesis" (as the baselines').
+pub const BEYOND_RUNS: [usize; 4] = BASELINE_RUNS;
+
+/// Sampled Move-to-Target targets of "Beyond the thesis".
+pub const BEYOND_SAMPLED_TARGETS: usize = 100;
+
+/// The improved gate model of "Beyond the thesis": (document name suffix,
+/// model, --improve). Each change alone on the thesis's gate model, the
+/// one pair the page discusses, then all of them (`gate+`).
+#[must_use]
+pub fn beyond_models() -> Vec<(String, ModelKind, Vec<Improvement>)> {
+    Improvement::EACH
+        .into_iter()
+        .map(|i| (i.as_str().to_owned(), ModelKind::Gate, vec![i]))
+        // unrounded's gain with the actuator put right (docs/results.md).
+        .chain([
+            (
+                "unrounded-adapt-actuator".to_owned(),
+                ModelKind::Gate,
+                vec![Improvement::Unrounded, Improvement::AdaptActuator],
+            ),
+            ("gate-plus".to_owned(), ModelKind::GatePlus, Vec::new()),
+        ])
+        .collect()
+}
+
+/// The "Beyond the thesis" experiments: the push task's curve of each
+/// change and of gate+, Move to Target on the thesis's targets for
+/// forward-check and gate+, and on sampled targets for gate and gate+.
+fn beyond() -> Vec<Entry> {
+    let mut entries = Vec::new();
+    let improved = |improve: Vec<Improvement>| ModelOptions {
+        improve,
+        ..ModelOptions::default()
+    };
+    for (name, kind, improve) in beyond_models() {
+        entries.push(Entry::new(
+            format!("beyond-push-{name}"),
+            Spec::PushTask {
+                model: kind.into(),
+                options: improved(improve),
+                variant: Variant::Random,
+                train_runs: BEYOND_RUNS.to_vec(),
+                folds: 20,
+            },
+        ));
+    }
+    for (name, kind, improve) in beyond_models() {
+        if kind == ModelKind::GatePlus || improve == [Improvement::ForwardCheck] {
+            entries.push(Entry::new(
+                format!("beyond-mtt-{name}"),
+                Spec::MoveToTarget {
+                    model: kind.into(),
+                    options: improved(improve),
+                    targets: TARGETS.to_vec(),
+                    repetitions: REPETITIONS,
+                    max_steps: MAX_STEPS,
+                },
+            ));
+        }
+    }
+    for (name, kind) in [
+        ("gate", ModelKind::Gate),
+        ("gate-plus", ModelKind::GatePlus),
+    ] {
+        entries.push(Entry::new(
+            format!("beyond-sampled-{name}"),
+            Spec::MoveToTarget {
+                model: kind.into(),
+                options: ModelOptions::default(),
+                targets: sampled(BEYOND_SAMPLED_TARGETS, 1),
+                repetitions: 1,
+                max_steps: MAX_STEPS,
+            },
+        ));
+    }
+    entries
+}
 
 /// The latency settings an experiment is run with (name suffix, latency
 /// maximum): the default, and the harsher robustness row.
@@ -333,6 +429,7 @@ pub fn full() -> Vec<Entry> {
             },
         ));
     }
+    entries.extend(beyond());
     entries
 }
 
@@ -431,6 +528,18 @@ mod tests {
         assert_eq!(
             find("move-to-target-gate-seed3"),
             "pushlearn experiment move-to-target --model gate --seed 3 --json d/move-to-target-gate-seed3.json"
+        );
+        assert_eq!(
+            find("beyond-push-unrounded"),
+            "pushlearn experiment push-task --model gate --train-runs 1,3,10,30 --improve unrounded --json d/beyond-push-unrounded.json"
+        );
+        assert_eq!(
+            find("beyond-mtt-gate-plus"),
+            "pushlearn experiment move-to-target --model gate+ --json d/beyond-mtt-gate-plus.json"
+        );
+        assert_eq!(
+            find("beyond-sampled-gate"),
+            "pushlearn experiment move-to-target --model gate --sample-targets 100 --repetitions 1 --json d/beyond-sampled-gate.json"
         );
         assert_eq!(
             find("draft"),

@@ -282,6 +282,25 @@ pub fn run(
     })
 }
 
+/// One reproduction of `entries` from the documents `ran` produced and the
+/// ones `loaded` read back, in the order of `entries`; the calibration and
+/// the wall time are `ran`'s.
+#[must_use]
+pub fn merge(entries: &[Entry], ran: Reproduction, loaded: Reproduction) -> Reproduction {
+    let mut pool: Vec<Produced> = ran.produced.into_iter().chain(loaded.produced).collect();
+    let mut produced = Vec::with_capacity(pool.len());
+    for entry in entries {
+        if let Some(at) = pool.iter().position(|p| p.entry.name == entry.name) {
+            produced.push(pool.swap_remove(at));
+        }
+    }
+    Reproduction {
+        calibration: ran.calibration,
+        produced,
+        wall_seconds: ran.wall_seconds,
+    }
+}
+
 /// The reproduction whose documents are in `dir` (as [`Reproduction::files`]
 /// wrote them), without running anything: for regenerating the page after
 /// its template changed.

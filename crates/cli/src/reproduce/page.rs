@@ -58,6 +58,12 @@ enum Block<'a> {
     Selectors,
     /// The baselines beside the built-in models (`manifest::BASELINES`).
     Baselines,
+    /// `beyond-targets`: the improved models' targets, met or missed.
+    BeyondTargets,
+    /// `beyond-ablation`: the push task's curve of each change and gate+.
+    BeyondAblation,
+    /// `beyond-move-to-target`: Move to Target, thesis's and sampled targets.
+    BeyondMoveToTarget,
     /// `commands`: every experiment's stand-alone command.
     Commands,
 }
@@ -86,6 +92,9 @@ impl<'a> Block<'a> {
             "actuator-folds" => Block::ActuatorFolds(name(arg)?),
             "selectors" => Block::Selectors,
             "baselines" => Block::Baselines,
+            "beyond-targets" => Block::BeyondTargets,
+            "beyond-ablation" => Block::BeyondAblation,
+            "beyond-move-to-target" => Block::BeyondMoveToTarget,
             "commands" => Block::Commands,
             other => return Err(format!("unknown block `{other}`")),
         };
@@ -215,6 +224,9 @@ fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
         Block::ActuatorFolds(name) => actuator_folds(push_doc(results, name)?),
         Block::Selectors => selectors(results),
         Block::Baselines => baselines(results),
+        Block::BeyondTargets => beyond_targets(results),
+        Block::BeyondAblation => beyond_ablation(results),
+        Block::BeyondMoveToTarget => beyond_move_to_target(results),
         Block::Commands => Ok(commands(results.produced.iter().map(|p| &p.entry))),
     }
 }
@@ -539,6 +551,253 @@ fn baselines(results: &Reproduction) -> Result<String, String> {
                 report.folds
             );
         }
+    }
+    Ok(out)
+}
+
+/// Every learning curve of "Beyond the thesis", labelled: the thesis's gate
+/// model, each change on it, gate+, and the two baselines.
+///
+/// # Errors
+/// A document the reproduction does not have.
+pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)>, String> {
+    let mut names = vec![String::from("push-task-gate")];
+    names.extend(
+        super::manifest::beyond_models()
+            .into_iter()
+            .map(|(name, ..)| format!("beyond-push-{name}")),
+    );
+    names.extend(
+        super::manifest::BASELINES
+            .iter()
+            .map(|(n, ..)| (*n).to_owned()),
+    );
+    names
+        .iter()
+        .map(|name| {
+            let report = push_doc(results, name)?;
+            let label = match (&report.setup.learner, report.setup.model.as_str()) {
+                (Some(l), model) => format!("{model} {} (Python)", l.version),
+                (None, "gate") => "gate (thesis model)".to_owned(),
+                (None, model) => model.to_owned(),
+            };
+            Ok((label, report))
+        })
+        .collect()
+}
+
+/// One row per curve of [`beyond_curves`]: block position / orientation
+/// at each of `manifest::BEYOND_RUNS`, and the actuator at the first and
+/// the third.
+fn beyond_ablation(results: &Reproduction) -> Result<String, String> {
+    let runs = super::manifest::BEYOND_RUNS;
+    let mut out = String::from("| model |");
+    for n in runs {
+        let _ = write!(out, " N = {n}: position [m] / orientation [rad] |");
+    }
+    let _ = writeln!(out, " actuator [m], N = {} / {} |", runs[0], runs[2]);
+    out.push_str(&"|---".repeat(runs.len() + 2));
+    out.push_str("|\n");
+    for (label, report) in beyond_curves(results)? {
+        let name = &report.setup.model;
+        let _ = write!(out, "| {label} |");
+        for n in runs {
+            let e = entry_at(report, name, n)?;
+            let _ = write!(
+                out,
+                " {:.4} / {:.4} |",
+                e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
+            );
+        }
+        let (a, b) = (
+            entry_at(report, name, runs[0])?,
+            entry_at(report, name, runs[2])?,
+        );
+        let _ = writeln!(
+            out,
+            " {:.4} / {:.4} |",
+            a.blue.actuator_pos_err.mean, b.blue.actuator_pos_err.mean
+        );
+    }
+    Ok(out)
+}
+
+/// The targets for gate+, each against its measured value.
+fn beyond_targets(results: &Reproduction) -> Result<String, String> {
+    let plus = push_doc(results, "beyond-push-gate-plus")?;
+    let at = |n| entry_at(plus, "beyond-push-gate-plus", n);
+    let gate_mtt = reference::move_to_target(ModelKind::Gate);
+    let mtt = mtt_doc(results, "beyond-mtt-gate-plus")?;
+    let sampled = mtt_doc(results, "beyond-sampled-gate-plus")?;
+    let ten = reference::curve(ModelKind::Gate, 10)
+        .ok_or("the thesis's gate curve has no 10-run value")?;
+    let mut out = String::from("| Target | Ours (gate+) | Met |\n|---|---|---|\n");
+    let mut row = |what: String, ours: String, met: bool| {
+        let _ = writeln!(
+            out,
+            "| {what} | {ours} | {} |",
+            if met { "yes" } else { "no" }
+        );
+    };
+    let e10 = at(10)?;
+    let (half_pos, half_ori) = (0.025, 0.075);
+    row(
+        format!("10 runs: block position ≤ {half_pos} m (half the thesis's gate model)"),
+        format!("{:.4}", e10.blue.block_pos_err.mean),
+        e10.blue.block_pos_err.mean <= half_pos,
+    );
+    row(
+        format!("10 runs: block orientation ≤ {half_ori} rad"),
+        format!("{:.4}", e10.blue.block_ori_err.mean),
+        e10.blue.block_ori_err.mean <= half_ori,
+    );
+    let e3 = at(3)?;
+    row(
+        format!(
+            "3 runs: block position ≤ {:.3} m (the thesis's 10-run value)",
+            ten.pos.0
+        ),
+        format!("{:.4}", e3.blue.block_pos_err.mean),
+        e3.blue.block_pos_err.mean <= ten.pos.0,
+    );
+    row(
+        format!("3 runs: block orientation ≤ {:.3} rad", ten.ori.0),
+        format!("{:.4}", e3.blue.block_ori_err.mean),
+        e3.blue.block_ori_err.mean <= ten.ori.0,
+    );
+    row(
+        format!(
+            "Move to Target, the thesis's targets: {} of {}",
+            runs(mtt),
+            runs(mtt)
+        ),
+        format!("{} of {}", reached(mtt), runs(mtt)),
+        reached(mtt) == runs(mtt),
+    );
+    let share = reached(sampled) as f64 / runs(sampled).max(1) as f64;
+    row(
+        format!(
+            "Move to Target, {} sampled targets: ≥ 95 % reached",
+            runs(sampled)
+        ),
+        format!(
+            "{} of {} ({:.0} %)",
+            reached(sampled),
+            runs(sampled),
+            100.0 * share
+        ),
+        share >= 0.95,
+    );
+    for (k, (t, thesis)) in mtt.targets.iter().zip(gate_mtt.iter()).enumerate() {
+        let limit = 0.7 * thesis.steps;
+        row(
+            format!(
+                "target {}: mean steps ≤ 0.7 × the thesis's {:.0} = {limit:.0}",
+                k + 1,
+                thesis.steps
+            ),
+            format!("{:.0}", t.summary.steps),
+            t.summary.steps <= limit,
+        );
+    }
+    let baselines: Vec<&PushReport> = super::manifest::BASELINES
+        .iter()
+        .map(|(name, ..)| push_doc(results, name))
+        .collect::<Result<_, _>>()?;
+    let mut worse = Vec::new();
+    for n in super::manifest::BEYOND_RUNS {
+        let ours = at(n)?;
+        for b in &baselines {
+            let theirs = entry_at(b, &b.setup.model, n)?;
+            if ours.blue.block_pos_err.mean >= theirs.blue.block_pos_err.mean
+                || ours.blue.block_ori_err.mean >= theirs.blue.block_ori_err.mean
+            {
+                worse.push(format!("N = {n} vs {}", b.setup.model));
+            }
+        }
+    }
+    row(
+        "better than kNN and GP (block position and orientation) at every N".to_owned(),
+        if worse.is_empty() {
+            "better at every N".to_owned()
+        } else {
+            format!("not better at {}", worse.join(", "))
+        },
+        worse.is_empty(),
+    );
+    Ok(out)
+}
+
+/// Reached per thesis target (of 5) and mean steps for the thesis's gate
+/// model, forward-check and gate+, then reached of the sampled targets.
+fn beyond_move_to_target(results: &Reproduction) -> Result<String, String> {
+    let mut out = String::from(
+        "| Model | Target 1 | Target 2 | Target 3 | Target 4 | Reached | Mean steps (1–4) |\n|---|---|---|---|---|---|---|\n",
+    );
+    let thesis = reference::move_to_target(ModelKind::Gate);
+    let _ = writeln!(
+        out,
+        "| gate, thesis | {} | {} | {} |",
+        thesis
+            .iter()
+            .map(|r| r.reached.to_string())
+            .collect::<Vec<_>>()
+            .join(" | "),
+        thesis.iter().map(|r| r.reached).sum::<usize>(),
+        thesis
+            .iter()
+            .map(|r| format!("{:.0}", r.steps))
+            .collect::<Vec<_>>()
+            .join(" / ")
+    );
+    for name in [
+        "move-to-target-gate",
+        "beyond-mtt-forward-check",
+        "beyond-mtt-gate-plus",
+    ] {
+        let r = mtt_doc(results, name)?;
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {} |",
+            r.setup.model,
+            r.targets
+                .iter()
+                .map(|t| t.summary.reached.to_string())
+                .collect::<Vec<_>>()
+                .join(" | "),
+            reached(r),
+            r.targets
+                .iter()
+                .map(|t| format!("{:.0}", t.summary.steps))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        );
+    }
+    out.push_str("\n| Model | Sampled targets reached | Mean steps (failures count the limit) | Mean steps of the reached |\n|---|---|---|---|\n");
+    for name in ["beyond-sampled-gate", "beyond-sampled-gate-plus"] {
+        let r = mtt_doc(results, name)?;
+        let steps: Vec<f64> = r.targets.iter().map(|t| t.summary.steps).collect();
+        let reached_steps: Vec<f64> = r
+            .targets
+            .iter()
+            .filter_map(|t| t.summary.steps_reached)
+            .collect();
+        let mean = |v: &[f64]| {
+            if v.is_empty() {
+                "–".to_owned()
+            } else {
+                format!("{:.0}", v.iter().sum::<f64>() / v.len() as f64)
+            }
+        };
+        let _ = writeln!(
+            out,
+            "| {} | {} of {} | {} | {} |",
+            r.setup.model,
+            reached(r),
+            runs(r),
+            mean(&steps),
+            mean(&reached_steps)
+        );
     }
     Ok(out)
 }

@@ -26,6 +26,36 @@ pub const TARGETS: [ObjectState; 4] = [
     ObjectState::new(0.6, -0.7, PI),
 ];
 
+/// Where sampled targets lie (`--sample-targets`, the same region as the
+/// Gymnasium environments' `TargetRegion`, `docs/gym.md`): block centres
+/// with x in [−0.7, 0.7) m and y in [−0.8, 0.8) m, any yaw in [−π, π); the
+/// actuator can reach every side of such a block.
+pub const SAMPLED_X: (f64, f64) = (-0.7, 0.7);
+/// See [`SAMPLED_X`].
+pub const SAMPLED_Y: (f64, f64) = (-0.8, 0.8);
+/// A sampled target is at least this far (m) from the block's start, so
+/// that no run begins solved.
+pub const SAMPLED_MIN_TRAVEL: f64 = 0.3;
+
+/// `n` targets drawn uniformly from the sampled region by rejection, from
+/// a generator seeded with `seed` alone, so that every model meets the
+/// same targets: x, y and θ in that order per draw.
+#[must_use]
+pub fn sampled_targets(n: usize, seed: u64, block_start: (f64, f64)) -> Vec<ObjectState> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut targets = Vec::with_capacity(n);
+    while targets.len() < n {
+        let x = rng.random_range(SAMPLED_X.0..SAMPLED_X.1);
+        let y = rng.random_range(SAMPLED_Y.0..SAMPLED_Y.1);
+        let theta = rng.random_range(-PI..PI);
+        if (x - block_start.0).hypot(y - block_start.1) >= SAMPLED_MIN_TRAVEL {
+            targets.push(ObjectState::new(x, y, theta));
+        }
+    }
+    targets
+}
+
 /// The outcome of one test run (§4.3, §7.6).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MttRun {
@@ -121,6 +151,29 @@ impl TargetSummary {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn sampled_targets_are_seeded_reachable_and_away_from_the_start() {
+        let targets = super::sampled_targets(200, 1, (0.0, 0.25));
+        assert_eq!(targets, super::sampled_targets(200, 1, (0.0, 0.25)));
+        assert_ne!(targets, super::sampled_targets(200, 2, (0.0, 0.25)));
+        for t in &targets {
+            assert!(
+                (-0.7..0.7).contains(&t.x) && (-0.8..0.8).contains(&t.y),
+                "{t:?}"
+            );
+            assert!((-std::f64::consts::PI..std::f64::consts::PI).contains(&t.theta));
+            assert!(t.x.hypot(t.y - 0.25) >= super::SAMPLED_MIN_TRAVEL, "{t:?}");
+        }
+        // Uniform, not clustered: every quadrant of the region gets some.
+        for (sx, sy) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let n = targets
+                .iter()
+                .filter(|t| t.x * sx > 0.0 && t.y * sy > 0.0)
+                .count();
+            assert!(n > 20, "{n} in quadrant ({sx}, {sy})");
+        }
+    }
     use super::*;
 
     #[test]

@@ -3,7 +3,7 @@
 use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use super::round::r3;
+use super::round::{r3, Precision};
 use super::shape::Shape;
 use super::transform::global_point;
 use crate::types::{ObjectState, TrackedObject};
@@ -141,9 +141,9 @@ fn contact_by_id(a: &Body, b: &Body) -> (f64, Vector2<f64>) {
     contact(a, Shape::of_or_point(a.id), b, Shape::of_or_point(b.id))
 }
 
-fn closing(n: Vector2<f64>, a: &Body, b: &Body) -> f64 {
+fn closing(n: Vector2<f64>, a: &Body, b: &Body, precision: Precision) -> f64 {
     let dv = b.displacement - a.displacement;
-    r3(n.x * dv.x + n.y * dv.y)
+    precision.round(n.x * dv.x + n.y * dv.y)
 }
 
 /// `dist_closing(A, B)` (`docs/spec/features.md` §5): rounded signed distance between A
@@ -151,10 +151,16 @@ fn closing(n: Vector2<f64>, a: &Body, b: &Body) -> f64 {
 /// A towards B.
 #[must_use]
 pub fn dist_closing(a: &Body, b: &Body) -> DistClosing {
+    dist_closing_at(a, b, Precision::Thesis)
+}
+
+/// [`dist_closing`] rounded at `precision`.
+#[must_use]
+pub fn dist_closing_at(a: &Body, b: &Body, precision: Precision) -> DistClosing {
     let (dist, n) = contact_by_id(a, b);
     DistClosing {
-        distance: r3(dist),
-        closing: closing(n, a, b),
+        distance: precision.round(dist),
+        closing: closing(n, a, b, precision),
     }
 }
 
@@ -287,7 +293,7 @@ mod tests {
         let a = body(0, 0.0, 0.0, 0.0, 0.0, 0.0);
         let b = body(0, dx, 0.0, 0.0, 0.01, 0.02);
         let (d, n) = contact(&a, &A, &b, &B);
-        (d, closing(n, &a, &b))
+        (d, closing(n, &a, &b, Precision::Thesis))
     }
 
     #[test]
@@ -321,7 +327,7 @@ mod tests {
         assert_eq!(d, 1.0);
         // The first segment (y = −1) wins: n = c − q = (0, 0) − (0, −1) = +y.
         assert_eq!(n, Vector2::new(0.0, 1.0));
-        assert_eq!(closing(n, &a, &b), 0.02);
+        assert_eq!(closing(n, &a, &b, Precision::Thesis), 0.02);
     }
 
     proptest! {

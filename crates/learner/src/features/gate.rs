@@ -2,8 +2,8 @@
 
 use nalgebra::Vector2;
 
-use super::distance::{dist_closing, Body};
-use super::round::{r3, r3_vec};
+use super::distance::{dist_closing_at, Body};
+use super::round::Precision;
 use super::transform::{global_vec, local_point, local_vec};
 use crate::types::{ObjectState, TrackedObject};
 
@@ -27,10 +27,20 @@ pub fn relative_features(
     reference: &TrackedObject,
     other: &TrackedObject,
 ) -> [f64; RELATIVE_FEATURES_DIM] {
-    let dc = dist_closing(&Body::from(reference), &Body::from(other));
+    relative_features_at(reference, other, Precision::Thesis)
+}
+
+/// [`relative_features`] rounded at `precision`.
+#[must_use]
+pub fn relative_features_at(
+    reference: &TrackedObject,
+    other: &TrackedObject,
+    precision: Precision,
+) -> [f64; RELATIVE_FEATURES_DIM] {
+    let dc = dist_closing_at(&Body::from(reference), &Body::from(other), precision);
     let (theta, p) = (reference.s.theta, reference.s.position());
-    let rel = r3_vec(local_point(theta, p, other.s.position()));
-    let vel = r3_vec(local_vec(theta, other.velocity()));
+    let rel = precision.round_vec(local_point(theta, p, other.s.position()));
+    let vel = precision.round_vec(local_vec(theta, other.velocity()));
     [
         f64::from(reference.id),
         f64::from(other.id),
@@ -48,8 +58,18 @@ pub fn relative_features(
 /// Also the planning target difference `Δ(current block, target)`.
 #[must_use]
 pub fn local_change(pre: &ObjectState, post: &ObjectState) -> [f64; LOCAL_CHANGE_DIM] {
+    local_change_at(pre, post, Precision::Thesis)
+}
+
+/// [`local_change`] rounded at `precision`.
+#[must_use]
+pub fn local_change_at(
+    pre: &ObjectState,
+    post: &ObjectState,
+    precision: Precision,
+) -> [f64; LOCAL_CHANGE_DIM] {
     let dp = Vector2::new(post.x - pre.x, post.y - pre.y);
-    let l = r3_vec(local_vec(pre.theta, dp));
+    let l = precision.round_vec(local_vec(pre.theta, dp));
     [l.x, l.y, post.theta - pre.theta]
 }
 
@@ -66,7 +86,18 @@ pub fn apply_local_change(
     delta: [f64; LOCAL_CHANGE_DIM],
     boost: f64,
 ) -> ObjectState {
-    let g = r3_vec(global_vec(
+    apply_local_change_at(s, delta, boost, Precision::Thesis)
+}
+
+/// [`apply_local_change`] rounded at `precision`.
+#[must_use]
+pub fn apply_local_change_at(
+    s: &ObjectState,
+    delta: [f64; LOCAL_CHANGE_DIM],
+    boost: f64,
+    precision: Precision,
+) -> ObjectState {
+    let g = precision.round_vec(global_vec(
         s.theta,
         Vector2::new(delta[0] * boost, delta[1] * boost),
     ));
@@ -87,10 +118,20 @@ pub fn actuator_change(old: &ObjectState, new: &ObjectState) -> [f64; LOCAL_CHAN
 /// The predicted actuator state `r3(s + Δ̂)` (`docs/spec/features.md` §3.5).
 #[must_use]
 pub fn apply_actuator_change(s: &ObjectState, delta: [f64; LOCAL_CHANGE_DIM]) -> ObjectState {
+    apply_actuator_change_at(s, delta, Precision::Thesis)
+}
+
+/// [`apply_actuator_change`] rounded at `precision`.
+#[must_use]
+pub fn apply_actuator_change_at(
+    s: &ObjectState,
+    delta: [f64; LOCAL_CHANGE_DIM],
+    precision: Precision,
+) -> ObjectState {
     ObjectState {
-        x: r3(s.x + delta[0]),
-        y: r3(s.y + delta[1]),
-        theta: r3(s.theta + delta[2]),
+        x: precision.round(s.x + delta[0]),
+        y: precision.round(s.y + delta[1]),
+        theta: precision.round(s.theta + delta[2]),
     }
 }
 

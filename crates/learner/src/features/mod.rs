@@ -23,9 +23,12 @@ mod round;
 mod shape;
 mod transform;
 
-pub use distance::{closest_point_on_segment, dist, dist_closing, Body, DistClosing};
+pub use distance::{
+    closest_point_on_segment, dist, dist_closing, dist_closing_at, Body, DistClosing,
+};
 pub use gate::{
-    actuator_change, apply_actuator_change, apply_local_change, local_change, relative_features,
+    actuator_change, apply_actuator_change, apply_actuator_change_at, apply_local_change,
+    apply_local_change_at, local_change, local_change_at, relative_features, relative_features_at,
     DEFAULT_PREDICTION_BOOST, LOCAL_CHANGE_DIM, RELATIVE_FEATURES_DIM,
 };
 pub use interaction::{
@@ -34,10 +37,10 @@ pub use interaction::{
     EPS_NOISE_100HZ, EPS_NOISE_10HZ, INTERACTION_DIM, INTERACTION_INPUT_DIM, TARGET_FEATURES,
 };
 pub use parse::{
-    is_skipped, parse_frame, parse_observation, quaternion_to_yaw, yaw_to_quaternion, ActuatorYaw,
-    ParseError,
+    is_skipped, parse_frame, parse_frame_at, parse_observation, parse_observation_at,
+    quaternion_to_yaw, yaw_to_quaternion, ActuatorYaw, ParseError,
 };
-pub use round::{r3, r3_vec};
+pub use round::{r3, r3_vec, Precision};
 pub use shape::{Shape, ACTUATOR_SHAPE, BLUE_SHAPE, POINT_SHAPE, RED_SHAPE};
 pub use transform::{
     apply_homogeneous, global_point, global_vec, inverse_transform, local_point, local_vec,

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::round::r3;
+use super::round::Precision;
 use super::shape::Shape;
 use crate::types::{Frame, ObjectState, Observation, Poses, ACTUATOR_ID, ACTUATOR_NAME};
 
@@ -106,8 +106,13 @@ fn finite(name: &str, field: &'static str, value: f64) -> Result<f64, ParseError
     }
 }
 
-fn rounded(name: &str, field: &'static str, value: f64) -> Result<f64, ParseError> {
-    let r = r3(value);
+fn rounded(
+    name: &str,
+    field: &'static str,
+    value: f64,
+    precision: Precision,
+) -> Result<f64, ParseError> {
+    let r = precision.round(value);
     if r.is_finite() {
         Ok(r)
     } else {
@@ -122,6 +127,14 @@ fn rounded(name: &str, field: &'static str, value: f64) -> Result<f64, ParseErro
 /// `s = (r3(x), r3(y), r3(yaw))` of one observation (`docs/spec/features.md` §1 steps
 /// 1–3). The z coordinate is not read, so it is not checked either.
 pub fn parse_observation(obs: &Observation) -> Result<ObjectState, ParseError> {
+    parse_observation_at(obs, Precision::Thesis)
+}
+
+/// [`parse_observation`] rounded at `precision`.
+pub fn parse_observation_at(
+    obs: &Observation,
+    precision: Precision,
+) -> Result<ObjectState, ParseError> {
     let name = obs.name.as_str();
     let px = finite(name, "position.x", obs.position[0])?;
     let py = finite(name, "position.y", obs.position[1])?;
@@ -135,10 +148,10 @@ pub fn parse_observation(obs: &Observation) -> Result<ObjectState, ParseError> {
         finite(name, field, value)?;
     }
     Ok(ObjectState {
-        x: rounded(name, "position.x", px)?,
-        y: rounded(name, "position.y", py)?,
+        x: rounded(name, "position.x", px, precision)?,
+        y: rounded(name, "position.y", py, precision)?,
         // atan2 lies in [−π, π], r3 cannot overflow there.
-        theta: r3(quaternion_to_yaw(obs.orientation)),
+        theta: precision.round(quaternion_to_yaw(obs.orientation)),
     })
 }
 
@@ -152,6 +165,15 @@ pub fn parse_observation(obs: &Observation) -> Result<ObjectState, ParseError> {
 /// Previous states (§1 step 5) are the caller's: see
 /// [`TrackedObject::fresh`](crate::types::TrackedObject::fresh).
 pub fn parse_frame(frame: &Frame, actuator_yaw: ActuatorYaw) -> Result<Poses, ParseError> {
+    parse_frame_at(frame, actuator_yaw, Precision::Thesis)
+}
+
+/// [`parse_frame`] with the states rounded at `precision`.
+pub fn parse_frame_at(
+    frame: &Frame,
+    actuator_yaw: ActuatorYaw,
+    precision: Precision,
+) -> Result<Poses, ParseError> {
     let mut actuator: Option<ObjectState> = None;
     let mut blocks: BTreeMap<u32, (ObjectState, &str)> = BTreeMap::new();
     for obs in &frame.objects {
@@ -165,7 +187,7 @@ pub fn parse_frame(frame: &Frame, actuator_yaw: ActuatorYaw) -> Result<Poses, Pa
             if obs.id != ACTUATOR_ID {
                 return Err(ParseError::ActuatorId { id: obs.id });
             }
-            let mut s = parse_observation(obs)?;
+            let mut s = parse_observation_at(obs, precision)?;
             if actuator_yaw == ActuatorYaw::ForceZero {
                 s.theta = 0.0;
             }
@@ -178,7 +200,7 @@ pub fn parse_frame(frame: &Frame, actuator_yaw: ActuatorYaw) -> Result<Poses, Pa
                 id: obs.id,
             });
         }
-        let s = parse_observation(obs)?;
+        let s = parse_observation_at(obs, precision)?;
         if let Some((_, first)) = blocks.insert(obs.id, (s, obs.name.as_str())) {
             return Err(ParseError::DuplicateBlock {
                 id: obs.id,

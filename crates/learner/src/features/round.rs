@@ -18,6 +18,40 @@ pub fn r3_vec(v: Vector2<f64>) -> Vector2<f64> {
     Vector2::new(r3(v.x), r3(v.y))
 }
 
+/// Where the gate model's features and predictions round: to 3 decimals as
+/// the thesis did ([`r3`]), or not at all (the improved model's `unrounded`
+/// change, `docs/models.md` "Beyond the thesis").
+///
+/// The rounding was the original's only noise filter; it also quantises a
+/// predicted step of a few millimetres to whole millimetres, an error a
+/// 150-step prediction chain accumulates.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Precision {
+    /// `r3` everywhere the specification rounds.
+    #[default]
+    Thesis,
+    /// Full `f64` precision.
+    Full,
+}
+
+impl Precision {
+    /// `v` at this precision.
+    #[must_use]
+    pub fn round(self, v: f64) -> f64 {
+        match self {
+            Precision::Thesis => r3(v),
+            Precision::Full => v,
+        }
+    }
+
+    /// [`Precision::round`] component-wise.
+    #[must_use]
+    pub fn round_vec(self, v: Vector2<f64>) -> Vector2<f64> {
+        Vector2::new(self.round(v.x), self.round(v.y))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -50,6 +84,17 @@ mod tests {
             r3_vec(Vector2::new(0.12345, -0.00049)),
             Vector2::new(0.123, -0.0)
         );
+    }
+
+    #[test]
+    fn full_precision_keeps_every_bit_and_thesis_precision_is_r3() {
+        for v in [0.0005, 0.0015, -0.0005, 0.123_456_789, 1e-9] {
+            assert_eq!(Precision::Full.round(v).to_bits(), v.to_bits());
+            assert_eq!(Precision::Thesis.round(v).to_bits(), r3(v).to_bits());
+        }
+        let v = Vector2::new(0.12345, -0.00049);
+        assert_eq!(Precision::Thesis.round_vec(v), r3_vec(v));
+        assert_eq!(Precision::Full.round_vec(v), v);
     }
 
     #[test]

@@ -12,8 +12,8 @@ use super::world::{GateWorld, Record, SharedBlock};
 use crate::aim::InverseModel;
 use crate::aitm::{Aitm, AitmConfig};
 use crate::features::{
-    actuator_change, apply_actuator_change, apply_local_change, local_change, local_vec,
-    parse_frame, r3, r3_vec, relative_features, ActuatorYaw, ParseError, LOCAL_CHANGE_DIM,
+    actuator_change, apply_actuator_change_at, apply_local_change_at, local_change_at, local_vec,
+    parse_frame_at, relative_features_at, ActuatorYaw, ParseError, LOCAL_CHANGE_DIM,
     RELATIVE_FEATURES_DIM,
 };
 use crate::model::Model;
@@ -23,6 +23,11 @@ use crate::types::{Action, Frame, ObjectState, Poses, Target, TargetError, Track
 /// ε_change (`docs/spec/gate-model.md` §2, `docs/spec/README.md` §6): a block "changed" when its
 /// local change has a norm above this, i.e. any rounding-level change.
 pub const EPS_CHANGE: f64 = 0.0;
+
+/// ε_change of the `unrounded` improvement: half a rounding unit, the
+/// smallest change that rounding to 3 decimals let through, so that the
+/// physics' sub-millimetre jitter of a resting block is not taken for a push.
+pub const UNROUNDED_EPS_CHANGE: f64 = 0.0005;
 
 /// The hard-coded actuator's displacement per unit of action: the 100 Hz step
 /// length (`docs/spec/gate-model.md` §5, flag 16).
@@ -56,15 +61,16 @@ fn predictor_input(
     let mut x = [0.0; MAX_PREDICTOR_INPUT];
     x[..RELATIVE_FEATURES_DIM].copy_from_slice(phi);
     let extra = config.params().velocity_features;
+    let precision = config.params().improvements.precision();
     if extra != VelocityFeatures::None {
-        let v = r3_vec(local_vec(
+        let v = precision.round_vec(local_vec(
             o.s_prev.theta,
             o.s.position() - o.s_prev.position(),
         ));
         x[RELATIVE_FEATURES_DIM] = v.x;
         x[RELATIVE_FEATURES_DIM + 1] = v.y;
         if extra == VelocityFeatures::LinearAngular {
-            x[RELATIVE_FEATURES_DIM + 2] = r3(o.s.theta - o.s_prev.theta);
+            x[RELATIVE_FEATURES_DIM + 2] = precision.round(o.s.theta - o.s_prev.theta);
         }
     }
     (x, RELATIVE_FEATURES_DIM + extra.dim())
@@ -156,7 +162,7 @@ impl GateModel {
     pub fn new(config: GateConfig) -> Self {
         Self {
             config,
-            actuator_model: Aitm::new(config.forward(), ACTION_DIM, LOCAL_CHANGE_DIM),
+            actuator_model: Aitm::new(config.actuator(), ACTION_DIM, LOCAL_CHANGE_DIM),
             gate: Aitm::new(AitmConfig::classifier(), RELATIVE_FEATURES_DIM, 1),
             predictors: BTreeMap::new(),
             actuator: None,
@@ -183,9 +189,53 @@ impl GateModel {
         &self.gate
     }
 
-    /// The forward and inverse model of a block id, once it has changed.
+    /// The forward and inverse model of a block id, once it has changed
+    /// (with the `shared-blocks` improvement: the one model of every block,
+    /// kept under the id of the block that first changed).
     pub fn predictor(&self, id: u32) -> Option<&Predictor> {
-        self.predictors.get(&id)
+        if self.config.params().improvements.shared_blocks {
+            self.predictors.values().next()
+        } else {
+            self.predictors.get(&id)
+        }
+    }
+
+    /// [`GateModel::predictor`], to train or to query the inverse model.
+    pub(super) fn predictor_mut(&mut self, id: u32) -> Option<&mut Predictor> {
+        if self.config.params().improvements.shared_blocks {
+            self.predictors.values_mut().next()
+        } else {
+            self.predictors.get_mut(&id)
+        }
+    }
+
+    /// φ(reference, other) as this model computes it: at its precision, and
+    /// without the two ids when the blocks share one model.
+    pub(super) fn phi(
+        &self,
+        reference: &TrackedObject,
+        other: &TrackedObject,
+    ) -> [f64; RELATIVE_FEATURES_DIM] {
+        let improvements = self.config.params().improvements;
+        let mut phi = relative_features_at(reference, other, improvements.precision());
+        if improvements.shared_blocks {
+            phi[0] = 0.0;
+            phi[1] = 0.0;
+        }
+        phi
+    }
+
+    /// Δ(pre, post) at this model's precision.
+    pub(super) fn local_change(
+        &self,
+        pre: &ObjectState,
+        post: &ObjectState,
+    ) -> [f64; LOCAL_CHANGE_DIM] {
+        local_change_at(pre, post, self.precision())
+    }
+
+    fn precision(&self) -> crate::features::Precision {
+        self.config.params().improvements.precision()
     }
 
     /// The model's actuator (state after the latest update).
@@ -234,7 +284,7 @@ impl GateModel {
         };
         TrackedObject {
             id: from.id,
-            s: apply_actuator_change(&from.s, delta),
+            s: apply_actuator_change_at(&from.s, delta, self.precision()),
             s_prev: from.s,
         }
     }
@@ -247,13 +297,14 @@ impl GateModel {
         o: &TrackedObject,
         phi: &[f64; RELATIVE_FEATURES_DIM],
     ) -> Option<ObjectState> {
-        let p = self.predictors.get(&o.id)?;
+        let p = self.predictor(o.id)?;
         let (x, n) = predictor_input(&self.config, o, phi);
         let d = p.forward.query(&x[..n]);
-        Some(apply_local_change(
+        Some(apply_local_change_at(
             &o.s,
             [d[0], d[1], d[2]],
             self.config.params().prediction_boost,
+            self.precision(),
         ))
     }
 
@@ -262,19 +313,26 @@ impl GateModel {
     fn train_block(&mut self, k: &TrackedObject, o: &TrackedObject, act: &TrackedObject) {
         // docs/spec/gate-model.md §2: OLD block state with NEW actuator state, the
         // pairing predict() presents (predicted actuator, current block).
-        let phi = relative_features(k, act);
-        let delta = local_change(&k.s, &o.s);
-        let changed = norm(&delta) > EPS_CHANGE;
+        let phi = self.phi(k, act);
+        let delta = self.local_change(&k.s, &o.s);
+        let eps_change = if self.config.params().improvements.unrounded {
+            UNROUNDED_EPS_CHANGE
+        } else {
+            EPS_CHANGE
+        };
+        let changed = norm(&delta) > eps_change;
         if !self.config.params().hard_coded_gate {
             self.gate.update_label(&phi, i64::from(changed));
         }
         if changed {
-            let config = &self.config;
-            let (x, n) = predictor_input(config, k, &phi);
-            let p = self
-                .predictors
-                .entry(o.id)
-                .or_insert_with(|| Predictor::new(config));
+            let config = self.config;
+            let (x, n) = predictor_input(&config, k, &phi);
+            if self.predictor(o.id).is_none() {
+                self.predictors.insert(o.id, Predictor::new(&config));
+            }
+            let Some(p) = self.predictor_mut(o.id) else {
+                return;
+            };
             p.forward.update(&x[..n], &delta);
             p.inverse.train(&phi, &delta);
         }
@@ -313,9 +371,10 @@ impl Model for GateModel {
 
     fn parse(&self, frame: &Frame) -> Result<GateWorld, ParseError> {
         // docs/spec/features.md §1 step 4: the gate model zeroes the actuator's yaw.
-        Ok(GateWorld::from_poses(&parse_frame(
+        Ok(GateWorld::from_poses(&parse_frame_at(
             frame,
             ActuatorYaw::ForceZero,
+            self.precision(),
         )?))
     }
 
@@ -366,7 +425,7 @@ impl Model for GateModel {
             .iter()
             .map(|block| {
                 let o = block.get();
-                let phi = relative_features(&o, &act);
+                let phi = self.phi(&o, &act);
                 match self
                     .influences(&phi)
                     .then(|| self.predictor_state(&o, &phi))
@@ -457,6 +516,11 @@ impl TryFrom<GateModelState> for GateModel {
         }
         if dims(&s.gate) != (RELATIVE_FEATURES_DIM, 1) || !s.gate.config().is_classifier() {
             return Err(Bad("gate dimensions or kind"));
+        }
+        if s.config.params().improvements.shared_blocks && s.predictors.len() > 1 {
+            return Err(Bad(
+                "several block predictors in a model whose blocks share one",
+            ));
         }
         for p in s.predictors.values() {
             if dims(&p.forward) != (predictor_input_dim(&s.config), LOCAL_CHANGE_DIM) {

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::errors::GateError;
 use crate::aim::{AimConfig, AimParams};
 use crate::aitm::{AitmConfig, AitmParams, QueryMode};
-use crate::features::DEFAULT_PREDICTION_BOOST;
+use crate::features::{Precision, DEFAULT_PREDICTION_BOOST};
 
 /// The boost of configuration flag 64 (`docs/spec/gate-model.md` §5).
 pub const FLAG_PREDICTION_BOOST: f64 = 1.5;
@@ -48,6 +48,78 @@ impl VelocityFeatures {
     }
 }
 
+/// The improved gate model's changes (`docs/models.md` "Beyond the
+/// thesis"), each one switchable so that an ablation has one row per change.
+/// All off is the thesis's model, bit for bit; all on is `gate+`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, rename_all = "kebab-case")]
+pub struct Improvements {
+    /// Features, changes and predictions at full precision instead of
+    /// rounded to 3 decimals; a block then counts as changed above a noise
+    /// threshold ([`UNROUNDED_EPS_CHANGE`](super::UNROUNDED_EPS_CHANGE))
+    /// instead of at any rounding unit.
+    pub unrounded: bool,
+    /// The forward models blend the winner with all its topological
+    /// neighbours (AITM `NEIGHBOUR`) instead of the winner and the second
+    /// winner only.
+    pub interpolate: bool,
+    /// The planner checks the inverse model's push and variants of it with
+    /// the forward model and takes the one predicted to bring the block
+    /// closest to the target.
+    pub forward_check: bool,
+    /// One forward and inverse model shared by every block, with the block
+    /// ids left out of φ, so that what was learned on one object applies to
+    /// another.
+    pub shared_blocks: bool,
+    /// The actuator's forward model adapts its winner towards every sample
+    /// ([`ADAPTED_ACTUATOR_RATE`]) instead of replacing half of it only when
+    /// the error exceeds the insertion threshold: its one input, the
+    /// commanded action, then predicts the mean step rather than whichever
+    /// (possibly latency-shortened) step it stored first.
+    pub adapt_actuator: bool,
+    /// The block forward models move their winner's output towards every
+    /// sample it wins (η_out = [`AVERAGED_OUTPUT_RATE`], inputs and local
+    /// linear maps fixed), so that a node holds a running mean of the
+    /// changes it stands for, not the single sample that created it.
+    pub average_outputs: bool,
+}
+
+/// η_out of the block forward models with `average-outputs` (the draft's
+/// smaller rate, as [`ADAPTED_ACTUATOR_RATE`]).
+pub const AVERAGED_OUTPUT_RATE: f64 = 0.1;
+
+/// η of the actuator's forward model with `adapt-actuator`: the smaller of
+/// the two non-zero rates of the thesis draft's tables (0.1 and 0.2).
+pub const ADAPTED_ACTUATOR_RATE: f64 = 0.1;
+
+impl Improvements {
+    /// Every change: the `gate+` model.
+    pub const ALL: Self = Self {
+        unrounded: true,
+        interpolate: true,
+        forward_check: true,
+        shared_blocks: true,
+        adapt_actuator: true,
+        average_outputs: true,
+    };
+
+    /// Whether any change is on.
+    #[must_use]
+    pub fn any(self) -> bool {
+        self != Self::default()
+    }
+
+    /// The precision of features and predictions.
+    #[must_use]
+    pub fn precision(self) -> Precision {
+        if self.unrounded {
+            Precision::Full
+        } else {
+            Precision::Thesis
+        }
+    }
+}
+
 /// Unchecked gate model parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct GateParams {
@@ -71,6 +143,9 @@ pub struct GateParams {
     /// The block predictors' velocity inputs (flag 1).
     #[serde(default)]
     pub velocity_features: VelocityFeatures,
+    /// Changes beyond the thesis; none in the faithful model.
+    #[serde(default)]
+    pub improvements: Improvements,
 }
 
 impl GateParams {
@@ -84,6 +159,7 @@ impl GateParams {
             hard_coded_gate: false,
             forward_learning_rate: 0.0,
             velocity_features: VelocityFeatures::None,
+            improvements: Improvements::default(),
         }
     }
 
@@ -132,13 +208,29 @@ impl GateParams {
         if !(self.prediction_boost.is_finite() && self.prediction_boost > 0.0) {
             return Err(GateError::InvalidBoost(self.prediction_boost));
         }
-        let forward = AitmParams::regressor(QueryMode::BestTwo)
-            .with_learning_rate(self.forward_learning_rate)
-            .check()?;
+        let mode = if self.improvements.interpolate {
+            QueryMode::Neighbour
+        } else {
+            QueryMode::BestTwo
+        };
+        let mut forward =
+            AitmParams::regressor(mode).with_learning_rate(self.forward_learning_rate);
+        if self.improvements.average_outputs {
+            forward.eta_out = AVERAGED_OUTPUT_RATE;
+        }
+        let forward = forward.check()?;
+        let actuator = if self.improvements.adapt_actuator {
+            AitmParams::regressor(mode)
+                .with_learning_rate(ADAPTED_ACTUATOR_RATE)
+                .check()?
+        } else {
+            forward
+        };
         Ok(GateConfig {
             params: self,
             aim,
             forward,
+            actuator,
         })
     }
 }
@@ -156,9 +248,11 @@ pub struct GateConfig {
     params: GateParams,
     /// `params.aim`, checked.
     aim: AimConfig,
-    /// The actuator and block forward models' configuration (BESTTWO,
+    /// The block forward models' configuration (BESTTWO,
     /// `docs/spec/aitm.md` §6, with `params.forward_learning_rate`), checked.
     forward: AitmConfig,
+    /// The actuator forward model's: `forward`, but for `adapt-actuator`.
+    actuator: AitmConfig,
 }
 
 impl TryFrom<GateParams> for GateConfig {
@@ -188,6 +282,7 @@ impl GateConfig {
             params: GateParams::hz100(),
             aim: AimConfig::hz100(),
             forward: AitmConfig::regressor(QueryMode::BestTwo),
+            actuator: AitmConfig::regressor(QueryMode::BestTwo),
         }
     }
 
@@ -210,9 +305,14 @@ impl GateConfig {
         self.aim
     }
 
-    /// The actuator and block forward models' configuration.
+    /// The block forward models' configuration.
     pub fn forward(&self) -> AitmConfig {
         self.forward
+    }
+
+    /// The actuator forward model's configuration.
+    pub fn actuator(&self) -> AitmConfig {
+        self.actuator
     }
 }
 

@@ -22,8 +22,14 @@ mod tests;
 pub use crate::planning::{
     APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
-pub use algorithm::{GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL};
+pub use algorithm::{
+    GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL,
+    UNROUNDED_EPS_CHANGE,
+};
 pub use errors::GateError;
-pub use hyperparams::{flags, GateConfig, GateParams, VelocityFeatures, FLAG_PREDICTION_BOOST};
+pub use hyperparams::{
+    flags, GateConfig, GateParams, Improvements, VelocityFeatures, ADAPTED_ACTUATOR_RATE,
+    AVERAGED_OUTPUT_RATE, FLAG_PREDICTION_BOOST,
+};
 pub use planner::{PASS_MAX, PASS_MIN};
 pub use world::GateWorld;

@@ -5,11 +5,11 @@ use nalgebra::Vector2;
 use rand::Rng;
 
 use super::algorithm::GateModel;
-use crate::features::{global_point, global_vec, local_change, relative_features};
+use crate::features::{global_point, global_vec, relative_features};
 use crate::planning::{
     circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
-use crate::types::{Action, TrackedObject};
+use crate::types::{Action, ObjectState, TrackedObject};
 
 /// The precondition's motion passes through unscaled strictly inside
 /// (`PASS_MIN`, `PASS_MAX`) or when it is zero.
@@ -33,10 +33,9 @@ impl GateModel {
             self.target = None;
             return Action::ZERO;
         }
-        let d = local_change(&b.s, &goal);
+        let d = self.local_change(&b.s, &goal);
         let pre = self
-            .predictors
-            .get_mut(&b.id)
+            .predictor_mut(b.id)
             .and_then(|p| p.inverse.preconditions_for(&d));
         let Some(pre) = pre else {
             return exploration(b.s.position() - act.s.position(), rng);
@@ -53,7 +52,7 @@ impl GateModel {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
             // docs/spec/planning.md §2: the gate as a safety check on the straight move.
             let a_hat = self.predict_actuator(&act, u);
-            let phi = relative_features(&b, &a_hat);
+            let phi = self.phi(&b, &a_hat);
             if !self.influences(&phi) {
                 return u;
             }
@@ -65,12 +64,78 @@ impl GateModel {
         }
         let n = norm2(v_star);
         // docs/spec/planning.md §2: at 10 Hz the raw displacement passes through.
-        if n == 0.0 || (PASS_MIN < n && n < PASS_MAX) {
-            return Action::from_vector(v_star);
+        let push = if n == 0.0 || (PASS_MIN < n && n < PASS_MAX) {
+            Action::from_vector(v_star)
+        } else {
+            Action::from_vector(scaled(v_star, APPROACH_SPEED))
+        };
+        if self.config.params().improvements.forward_check {
+            return self.checked_push(&b, &act, push);
         }
-        Action::from_vector(scaled(v_star, APPROACH_SPEED))
+        push
+    }
+
+    /// The `forward-check` improvement: of the inverse model's `push` and
+    /// slower or turned variants of it, the one after which the forward
+    /// model predicts the block closest to the target; `push` itself on a
+    /// tie. The inverse model averages pushes that had similar effects, so
+    /// near the target its push often overshoots, and it knows nothing of
+    /// the block's exact pose relative to the actuator, which the forward
+    /// model sees.
+    pub(super) fn checked_push(
+        &self,
+        b: &TrackedObject,
+        act: &TrackedObject,
+        push: Action,
+    ) -> Action {
+        let Some(goal) = self.target.map(|t| t.pose) else {
+            return push;
+        };
+        let v = push.to_vector();
+        let mut best = (self.predicted_distance(b, act, push, &goal), push);
+        for &(speed, turn) in &FORWARD_CHECK_VARIANTS {
+            let u = Action::from_vector(global_vec(turn, v) * speed);
+            let d = self.predicted_distance(b, act, u, &goal);
+            // Strict: a variant must be predicted better, not merely as good.
+            if d < best.0 {
+                best = (d, u);
+            }
+        }
+        best.1
+    }
+
+    /// The distance to `goal` of block `b` one message after `u`, as the
+    /// forward models predict it.
+    pub(super) fn predicted_distance(
+        &self,
+        b: &TrackedObject,
+        act: &TrackedObject,
+        u: Action,
+        goal: &ObjectState,
+    ) -> f64 {
+        let a_hat = self.predict_actuator(act, u);
+        let phi = self.phi(b, &a_hat);
+        let s = if self.influences(&phi) {
+            self.predictor_state(b, &phi).unwrap_or(b.s)
+        } else {
+            b.s
+        };
+        s.distance_to(goal)
     }
 }
+
+/// The variants of the inverse model's push that `forward-check` weighs:
+/// (speed factor, turn in radians), in the order that breaks ties.
+const FORWARD_CHECK_VARIANTS: [(f64, f64); 8] = [
+    (0.5, 0.0),
+    (0.25, 0.0),
+    (1.0, 0.2),
+    (1.0, -0.2),
+    (1.0, 0.4),
+    (1.0, -0.4),
+    (0.5, 0.2),
+    (0.5, -0.2),
+];
 
 /// `circle_gate(B, Act, q)` (`docs/spec/planning.md` §4): the distance and the
 /// actuator's angle come from `φ(B, Act)`, `r` is the global vector from the

@@ -1079,3 +1079,202 @@ fn a_learning_rate_moves_the_forward_models_nodes() {
     // With η = 0 every stored input is one the model was shown: rounded.
     assert!(still.iter().all(|(w, _)| w.iter().all(|&v| v == r3(v))));
 }
+
+// ------------------------------------------------- beyond the thesis (gate+)
+
+fn improved(on: Improvements) -> GateModel {
+    GateModel::new(
+        GateParams {
+            improvements: on,
+            ..GateParams::hz100()
+        }
+        .check()
+        .unwrap(),
+    )
+}
+
+fn frame_at(actuator: (f64, f64), block: (f64, f64)) -> Frame {
+    let obs = |name: &str, id, (x, y): (f64, f64)| Observation {
+        name: name.to_owned(),
+        id,
+        position: [x, y, 0.03],
+        orientation: [0.0, 0.0, 0.0, 1.0],
+    };
+    Frame {
+        objects: vec![
+            obs("actuator", ACTUATOR_ID, actuator),
+            obs("blockA", BLUE_ID, block),
+        ],
+    }
+}
+
+#[test]
+fn without_improvements_the_model_is_the_thesiss_bit_for_bit() {
+    assert_eq!(GateParams::hz100().improvements, Improvements::default());
+    assert!(!Improvements::default().any() && Improvements::ALL.any());
+    let (mut faithful, mut default) = (GateModel::default(), improved(Improvements::default()));
+    train(&mut faithful, &[0.0, -0.12, 0.07]);
+    train(&mut default, &[0.0, -0.12, 0.07]);
+    assert_eq!(
+        serde_json::to_string(&faithful).unwrap(),
+        serde_json::to_string(&default).unwrap()
+    );
+}
+
+#[test]
+fn an_older_model_file_without_improvements_still_loads_as_the_faithful_model() {
+    let json = serde_json::to_string(&GateModel::default()).unwrap();
+    let mut value: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let removed = value
+        .pointer_mut("/config")
+        .and_then(|c| c.as_object_mut())
+        .and_then(|c| c.remove("improvements"));
+    assert!(removed.is_some(), "the improvements are serialised: {json}");
+    let back: GateModel = serde_json::from_value(value).unwrap();
+    assert_eq!(back.config(), &GateConfig::hz100());
+}
+
+#[test]
+fn unrounded_keeps_every_bit_of_the_world_and_of_the_features() {
+    let frame = frame_at((0.123_456, -0.000_4), (0.0, 0.25));
+    let rounded = GateModel::default().parse(&frame).unwrap();
+    assert_eq!(rounded.actuator.s.x, 0.123);
+    let on = Improvements {
+        unrounded: true,
+        ..Improvements::default()
+    };
+    let full = improved(on).parse(&frame).unwrap();
+    assert_eq!(full.actuator.s.x, 0.123_456);
+    assert_eq!(full.actuator.s.y, -0.000_4);
+    let m = improved(on);
+    let phi = m.phi(&full.blocks[0].get(), &full.actuator);
+    // rel_x of the actuator in the block's frame, unrounded.
+    assert!((phi[4] - 0.123_456).abs() < 1e-12, "{phi:?}");
+}
+
+#[test]
+fn unrounded_does_not_take_sub_millimetre_jitter_for_a_push() {
+    let on = Improvements {
+        unrounded: true,
+        ..Improvements::default()
+    };
+    let mut m = improved(on);
+    m.reset_objects(&world((0.0, -0.3), &blue(0.0, 0.25, 0.0)));
+    // The block creeps 0.2 mm: below UNROUNDED_EPS_CHANGE, no predictor.
+    m.update(&world((0.0, -0.295), &blue(0.000_2, 0.25, 0.0)), PUSH);
+    assert!(m.predictor(BLUE_ID).is_none());
+    const { assert!(0.000_2 < UNROUNDED_EPS_CHANGE) };
+    // A 2 mm push is a change.
+    m.update(&world((0.0, -0.29), &blue(0.000_2, 0.252, 0.0)), PUSH);
+    assert!(m.predictor(BLUE_ID).is_some());
+}
+
+#[test]
+fn shared_blocks_carry_what_was_learned_on_one_block_to_another() {
+    let shared = Improvements {
+        shared_blocks: true,
+        ..Improvements::default()
+    };
+    let delta = [0.0, 0.005, 0.001];
+    let scene = world((0.0, 0.12), &[(RED_ID, st(0.0, 0.25, 0.0))]);
+    for (on, moves) in [(Improvements::default(), false), (shared, true)] {
+        let mut m = improved(on);
+        m.reset_objects(&world((0.0, 0.1), &[(BLUE_ID, st(0.0, 0.25, 0.0))]));
+        m.gate = gate_always(1);
+        // As the model would have learned it: φ without ids when shared.
+        let mut forward = Aitm::new(AitmConfig::regressor(QueryMode::BestTwo), 8, 3);
+        let ids = if moves { [0.0, 0.0] } else { [15.0, 8.0] };
+        for rel_y in [-0.1, -0.2] {
+            forward.update(&[ids[0], ids[1], 0.0, 0.0, 0.0, rel_y, 0.0, 0.0], &delta);
+        }
+        let inverse = InverseModel::new(m.config().aim());
+        m.predictors.insert(BLUE_ID, Predictor { forward, inverse });
+        let p = m.predict(&scene, PUSH);
+        let red = p.block(RED_ID).map(|b| b.s);
+        if moves {
+            // Only blue was ever learned; red moves as blue did.
+            assert_eq!(red, Some(st(0.0, 0.255, 0.001)), "{on:?}");
+            assert!(m.predictor(RED_ID).is_some());
+        } else {
+            assert_eq!(red, Some(st(0.0, 0.25, 0.0)), "{on:?}");
+            assert!(m.predictor(RED_ID).is_none());
+        }
+    }
+}
+
+#[test]
+fn a_shared_model_with_two_block_predictors_is_refused() {
+    let mut m = improved(Improvements {
+        shared_blocks: true,
+        ..Improvements::default()
+    });
+    train(&mut m, &[0.0]);
+    let aim = InverseModel::new(m.config().aim());
+    m.predictors
+        .insert(RED_ID, predictor_constant([0.0; 3], aim));
+    let json = serde_json::to_string(&m).unwrap();
+    assert!(serde_json::from_str::<GateModel>(&json).is_err());
+}
+
+#[test]
+fn adapt_actuator_predicts_the_usual_step_after_a_latency_shortened_first_one() {
+    let on = Improvements {
+        adapt_actuator: true,
+        ..Improvements::default()
+    };
+    let mut steps = vec![0.002];
+    steps.extend([0.005; 60]);
+    let predicted = |mut m: GateModel| {
+        let mut y = 0.0;
+        m.reset_objects(&world((0.0, y), &blue(0.0, 0.9, 0.0)));
+        for s in &steps {
+            y += s;
+            m.update(&world((0.0, y), &blue(0.0, 0.9, 0.0)), PUSH);
+        }
+        let from = world((0.0, 0.0), &blue(0.0, 0.9, 0.0));
+        m.predict(&from, PUSH).actuator.s.y
+    };
+    let faithful = predicted(GateModel::default());
+    let adapted = predicted(improved(on));
+    // The thesis's map keeps its first (short) sample in the blend.
+    assert!((faithful - 0.005).abs() >= 0.001, "faithful {faithful}");
+    assert!((adapted - 0.005).abs() < (faithful - 0.005).abs());
+    assert!((adapted - 0.005).abs() <= 0.000_5, "adapted {adapted}");
+}
+
+#[test]
+fn forward_check_takes_the_push_predicted_best_and_keeps_the_inverse_models_on_a_tie() {
+    let on = Improvements {
+        forward_check: true,
+        ..Improvements::default()
+    };
+    let mut m = improved(on);
+    train(&mut m, &[0.0, -0.12, 0.07, 0.2, -0.2, 0.1]);
+    let goal = st(0.0, 0.6, 0.0);
+    m.set_target(Some(Target::new(BLUE_ID, goal))).unwrap();
+    let act = m.actuator().unwrap();
+    let b = m.block(BLUE_ID).unwrap();
+    for (vx, vy) in [
+        (0.0, 0.3),
+        (0.05, 0.3),
+        (-0.1, 0.25),
+        (0.2, 0.2),
+        (0.0, 0.05),
+    ] {
+        let push = Action::new(vx, vy);
+        let chosen = m.checked_push(&b, &act, push);
+        let (d_push, d_chosen) = (
+            m.predicted_distance(&b, &act, push, &goal),
+            m.predicted_distance(&b, &act, chosen, &goal),
+        );
+        assert!(d_chosen <= d_push, "{push:?} → {chosen:?}");
+        if chosen == push {
+            continue;
+        }
+        assert!(d_chosen < d_push);
+    }
+    // Far from any contact every candidate predicts the block at rest: a tie.
+    let far = tracked(ACTUATOR_ID, st(1.5, -1.5, 0.0), st(1.5, -1.5, 0.0));
+    let push = Action::new(0.0, 0.3);
+    assert_eq!(m.checked_push(&b, &far, push), push);
+}
