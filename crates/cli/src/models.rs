@@ -324,16 +324,23 @@ impl ModelOptions {
         );
         // Only when set, so that memory stored before --improve existed
         // still compares equal.
-        let on = self.improvements();
-        if on.any() {
-            let names: Vec<&str> = Improvement::EACH
-                .into_iter()
-                .filter(|i| i.is_in(on))
-                .map(Improvement::as_str)
-                .collect();
+        let names = self.improvement_names();
+        if !names.is_empty() {
             line.push_str(&format!(", improve {}", names.join("+")));
         }
         line
+    }
+
+    /// The names of the changes --improve turns on, in the order of
+    /// [`Improvement::EACH`] (`all` spelt out), whatever the command line's.
+    #[must_use]
+    pub fn improvement_names(&self) -> Vec<&'static str> {
+        let on = self.improvements();
+        Improvement::EACH
+            .into_iter()
+            .filter(|i| i.is_in(on))
+            .map(Improvement::as_str)
+            .collect()
     }
 
     /// The changes of --improve.
@@ -358,12 +365,7 @@ impl ModelOptions {
         if on == Improvements::ALL {
             return ModelKind::GatePlus.as_str().to_owned();
         }
-        let mut name = String::from("gate");
-        for i in Improvement::EACH.into_iter().filter(|i| i.is_in(on)) {
-            name.push('+');
-            name.push_str(i.as_str());
-        }
-        name
+        format!("gate+{}", self.improvement_names().join("+"))
     }
 
     /// Refuses what only configures a built-in model: --eta, --selector,

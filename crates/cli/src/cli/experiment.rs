@@ -8,7 +8,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::ObjectState;
-use pushlearn_cli::experiment::move_to_target::{MAX_STEPS, TEST_BLOCK_START};
+use pushlearn_cli::experiment::move_to_target::{sampled_targets, MAX_STEPS};
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
@@ -16,7 +16,7 @@ use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, World
 use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
 use pushlearn_cli::models::{LearnerChoice, ModelKind, ModelOptions};
-use pushlearn_cli::results::move_to_target::{sampled_targets, REPETITIONS, TARGETS};
+use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
 use pushlearn_cli::spec::Spec;
 
 /// Run one of the thesis's experiments and print its table beside the
@@ -455,11 +455,7 @@ fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
         model: args.learner.choice(),
         options: args.options.clone(),
         targets: match args.sample_targets {
-            Some(n) => sampled_targets(
-                n as usize,
-                args.world.seed,
-                (TEST_BLOCK_START.x, TEST_BLOCK_START.y),
-            ),
+            Some(n) => sampled_targets(n as usize, args.world.seed),
             None if args.target.is_empty() => TARGETS.to_vec(),
             None => args.target.clone(),
         },

@@ -127,6 +127,15 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         use_repository_python(root);
     }
     let chosen = chosen_entries(&entries, &args.only)?;
+    let command = if args.quick {
+        "pushlearn reproduce --quick".to_owned()
+    } else if args.page_only {
+        "pushlearn reproduce --page-only".to_owned()
+    } else if chosen.is_some() {
+        format!("pushlearn reproduce --only {}", args.only.join(","))
+    } else {
+        "pushlearn reproduce".to_owned()
+    };
     // With --only, the timing of what ran (the loaded documents have none).
     let mut only_timing = None;
     let results = if args.page_only {
@@ -141,10 +150,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
             None => run_with_bars(&entries, &settings)?,
             Some(chosen) => {
                 let ran = run_with_bars(chosen, &settings)?;
-                only_timing = Some(ran.timing_page(&format!(
-                    "pushlearn reproduce --only {}",
-                    args.only.join(",")
-                )));
+                only_timing = Some(ran.timing_page(&command));
                 let others: Vec<manifest::Entry> = entries
                     .iter()
                     .filter(|e| !chosen.contains(e))
@@ -155,22 +161,20 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         }
     };
     let page = template.map(|t| page::generate(&t, &results)).transpose()?;
-    let command = if args.quick {
-        "pushlearn reproduce --quick"
-    } else if args.page_only {
-        "pushlearn reproduce --page-only"
-    } else {
-        "pushlearn reproduce"
-    };
-    let states: u64 = results
+    // What this run ran: everything, or with --only the chosen entries.
+    let ran: Vec<&reproduce::Produced> = results
         .produced
+        .iter()
+        .filter(|p| chosen.as_ref().is_none_or(|c| c.contains(&p.entry)))
+        .collect();
+    let states: u64 = ran
         .iter()
         .flat_map(|p| p.document.runs())
         .map(|r| r.messages)
         .sum();
     if args.page_only {
         if args.check {
-            check(root, &dir, None, page.as_deref())?;
+            check(root, &dir, None, false, page.as_deref())?;
             println!(
                 "{command} --check: {PAGE} matches {TEMPLATE} and the documents in {RESULTS_DIR}"
             );
@@ -203,51 +207,40 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         });
     }
     if args.check {
-        check(root, &dir, Some(&files), page.as_deref())?;
+        check(root, &dir, Some(&files), chosen.is_none(), page.as_deref())?;
         println!(
             "{command} --check: {} documents{} match the code ({} experiments, {states} messages, {:.1} s)",
             files.len(),
             if page.is_some() { " and the page" } else { "" },
-            results.produced.len(),
+            ran.len(),
             results.wall_seconds
         );
         return Ok(());
     }
     reproduce::write_files(&dir, &files)?;
-    if let Some(timing) = only_timing {
-        print!("{timing}");
-        // timing.md keeps the last full run's lines and, after them, the
-        // last --only run's (replacing an earlier one).
-        let path = dir.join(TIMING);
-        let old = std::fs::read_to_string(&path).unwrap_or_default();
-        let full = old.split(ONLY_TIMING_MARK).next().unwrap_or_default();
-        reproduce::write_atomically(
-            &path,
-            &format!("{}\n{ONLY_TIMING_MARK}\n\n{timing}", full.trim_end()),
-        )?;
-        if let Some(page) = &page {
-            let figures = draw_figures(root, &results, page)?;
-            reproduce::write_atomically(&root.join(PAGE), page)?;
-            println!(
-                "{command} --only: {} experiments in {:.1} s; wrote {} documents to {}, {figures} figures and {}",
-                files.len(),
-                results.wall_seconds,
-                files.len(),
-                dir.display(),
-                root.join(PAGE).display()
-            );
+    let timing = match only_timing {
+        None => {
+            // The other documents are only stale after a whole run.
+            for stale in stale_documents(&dir, &files)? {
+                std::fs::remove_file(&stale)
+                    .with_context(|| format!("removing the stale {}", stale.display()))?;
+                eprintln!(
+                    "removed {}: no experiment produces it any more",
+                    stale.display()
+                );
+            }
+            results.timing_page(&command)
         }
-        return Ok(());
-    }
-    for stale in stale_documents(&dir, &files)? {
-        std::fs::remove_file(&stale)
-            .with_context(|| format!("removing the stale {}", stale.display()))?;
-        eprintln!(
-            "removed {}: no experiment produces it any more",
-            stale.display()
-        );
-    }
-    reproduce::write_atomically(&dir.join(TIMING), &results.timing_page(command))?;
+        Some(timing) => {
+            print!("{timing}");
+            // timing.md keeps the last full run's lines and, after them,
+            // the last --only run's (replacing an earlier one).
+            let old = std::fs::read_to_string(dir.join(TIMING)).unwrap_or_default();
+            let full = old.split(ONLY_TIMING_MARK).next().unwrap_or_default();
+            format!("{}\n{ONLY_TIMING_MARK}\n\n{timing}", full.trim_end())
+        }
+    };
+    reproduce::write_atomically(&dir.join(TIMING), &timing)?;
     let mut figures = 0;
     if let Some(page) = &page {
         figures = draw_figures(root, &results, page)?;
@@ -255,7 +248,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     }
     println!(
         "{command}: {} experiments, {states} messages, in {:.1} s; wrote {} documents to {}{}{}",
-        results.produced.len(),
+        ran.len(),
         results.wall_seconds,
         files.len(),
         dir.display(),
@@ -419,11 +412,13 @@ fn run_with_bars(entries: &[manifest::Entry], settings: &Settings) -> Result<Rep
 
 /// Compares the regenerated files with the committed ones; fails naming
 /// every stale file and its first differing value. `files` is `None` when
-/// no document was regenerated (`--page-only`).
+/// no document was regenerated (`--page-only`); `whole` when every
+/// experiment ran, so that a committed document none wrote is stale.
 fn check(
     root: &Path,
     dir: &Path,
     files: Option<&[(String, String)]>,
+    whole: bool,
     page: Option<&str>,
 ) -> Result<()> {
     let mut problems = Vec::new();
@@ -446,8 +441,8 @@ fn check(
         }
     }
     let stale = match files {
-        Some(files) => stale_documents(dir, files)?,
-        None => Vec::new(),
+        Some(files) if whole => stale_documents(dir, files)?,
+        _ => Vec::new(),
     };
     for stale in stale {
         problems.push(format!(

@@ -38,7 +38,18 @@ pub const TRAINING_RUNS: [((f64, f64), Action); 8] = [
 pub const TEST_START: (f64, f64) = (0.0, 0.0);
 
 /// The blue block's start in every run.
-pub const TEST_BLOCK_START: ObjectState = ObjectState::new(0.0, 0.25, 0.0);
+const TEST_BLOCK_START: ObjectState = ObjectState::new(0.0, 0.25, 0.0);
+
+/// `--sample-targets n` with `--seed seed`: `n` targets of the sampled
+/// region, away from the blue block's start.
+#[must_use]
+pub fn sampled_targets(n: usize, seed: u64) -> Vec<ObjectState> {
+    crate::results::move_to_target::sampled_targets(
+        n,
+        seed,
+        (TEST_BLOCK_START.x, TEST_BLOCK_START.y),
+    )
+}
 
 /// Expected block starts of every run (§4.3; the red block's entry, which
 /// differs from the push task's, only matters in a two-block scene).

@@ -6,11 +6,11 @@ use std::fmt::Write as _;
 
 use learner::interaction::SelectorKind;
 
-use crate::experiment::move_to_target::MAX_STEPS;
+use crate::experiment::move_to_target::{sampled_targets, MAX_STEPS};
 use crate::experiment::push_task::protocol::Variant;
 use crate::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use crate::models::{Improvement, ModelKind, ModelOptions};
-use crate::results::move_to_target::{sampled_targets, REPETITIONS, TARGETS};
+use crate::results::move_to_target::{REPETITIONS, TARGETS};
 use crate::spec::Spec;
 
 /// The seeds whose spread `docs/results.md` shows beside seed 1 for the
@@ -85,8 +85,7 @@ impl Entry {
                 let _ = write!(line, " --selector {}", options.selector.as_str());
             }
             if !options.improve.is_empty() {
-                let names: Vec<&str> = options.improve.iter().map(|i| i.as_str()).collect();
-                let _ = write!(line, " --improve {}", names.join(","));
+                let _ = write!(line, " --improve {}", options.improvement_names().join(","));
             }
         };
         match &self.spec {
@@ -123,7 +122,7 @@ impl Entry {
                 max_steps,
             } => {
                 let _ = write!(line, "move-to-target {model}");
-                if *targets == sampled(targets.len(), self.seed) {
+                if *targets == sampled_targets(targets.len(), self.seed) {
                     let _ = write!(line, " --sample-targets {}", targets.len());
                 } else if targets[..] != TARGETS[..] {
                     for t in targets {
@@ -159,12 +158,6 @@ impl Entry {
 }
 
 const MODELS: [ModelKind; 2] = [ModelKind::Gate, ModelKind::Interaction];
-
-/// `n` targets of `--sample-targets n` with `--seed seed`.
-fn sampled(n: usize, seed: u64) -> Vec<learner::ObjectState> {
-    let start = crate::experiment::move_to_target::TEST_BLOCK_START;
-    sampled_targets(n, seed, (start.x, start.y))
-}
 
 /// The numbers of training runs of "Beyond the thesis" (as the baselines').
 pub const BEYOND_RUNS: [usize; 4] = BASELINE_RUNS;
@@ -236,7 +229,7 @@ fn beyond() -> Vec<Entry> {
             Spec::MoveToTarget {
                 model: kind.into(),
                 options: ModelOptions::default(),
-                targets: sampled(BEYOND_SAMPLED_TARGETS, 1),
+                targets: sampled_targets(BEYOND_SAMPLED_TARGETS, 1),
                 repetitions: 1,
                 max_steps: MAX_STEPS,
             },

@@ -734,21 +734,10 @@ fn beyond_move_to_target(results: &Reproduction) -> Result<String, String> {
     let mut out = String::from(
         "| Model | Target 1 | Target 2 | Target 3 | Target 4 | Reached | Mean steps (1–4) |\n|---|---|---|---|---|---|---|\n",
     );
-    let thesis = reference::move_to_target(ModelKind::Gate);
     let _ = writeln!(
         out,
-        "| gate, thesis | {} | {} | {} |",
-        thesis
-            .iter()
-            .map(|r| r.reached.to_string())
-            .collect::<Vec<_>>()
-            .join(" | "),
-        thesis.iter().map(|r| r.reached).sum::<usize>(),
-        thesis
-            .iter()
-            .map(|r| format!("{:.0}", r.steps))
-            .collect::<Vec<_>>()
-            .join(" / ")
+        "| gate, thesis | {} |",
+        thesis_mtt_cells(ModelKind::Gate)
     );
     for name in [
         "move-to-target-gate",
@@ -756,22 +745,7 @@ fn beyond_move_to_target(results: &Reproduction) -> Result<String, String> {
         "beyond-mtt-gate-plus",
     ] {
         let r = mtt_doc(results, name)?;
-        let _ = writeln!(
-            out,
-            "| {} | {} | {} | {} |",
-            r.setup.model,
-            r.targets
-                .iter()
-                .map(|t| t.summary.reached.to_string())
-                .collect::<Vec<_>>()
-                .join(" | "),
-            reached(r),
-            r.targets
-                .iter()
-                .map(|t| format!("{:.0}", t.summary.steps))
-                .collect::<Vec<_>>()
-                .join(" / ")
-        );
+        let _ = writeln!(out, "| {} | {} |", r.setup.model, mtt_cells(r));
     }
     out.push_str("\n| Model | Sampled targets reached | Mean steps (failures count the limit) | Mean steps of the reached |\n|---|---|---|---|\n");
     for name in ["beyond-sampled-gate", "beyond-sampled-gate-plus"] {
@@ -833,16 +807,7 @@ fn move_to_target(results: &Reproduction) -> Result<String, String> {
         "| Model | Setting | Target 1 | Target 2 | Target 3 | Target 4 | Reached | Mean steps (1–4) |\n|---|---|---|---|---|---|---|---|\n",
     );
     for model in [ModelKind::Gate, ModelKind::Interaction] {
-        let thesis = reference::move_to_target(model);
-        let cells: Vec<String> = thesis.iter().map(|r| format!("{}", r.reached)).collect();
-        let steps: Vec<String> = thesis.iter().map(|r| format!("{:.0}", r.steps)).collect();
-        let _ = writeln!(
-            out,
-            "| {model} | thesis | {} | {} | {} |",
-            cells.join(" | "),
-            thesis.iter().map(|r| r.reached).sum::<usize>(),
-            steps.join(" / ")
-        );
+        let _ = writeln!(out, "| {model} | thesis | {} |", thesis_mtt_cells(model));
         for (suffix, setting) in [
             ("", format!("L_max {LATENCY_MAX_STEPS} (default)")),
             ("-latency5", format!("L_max {LATENCY_MAX_STEPS_HARSH}")),
@@ -850,26 +815,37 @@ fn move_to_target(results: &Reproduction) -> Result<String, String> {
         ] {
             let name = format!("move-to-target-{model}{suffix}");
             let r = mtt_doc(results, &name)?;
-            let cells: Vec<String> = r
-                .targets
-                .iter()
-                .map(|t| t.summary.reached.to_string())
-                .collect();
-            let steps: Vec<String> = r
-                .targets
-                .iter()
-                .map(|t| format!("{:.0}", t.summary.steps))
-                .collect();
-            let _ = writeln!(
-                out,
-                "| {model} | {setting} | {} | {} | {} |",
-                cells.join(" | "),
-                reached(r),
-                steps.join(" / ")
-            );
+            let _ = writeln!(out, "| {model} | {setting} | {} |", mtt_cells(r));
         }
     }
     Ok(out)
+}
+
+/// A Move-to-Target row's cells: reached per target, their sum, and the
+/// targets' mean steps (failures count the limit), `r | r | … | n | s / s / …`.
+fn reached_and_steps(per_target: impl Iterator<Item = (usize, f64)> + Clone) -> String {
+    let reached: Vec<String> = per_target.clone().map(|(r, _)| r.to_string()).collect();
+    let steps: Vec<String> = per_target.clone().map(|(_, s)| format!("{s:.0}")).collect();
+    let total: usize = per_target.map(|(r, _)| r).sum();
+    format!("{} | {total} | {}", reached.join(" | "), steps.join(" / "))
+}
+
+/// [`reached_and_steps`] of one of our documents.
+fn mtt_cells(r: &MttReport) -> String {
+    reached_and_steps(
+        r.targets
+            .iter()
+            .map(|t| (t.summary.reached, t.summary.steps)),
+    )
+}
+
+/// [`reached_and_steps`] of the thesis's table for `model`.
+fn thesis_mtt_cells(model: ModelKind) -> String {
+    reached_and_steps(
+        reference::move_to_target(model)
+            .iter()
+            .map(|r| (r.reached, r.steps)),
+    )
 }
 
 /// The blue block's position and orientation and the actuator's mean

@@ -25,11 +25,9 @@ pub fn r3_vec(v: Vector2<f64>) -> Vector2<f64> {
 /// The rounding was the original's only noise filter; it also quantises a
 /// predicted step of a few millimetres to whole millimetres, an error a
 /// 150-step prediction chain accumulates.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Precision {
     /// `r3` everywhere the specification rounds.
-    #[default]
     Thesis,
     /// Full `f64` precision.
     Full,

@@ -193,19 +193,23 @@ impl GateModel {
     /// (with the `shared-blocks` improvement: the one model of every block,
     /// kept under the id of the block that first changed).
     pub fn predictor(&self, id: u32) -> Option<&Predictor> {
-        if self.config.params().improvements.shared_blocks {
-            self.predictors.values().next()
-        } else {
-            self.predictors.get(&id)
-        }
+        self.predictors.get(&self.predictor_key(id))
     }
 
     /// [`GateModel::predictor`], to train or to query the inverse model.
     pub(super) fn predictor_mut(&mut self, id: u32) -> Option<&mut Predictor> {
+        let key = self.predictor_key(id);
+        self.predictors.get_mut(&key)
+    }
+
+    /// Where block `id`'s predictor is kept: under its id, or with
+    /// `shared-blocks` under the id of the block that first changed (the
+    /// one entry there is), `id` itself before any did.
+    fn predictor_key(&self, id: u32) -> u32 {
         if self.config.params().improvements.shared_blocks {
-            self.predictors.values_mut().next()
+            self.predictors.keys().next().copied().unwrap_or(id)
         } else {
-            self.predictors.get_mut(&id)
+            id
         }
     }
 
@@ -325,14 +329,13 @@ impl GateModel {
             self.gate.update_label(&phi, i64::from(changed));
         }
         if changed {
-            let config = self.config;
-            let (x, n) = predictor_input(&config, k, &phi);
-            if self.predictor(o.id).is_none() {
-                self.predictors.insert(o.id, Predictor::new(&config));
-            }
-            let Some(p) = self.predictor_mut(o.id) else {
-                return;
-            };
+            let config = &self.config;
+            let (x, n) = predictor_input(config, k, &phi);
+            let key = self.predictor_key(o.id);
+            let p = self
+                .predictors
+                .entry(key)
+                .or_insert_with(|| Predictor::new(config));
             p.forward.update(&x[..n], &delta);
             p.inverse.train(&phi, &delta);
         }

@@ -51,13 +51,7 @@ impl GateModel {
         if dn > EPS_CLOSE_ENOUGH {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
             // docs/spec/planning.md §2: the gate as a safety check on the straight move.
-            let a_hat = self.predict_actuator(&act, u);
-            let phi = self.phi(&b, &a_hat);
-            if !self.influences(&phi) {
-                return u;
-            }
-            let b_hat = self.predictor_state(&b, &phi).unwrap_or(b.s);
-            if b_hat.distance_to(&goal) > b.s.distance_to(&goal) {
+            if self.predicted_block(&b, &act, u).distance_to(&goal) > b.s.distance_to(&goal) {
                 return circle_gate(&b, &act, q);
             }
             return u;
@@ -92,10 +86,10 @@ impl GateModel {
             return push;
         };
         let v = push.to_vector();
-        let mut best = (self.predicted_distance(b, act, push, &goal), push);
+        let mut best = (self.predicted_block(b, act, push).distance_to(&goal), push);
         for &(speed, turn) in &FORWARD_CHECK_VARIANTS {
             let u = Action::from_vector(global_vec(turn, v) * speed);
-            let d = self.predicted_distance(b, act, u, &goal);
+            let d = self.predicted_block(b, act, u).distance_to(&goal);
             // Strict: a variant must be predicted better, not merely as good.
             if d < best.0 {
                 best = (d, u);
@@ -104,23 +98,21 @@ impl GateModel {
         best.1
     }
 
-    /// The distance to `goal` of block `b` one message after `u`, as the
-    /// forward models predict it.
-    pub(super) fn predicted_distance(
+    /// Block `b` one message after `u`, as the forward models predict it:
+    /// where it is unless the gate says the actuator moves it.
+    pub(super) fn predicted_block(
         &self,
         b: &TrackedObject,
         act: &TrackedObject,
         u: Action,
-        goal: &ObjectState,
-    ) -> f64 {
+    ) -> ObjectState {
         let a_hat = self.predict_actuator(act, u);
         let phi = self.phi(b, &a_hat);
-        let s = if self.influences(&phi) {
+        if self.influences(&phi) {
             self.predictor_state(b, &phi).unwrap_or(b.s)
         } else {
             b.s
-        };
-        s.distance_to(goal)
+        }
     }
 }
 

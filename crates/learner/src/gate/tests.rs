@@ -1264,8 +1264,8 @@ fn forward_check_takes_the_push_predicted_best_and_keeps_the_inverse_models_on_a
         let push = Action::new(vx, vy);
         let chosen = m.checked_push(&b, &act, push);
         let (d_push, d_chosen) = (
-            m.predicted_distance(&b, &act, push, &goal),
-            m.predicted_distance(&b, &act, chosen, &goal),
+            m.predicted_block(&b, &act, push).distance_to(&goal),
+            m.predicted_block(&b, &act, chosen).distance_to(&goal),
         );
         assert!(d_chosen <= d_push, "{push:?} → {chosen:?}");
         if chosen == push {
