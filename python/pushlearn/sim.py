@@ -70,13 +70,16 @@ class SimError(Exception):
 class Shape:
     """A body's collision shape, centred on its pose (``Hello.shapes``).
 
-    Exactly one of ``sphere_radius`` (metres) and ``box_size`` (full edge
-    lengths along the body's x, y, z, metres) is set.
+    At most one of ``sphere_radius`` (metres), ``box_size`` (full edge
+    lengths along the body's x, y, z, metres) and ``cylinder`` (radius and
+    length, metres; upright, its axis the body's z) is set; none for a shape
+    this client does not know.
     """
 
     name: str
     sphere_radius: float | None = None
     box_size: tuple[float, float, float] | None = None
+    cylinder: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -123,6 +126,9 @@ class WorldHello:
             elif geometry == "box_size":
                 b = shape.box_size
                 shapes[shape.name] = Shape(shape.name, box_size=(b.x, b.y, b.z))
+            elif geometry == "cylinder":
+                c = shape.cylinder
+                shapes[shape.name] = Shape(shape.name, cylinder=(c.radius, c.length))
             else:
                 shapes[shape.name] = Shape(shape.name)
         return cls(

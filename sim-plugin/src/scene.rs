@@ -10,14 +10,20 @@ use serde::{Deserialize, Serialize};
 
 /// Ids the learners key their tables by (`docs/spec/features.md`): these names must
 /// carry exactly these ids, and no other body may use them.
-pub const KNOWN_IDS: [(&str, u32); 3] = [("actuator", 8), ("blockA", 15), ("blockB", 27)];
+pub const KNOWN_IDS: [(&str, u32); 4] = [
+    ("actuator", 8),
+    ("blockA", 15),
+    ("blockB", 27),
+    ("cylinder", 33),
+];
 
 /// Name of the body the actuator commands drive.
 pub const ACTUATOR: &str = "actuator";
 
-const BUILTINS: [(&str, &str); 2] = [
+const BUILTINS: [(&str, &str); 3] = [
     ("one_block", include_str!("../scenes/one_block.toml")),
     ("two_blocks", include_str!("../scenes/two_blocks.toml")),
+    ("objects", include_str!("../scenes/objects.toml")),
 ];
 
 // Plausible ranges for a table-top world (see `within`).
@@ -36,7 +42,7 @@ pub const DEFAULT_SCENE: &str = "one_block";
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("unknown built-in scene `{0}` (built-ins: one_block, two_blocks)")]
+    #[error("unknown built-in scene `{0}` (built-ins: one_block, two_blocks, objects)")]
     UnknownBuiltin(String),
     #[error("cannot read scene file {}: {source}", path.display())]
     Io {
@@ -229,6 +235,11 @@ pub enum ShapeSpec {
     /// Full edge lengths along x, y, z.
     Box {
         size: [f64; 3],
+    },
+    /// Upright: its axis is the body's z axis; `length` is its height.
+    Cylinder {
+        radius: f64,
+        length: f64,
     },
 }
 
@@ -424,6 +435,10 @@ impl Scene {
                 for s in size {
                     within(&field("shape.size"), s, MIN_SIZE, MAX_SIZE)?;
                 }
+            }
+            ShapeSpec::Cylinder { radius, length } => {
+                within(&field("shape.radius"), radius, MIN_SIZE, MAX_SIZE)?;
+                within(&field("shape.length"), length, MIN_SIZE, MAX_SIZE)?;
             }
         }
         within(&field("mass"), b.mass, MIN_MASS, MAX_MASS)?;

@@ -260,6 +260,7 @@ impl World {
             let geom = match spec.shape {
                 ShapeSpec::Sphere { radius } => GeomBuilder::sphere(radius),
                 ShapeSpec::Box { size } => GeomBuilder::cuboid(size),
+                ShapeSpec::Cylinder { radius, length } => GeomBuilder::cylinder(radius, length),
             };
             ode.insert_geom(geom.attached_to(handle).tag(i as u32 + 1))?;
             bodies.push(SimBody {

@@ -5,6 +5,7 @@
 
 use learner::{Model, ObjectState};
 
+use crate::experiment::push_task::objects::{self, Transfer};
 use crate::experiment::push_task::protocol::{Protocol, Variant};
 use crate::experiment::run::{self, Plan};
 use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
@@ -26,6 +27,9 @@ pub enum Spec {
         model: LearnerChoice,
         options: ModelOptions,
         variant: Variant,
+        /// The new-object experiments' objects (`objects` scene); `None`
+        /// for the thesis's.
+        transfer: Option<Transfer>,
         train_runs: Vec<usize>,
         folds: usize,
     },
@@ -78,6 +82,9 @@ impl Spec {
     #[must_use]
     pub fn scene(&self) -> &'static str {
         match self {
+            Spec::PushTask {
+                transfer: Some(_), ..
+            } => objects::SCENE,
             Spec::PushTask { variant, .. } => variant.scene(),
             Spec::ConstantFeedback { .. } => Variant::ConstantFeedback.scene(),
             Spec::MoveToTarget { .. } => "one_block",
@@ -160,6 +167,19 @@ impl Spec {
                 "constant feedback is its own experiment (Spec::ConstantFeedback)".into(),
             ));
         }
+        if let Spec::PushTask {
+            variant,
+            transfer: Some(_),
+            ..
+        } = self
+        {
+            if *variant != Variant::Random {
+                return Err(SpecError::Invalid(format!(
+                    "the new-object experiments (--train-on, --test-on) use the random variant's protocol; drop --variant {}",
+                    variant.as_str()
+                )));
+            }
+        }
         Ok(())
     }
 
@@ -176,10 +196,12 @@ impl Spec {
                 model,
                 options,
                 variant,
+                transfer,
                 train_runs,
                 folds,
             } => {
-                let protocol = Protocol::new(*variant, options.config_number());
+                let protocol = Protocol::new(*variant, options.config_number())
+                    .with_transfer(transfer.clone());
                 let model = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
                 Document::Push(model.dispatch(
                     options,

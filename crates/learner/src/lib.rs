@@ -48,5 +48,6 @@ pub use stats::{
 };
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,
-    TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, RED_ID, RED_NAME,
+    TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME,
+    RED_ID, RED_NAME,
 };

@@ -18,12 +18,17 @@ pub const BLUE_ID: u32 = 15;
 /// Id of the red block, `blockB` (0.3 × 0.3 m), only in the two-object scene.
 pub const RED_ID: u32 = 27;
 
+/// Id of the cylinder, only in the new-object scene (`objects`).
+pub const CYLINDER_ID: u32 = 33;
+
 /// Model name of the actuator; `docs/spec/protocol.md` §4 identifies it by this exact name.
 pub const ACTUATOR_NAME: &str = "actuator";
 /// Model name of the blue block (id 15).
 pub const BLUE_NAME: &str = "blockA";
 /// Model name of the red block (id 27).
 pub const RED_NAME: &str = "blockB";
+/// Model name of the cylinder (id 33).
+pub const CYLINDER_NAME: &str = "cylinder";
 
 /// The world's model name for an object id (`docs/spec/experiments.md` §2: SetPose
 /// commands address bodies by name).
@@ -33,6 +38,7 @@ pub fn object_name(id: u32) -> Option<&'static str> {
         ACTUATOR_ID => Some(ACTUATOR_NAME),
         BLUE_ID => Some(BLUE_NAME),
         RED_ID => Some(RED_NAME),
+        CYLINDER_ID => Some(CYLINDER_NAME),
         _ => None,
     }
 }

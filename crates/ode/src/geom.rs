@@ -27,6 +27,12 @@ pub enum Shape {
     Cuboid {
         size: [f64; 3],
     },
+    /// A flat-ended cylinder whose axis is the body's z axis; `length` is
+    /// its full extent along that axis.
+    Cylinder {
+        radius: f64,
+        length: f64,
+    },
     /// The half-space `normal · p <= offset` (static only).
     Plane {
         normal: [f64; 3],
@@ -44,6 +50,10 @@ impl Shape {
             Shape::Cuboid { size } => {
                 size.iter()
                     .try_for_each(|&s| check_positive("box size", s))?;
+            }
+            Shape::Cylinder { radius, length } => {
+                check_positive("cylinder radius", radius)?;
+                check_positive("cylinder length", length)?;
             }
             Shape::Plane { normal, offset } => {
                 check_finite("plane offset", offset)?;
@@ -81,6 +91,10 @@ impl GeomBuilder {
 
     pub fn cuboid(size: [f64; 3]) -> Self {
         GeomBuilder::new(Shape::Cuboid { size })
+    }
+
+    pub fn cylinder(radius: f64, length: f64) -> Self {
+        GeomBuilder::new(Shape::Cylinder { radius, length })
     }
 
     pub fn plane(normal: [f64; 3], offset: f64) -> Self {

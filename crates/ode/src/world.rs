@@ -201,6 +201,9 @@ impl World {
             let raw = match shape {
                 Shape::Sphere { radius } => ode_sys::dCreateSphere(space, radius),
                 Shape::Cuboid { size } => ode_sys::dCreateBox(space, size[0], size[1], size[2]),
+                Shape::Cylinder { radius, length } => {
+                    ode_sys::dCreateCylinder(space, radius, length)
+                }
                 Shape::Plane { normal, offset } => {
                     ode_sys::dCreatePlane(space, normal[0], normal[1], normal[2], offset)
                 }
@@ -503,6 +506,29 @@ mod tests {
     }
 
     #[test]
+    fn a_cylinder_stands_on_its_flat_end_along_the_body_z_axis() {
+        let mut w = World::new(StepParams::gazebo(), SpaceKind::Simple).unwrap();
+        w.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0))
+            .unwrap();
+        let b = w
+            .insert_body(BodyBuilder::new(1.0, [3.3e-3, 3.3e-3, 5e-3]).position([0.0, 0.0, 0.2]))
+            .unwrap();
+        w.insert_geom(GeomBuilder::cylinder(0.1, 0.1).attached_to(b))
+            .unwrap();
+        let s = surface();
+        for _ in 0..2000 {
+            w.step(|_| Some(s)).unwrap();
+        }
+        let body = w.body(b).unwrap();
+        // On its end face the centre rests half the length (0.05) up; on its
+        // side it would rest a radius (0.1) up.
+        let z = body.position()[2];
+        assert!((z - 0.05).abs() < 0.005, "z = {z}");
+        let q = body.orientation();
+        assert!(q[0].abs() < 1e-3 && q[1].abs() < 1e-3, "tilted: {q:?}");
+    }
+
+    #[test]
     fn refusing_the_contact_lets_the_ball_fall_through() {
         let (mut w, b) = ball_world();
         for _ in 0..1000 {
@@ -531,6 +557,8 @@ mod tests {
         assert!(w
             .insert_geom(GeomBuilder::cuboid([1.0, -1.0, 1.0]))
             .is_err());
+        assert!(w.insert_geom(GeomBuilder::cylinder(0.1, 0.0)).is_err());
+        assert!(w.insert_geom(GeomBuilder::cylinder(f64::NAN, 0.1)).is_err());
         assert!(w.insert_geom(GeomBuilder::plane([0.0; 3], 0.0)).is_err());
         assert_eq!(
             w.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0).attached_to(b)),

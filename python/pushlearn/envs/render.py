@@ -80,8 +80,10 @@ class Canvas:
         self, shape: Shape, x: float, y: float, theta: float, grow: float
     ) -> npt.NDArray[np.bool_]:
         dx, dy = self._x - x, self._y - y
-        if shape.sphere_radius is not None:
-            radius = shape.sphere_radius + grow
+        # An upright cylinder seen from above is a disc, like a sphere.
+        disc = shape.sphere_radius if shape.cylinder is None else shape.cylinder[0]
+        if disc is not None:
+            radius = disc + grow
             return np.asarray(dx * dx + dy * dy <= radius * radius)
         if shape.box_size is not None:
             cos, sin = math.cos(theta), math.sin(theta)

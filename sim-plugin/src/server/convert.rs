@@ -150,6 +150,9 @@ fn shape(body: &BodySpec) -> pb::Shape {
         geometry: Some(match body.shape {
             ShapeSpec::Sphere { radius } => pb::shape::Geometry::SphereRadius(radius),
             ShapeSpec::Box { size } => pb::shape::Geometry::BoxSize(vector3d(size)),
+            ShapeSpec::Cylinder { radius, length } => {
+                pb::shape::Geometry::Cylinder(pb::Cylinder { radius, length })
+            }
         }),
     }
 }

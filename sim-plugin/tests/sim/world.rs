@@ -298,7 +298,7 @@ fn scene_error(text: &str) -> String {
 #[test]
 fn builtin_scenes_load_by_name() {
     let names: Vec<_> = Scene::builtin_names().collect();
-    assert_eq!(names, ["one_block", "two_blocks"]);
+    assert_eq!(names, ["one_block", "two_blocks", "objects"]);
     for name in names {
         let scene = Scene::load(name).expect("loads");
         assert_eq!(scene.name, name);
@@ -314,6 +314,36 @@ fn builtin_scenes_load_by_name() {
         Scene::load("three_blocks"),
         Err(SceneError::UnknownBuiltin(_))
     ));
+}
+
+#[test]
+fn the_object_scene_is_the_two_block_world_with_the_red_block_parked_and_a_cylinder() {
+    let two = Scene::load("two_blocks").expect("loads");
+    let objects = Scene::load("objects").expect("loads");
+    assert_eq!(
+        (&objects.physics, &objects.ground, &objects.drive),
+        (&two.physics, &two.ground, &two.drive)
+    );
+    for body in &two.bodies {
+        let i = objects.body_index(&body.name).expect("every thesis body");
+        let mut parked = body.clone();
+        parked.start = objects.bodies[i].start;
+        assert_eq!(objects.bodies[i], parked, "{}", body.name);
+    }
+    let cylinder = &objects.bodies[objects.body_index("cylinder").expect("a cylinder")];
+    assert_eq!(cylinder.id, 33);
+    // Parked bodies stay out of the push task's area (the actuator drives
+    // from y = 0 towards +y).
+    for name in ["blockB", "cylinder"] {
+        let start = objects.bodies[objects.body_index(name).expect("parked")].start;
+        assert!(start.y < -0.5, "{name} parked at {start:?}");
+    }
+    // It stands on its flat end, as tall as the blocks.
+    let mut world = World::new(&objects).expect("world");
+    step_n(&mut world, 500);
+    let snapshot = world.snapshot();
+    let pose = snapshot.body("cylinder").expect("cylinder");
+    assert!((pose.position[2] - 0.05).abs() < 2e-3, "{pose:?}");
 }
 
 #[test]

@@ -9,6 +9,7 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::ObjectState;
 use pushlearn_cli::experiment::move_to_target::{sampled_targets, MAX_STEPS};
+use pushlearn_cli::experiment::push_task::objects::{Object, Transfer};
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
@@ -44,6 +45,9 @@ enum ExperimentCommand {
         pushlearn experiment push-task --model gate --variant two-objects         # §6.1\n  \
         pushlearn experiment push-task --model gate --variant two-objects --train-runs 7   # §6.2\n  \
         pushlearn experiment push-task --model gate --variant constant-feedback   # §7 (qualitative)\n\n\
+        New objects (docs/experiments.md):\n  \
+        pushlearn experiment push-task --model gate --train-on blue --test-on cylinder --train-runs 10\n  \
+        pushlearn experiment push-task --model gate+ --train-on blue,red --test-on cylinder --train-runs 10\n\n\
         Thesis draft (Tables 6.1, 6.2; every row of the draft):\n  \
         pushlearn experiment push-task --report draft\n  \
         pushlearn experiment push-task --model interaction --variant draft --selector tree --train-runs 3,10")]
@@ -192,6 +196,18 @@ struct PushTaskArgs {
     /// model per row].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     folds: Option<u32>,
+
+    /// New objects (the `objects` scene, docs/experiments.md): the objects
+    /// the training runs are about, taken in turn (blue, red, cylinder;
+    /// e.g. blue,red) [default with --test-on: blue]. The learner sees only
+    /// the run's object, as the blue block.
+    #[arg(long, value_name = "OBJECT,…", value_enum, value_delimiter = ',')]
+    train_on: Option<Vec<Object>>,
+
+    /// New objects: the object every test run is about [default with
+    /// --train-on: blue].
+    #[arg(long, value_name = "OBJECT", value_enum)]
+    test_on: Option<Object>,
 
     #[command(flatten)]
     options: ModelOptions,
@@ -410,16 +426,28 @@ fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
         }
         if variant != Variant::Random
             || args.train_runs.is_some()
+            || args.train_on.is_some()
+            || args.test_on.is_some()
             || args.options != ModelOptions::default()
         {
-            bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs and the model options");
+            bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs, --train-on, --test-on and the model options");
         }
         let folds = args
             .folds
             .map_or(variant_folds(Variant::Draft), |n| n as usize);
         return Ok(Spec::DraftTables { folds });
     }
+    let transfer = match (&args.train_on, args.test_on) {
+        (None, None) => None,
+        (train, test) => Some(Transfer::new(
+            train.clone().unwrap_or_else(|| vec![Object::Blue]),
+            test.unwrap_or(Object::Blue),
+        )?),
+    };
     if variant == Variant::ConstantFeedback {
+        if transfer.is_some() {
+            bail!("--train-on and --test-on are push tasks with training; drop them with --variant constant-feedback");
+        }
         if args.train_runs.is_some() {
             bail!("--variant constant-feedback has no training phase; drop --train-runs");
         }
@@ -432,6 +460,7 @@ fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
         model: args.learner.choice(),
         options: args.options.clone(),
         variant,
+        transfer,
         train_runs: match &args.train_runs {
             Some(list) => list.iter().map(|&n| n as usize).collect(),
             None => variant.default_train_runs(),

@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 use learner::eval::{actuator_left_area, RunStepper, MESSAGES_PER_RUN};
 use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID, ACTUATOR_NAME};
 
+use super::push_task::objects::View;
 use crate::results::run_info::Counters;
 use pushlearn::wire::pb::client_message::Payload;
 
@@ -52,6 +53,8 @@ pub struct Core<M: Model> {
     pub last_prediction: Option<M::World>,
     counters: Counters,
     out: Vec<Payload>,
+    /// What the learner is shown of each world state; `None`: all of it.
+    view: Option<View>,
 }
 
 impl<M: Model> Core<M> {
@@ -70,7 +73,14 @@ impl<M: Model> Core<M> {
             last_prediction: None,
             counters: Counters::default(),
             out: Vec::new(),
+            view: None,
         }
+    }
+
+    /// Shows the learner only what `view` keeps of the following world
+    /// states (the new-object experiments), or everything.
+    pub fn set_view(&mut self, view: Option<View>) {
+        self.view = view;
     }
 
     /// Queues a command for the world.
@@ -145,7 +155,11 @@ impl<M: Model> Core<M> {
             BLOCK_Z
         };
         // `expected_start` only holds ids of the world's bodies.
-        if let Some(name) = object_name(id) {
+        let name = match &self.view {
+            Some(view) => view.body(id),
+            None => object_name(id),
+        };
+        if let Some(name) = name {
             self.send(Payload::set_pose(
                 name,
                 [expected.x, expected.y, z],
@@ -163,6 +177,12 @@ pub trait Task<M: Model> {
     /// Handles one message. Commands go through `core`; the job ends with
     /// [`Core::finish`].
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World);
+
+    /// What the learner is shown of the world states before the task
+    /// first changes it ([`Core::set_view`]); `None`: everything.
+    fn initial_view(&self) -> Option<View> {
+        None
+    }
 }
 
 /// The state machine of `docs/spec/experiments.md` §2 for one job: a fresh model and
@@ -180,8 +200,10 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     /// A driver that starts, on its first message, with SetPublishRate and a
     /// world reset (`startup`).
     pub fn new(model: M, task: T, publish_rate_hz: u32) -> Self {
+        let mut core = Core::new(publish_rate_hz);
+        core.set_view(task.initial_view());
         Self {
-            core: Core::new(publish_rate_hz),
+            core,
             model,
             task,
             failure: None,
@@ -203,7 +225,8 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
             core.ignore = false;
             core.counters.ignored += 1;
         } else {
-            match self.model.parse(frame) {
+            let shown = core.view.map(|view| view.apply(frame));
+            match self.model.parse(shown.as_ref().unwrap_or(frame)) {
                 Err(err) => {
                     core.counters.parse_errors += 1;
                     tracing::warn!(%err, "a world state the model cannot parse was skipped");

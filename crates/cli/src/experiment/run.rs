@@ -192,7 +192,7 @@ pub fn push_task<M: Model>(
     let results = run_jobs(
         &jobs,
         plan.workers(),
-        || plan.start(variant.scene()),
+        || plan.start(protocol.scene()),
         |job, worker| {
             let (task, timing, counters) = drive(
                 &mut worker.link,
@@ -212,6 +212,7 @@ pub fn push_task<M: Model>(
     Ok(PushReport {
         setup: plan.setup(crate::results::push_task::EXPERIMENT),
         variant: variant.as_str().to_owned(),
+        transfer: protocol.transfer.clone(),
         folds,
         train_runs: train_runs.to_vec(),
         results: summarise(

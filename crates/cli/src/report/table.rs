@@ -77,10 +77,15 @@ pub fn push(out: &mut impl Write, report: &PushReport, model: ModelKind) -> io::
 /// [`crate::report::draft::keypoint_table`] adds).
 #[must_use]
 pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
+    // The thesis pushed only its own blocks: its values do not apply to
+    // the new-object experiments.
+    let (experiment, thesis) = match &report.transfer {
+        Some(t) => (format!("new objects, {}", t.label()), false),
+        None => (report.variant.clone(), true),
+    };
     let head = vec![
         format!(
-            "Push task ({}), {}, {}, mode {}, seed {}",
-            report.variant,
+            "Push task ({experiment}), {}, {}, mode {}, seed {}",
             learner_title(&report.setup, model),
             plural(report.folds, "fold"),
             report.setup.mode,
@@ -92,18 +97,21 @@ pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
     let mut tables = match report.variant.as_str() {
         "fixed-three" => report.results.iter().map(|e| positions(e, model)).collect(),
         "two-objects" => report.results.iter().map(two_objects).collect(),
-        _ => curve(&report.results, model),
+        _ => curve(&report.results, model, thesis),
     };
     tables.push(nodes(&report.results, model));
     Printout {
-        stem: format!("push-task-{}-{}", report.setup.model, report.variant),
+        stem: match &report.transfer {
+            Some(t) => format!("push-task-{}-{}", report.setup.model, t.slug()),
+            None => format!("push-task-{}-{}", report.setup.model, report.variant),
+        },
         head,
         tables,
         foot: run_info(&report.run),
     }
 }
 
-fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
+fn curve(results: &[CurveEntry], model: ModelKind, thesis: bool) -> Vec<Table> {
     let source = match model {
         ModelKind::Gate | ModelKind::GatePlus => "§3.4",
         ModelKind::Interaction => "§3.2",
@@ -121,7 +129,7 @@ fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
         ],
     );
     for e in results {
-        let r = reference::curve(model, e.train_runs);
+        let r = reference::curve(model, e.train_runs).filter(|_| thesis);
         let f = e.folds;
         all.rows.push(vec![
             whole(e.train_runs),
@@ -153,7 +161,7 @@ fn curve(results: &[CurveEntry], model: ModelKind) -> Vec<Table> {
         ],
     );
     for e in results {
-        let r = reference::curve(model, e.train_runs);
+        let r = reference::curve(model, e.train_runs).filter(|_| thesis);
         let i = &e.blue.interacting;
         let f = e.folds;
         interacting.rows.push(vec![

@@ -7,9 +7,10 @@ use std::fmt::Write as _;
 use learner::interaction::SelectorKind;
 
 use crate::experiment::move_to_target::{sampled_targets, MAX_STEPS};
+use crate::experiment::push_task::objects::{Object, Transfer};
 use crate::experiment::push_task::protocol::Variant;
 use crate::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
-use crate::models::{Improvement, ModelKind, ModelOptions};
+use crate::models::{Improvement, LearnerChoice, ModelKind, ModelOptions};
 use crate::results::move_to_target::{REPETITIONS, TARGETS};
 use crate::spec::Spec;
 
@@ -93,12 +94,22 @@ impl Entry {
                 model,
                 options: o,
                 variant,
+                transfer,
                 train_runs,
                 folds,
             } => {
                 let _ = write!(line, "push-task {model}");
                 if *variant != Variant::Random {
                     let _ = write!(line, " --variant {}", variant.as_str());
+                }
+                if let Some(t) = transfer {
+                    let train: Vec<&str> = t.train.iter().map(|o| o.as_str()).collect();
+                    let _ = write!(
+                        line,
+                        " --train-on {} --test-on {}",
+                        train.join(","),
+                        t.test.as_str()
+                    );
                 }
                 if *train_runs != variant.default_train_runs() {
                     let runs: Vec<String> = train_runs.iter().map(ToString::to_string).collect();
@@ -201,6 +212,7 @@ fn beyond() -> Vec<Entry> {
                 model: kind.into(),
                 options: improved(improve),
                 variant: Variant::Random,
+                transfer: None,
                 train_runs: BEYOND_RUNS.to_vec(),
                 folds: 20,
             },
@@ -257,6 +269,7 @@ fn push(model: ModelKind, variant: Variant, train_runs: Vec<usize>, folds: usize
         model: model.into(),
         options: ModelOptions::default(),
         variant,
+        transfer: None,
         train_runs,
         folds,
     }
@@ -280,6 +293,15 @@ pub const BASELINES: [(&str, &str, u64); 2] = [
     ("baseline-knn", "pushlearn.baselines:KnnLearner", 60),
     ("baseline-gp", "pushlearn.baselines:GpLearner", 600),
 ];
+
+/// The baseline `class` of the Python package, served for the driver, its
+/// slowest answer allowed `timeout_s` seconds.
+fn baseline(class: &str, timeout_s: u64) -> LearnerChoice {
+    LearnerChoice::External(crate::external::LearnerSpec {
+        source: crate::external::Source::Command(python_learner(class)),
+        timeout: std::time::Duration::from_secs(timeout_s),
+    })
+}
 
 /// The numbers of training runs of the baseline table.
 pub const BASELINE_RUNS: [usize; 4] = [1, 3, 10, 30];
@@ -314,16 +336,13 @@ pub fn full() -> Vec<Entry> {
             // Beside the default curves: the same world, so the baselines'
             // runs are the curves' recorded ones.
             for (name, class, timeout) in BASELINES {
-                let learner = crate::external::LearnerSpec {
-                    source: crate::external::Source::Command(python_learner(class)),
-                    timeout: std::time::Duration::from_secs(timeout),
-                };
                 entries.push(Entry::new(
                     name,
                     Spec::PushTask {
-                        model: crate::models::LearnerChoice::External(learner),
+                        model: baseline(class, timeout),
                         options: ModelOptions::default(),
                         variant: Variant::Random,
+                        transfer: None,
                         train_runs: BASELINE_RUNS.to_vec(),
                         folds: 20,
                     },
@@ -417,12 +436,82 @@ pub fn full() -> Vec<Entry> {
                     ..ModelOptions::default()
                 },
                 variant: Variant::Draft,
+                transfer: None,
                 train_runs: vec![3, 10, 30],
                 folds: 5,
             },
         ));
     }
     entries.extend(beyond());
+    entries.extend(objects());
+    entries
+}
+
+/// Training runs of the new-object experiments: the number the issue's
+/// forward-model targets are stated at.
+pub const OBJECT_RUNS: usize = 10;
+
+/// The new-object experiments' conditions (`docs/experiments.md` "New
+/// objects"): trained on the blue block and tested on each object, then
+/// trained on a mix of two and tested on the third.
+#[must_use]
+pub fn transfers() -> Vec<Transfer> {
+    use Object::{Blue, Cylinder, Red};
+    [
+        (vec![Blue], Blue),
+        (vec![Blue], Red),
+        (vec![Blue], Cylinder),
+        (vec![Blue, Red], Cylinder),
+        (vec![Blue, Cylinder], Red),
+    ]
+    .into_iter()
+    .map(|(train, test)| Transfer { train, test })
+    .collect()
+}
+
+/// The learners of the new-object table: (document name part, learner):
+/// both faithful models, gate+, and the two baselines.
+#[must_use]
+pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
+    let mut learners = vec![
+        ("gate", ModelKind::Gate.into()),
+        ("interaction", ModelKind::Interaction.into()),
+        ("gate-plus", ModelKind::GatePlus.into()),
+    ];
+    for (name, class, timeout) in BASELINES {
+        learners.push((
+            name.trim_start_matches("baseline-"),
+            baseline(class, timeout),
+        ));
+    }
+    learners
+}
+
+/// The document name of one learner on one new-object condition.
+#[must_use]
+pub fn object_entry_name(learner: &str, transfer: &Transfer) -> String {
+    format!("objects-{learner}-{}", transfer.slug())
+}
+
+/// The new-object experiments, condition by condition (the learners of one
+/// condition share its recorded runs).
+fn objects() -> Vec<Entry> {
+    let mut entries = Vec::new();
+    for transfer in transfers() {
+        for (name, learner) in object_learners() {
+            entries.push(Entry::new(
+                object_entry_name(name, &transfer),
+                Spec::PushTask {
+                    model: learner,
+                    options: ModelOptions::default(),
+                    variant: Variant::Random,
+                    transfer: Some(transfer.clone()),
+                    train_runs: vec![OBJECT_RUNS],
+                    folds: 20,
+                },
+            ));
+        }
+    }
     entries
 }
 

@@ -70,12 +70,18 @@ impl Setup {
     }
 }
 
+use crate::experiment::push_task::objects::Transfer;
+
 /// `pushlearn experiment push-task` (all variants but constant feedback).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PushReport {
     #[serde(flatten)]
     pub setup: Setup,
     pub variant: String,
+    /// The objects the runs were about (the new-object experiments); absent
+    /// for the thesis's blocks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub transfer: Option<Transfer>,
     pub folds: usize,
     pub train_runs: Vec<usize>,
     pub results: Vec<CurveEntry>,

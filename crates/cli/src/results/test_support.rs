@@ -78,6 +78,7 @@ pub(crate) fn push_report(variant: &str, train_runs: &[usize]) -> PushReport {
     PushReport {
         setup: Setup::for_tests("push-task", "gate"),
         variant: variant.into(),
+        transfer: None,
         folds: 2,
         train_runs: train_runs.to_vec(),
         results: summarise(&x0, blocks, train_runs, &jobs).unwrap(),

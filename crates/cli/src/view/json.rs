@@ -49,6 +49,11 @@ pub enum Shape {
     Box {
         size: [f64; 3],
     },
+    /// Upright (its axis is the body's z); `length` is its height.
+    Cylinder {
+        radius: f64,
+        length: f64,
+    },
 }
 
 /// A body of the scene, at its start pose.
@@ -144,6 +149,10 @@ impl Outgoing {
                             Geometry::SphereRadius(radius) => Shape::Sphere { radius },
                             Geometry::BoxSize(v) => Shape::Box {
                                 size: [v.x, v.y, v.z],
+                            },
+                            Geometry::Cylinder(c) => Shape::Cylinder {
+                                radius: c.radius,
+                                length: c.length,
                             },
                         }),
                     x,

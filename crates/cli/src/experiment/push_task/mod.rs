@@ -6,10 +6,13 @@
 //!
 //! * [`protocol`]: the variants, the driver's configuration bits and the
 //!   jobs ([`protocol::PushJob`]);
-//! * [`task`]: [`task::PushTask`], the §3 handler for one job.
+//! * [`task`]: [`task::PushTask`], the §3 handler for one job;
+//! * [`objects`]: the new-object experiments' objects and what the learner
+//!   is shown of them.
 //!
 //! What the jobs measured, and its §7 summary, are
 //! [`crate::results::push_task`].
 
+pub mod objects;
 pub mod protocol;
 pub mod task;

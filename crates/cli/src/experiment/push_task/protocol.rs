@@ -12,6 +12,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use super::objects::{self, Transfer};
 use crate::experiment::{seed, LOW_RATE_HZ, RATE_HZ};
 use crate::results::constant_feedback;
 use crate::results::push_task::EXPERIMENT;
@@ -78,6 +79,9 @@ pub struct Protocol {
     pub test_positions: Vec<f64>,
     /// The world's publish rate and the learner's update rate.
     pub rate_hz: u32,
+    /// The objects the runs are about, in the `objects` scene; `None`: the
+    /// variant's own scene and blocks.
+    pub transfer: Option<Transfer>,
 }
 
 impl Protocol {
@@ -106,6 +110,24 @@ impl Protocol {
             } else {
                 RATE_HZ
             },
+            transfer: None,
+        }
+    }
+
+    /// The protocol with its runs about the objects of `transfer`.
+    #[must_use]
+    pub fn with_transfer(mut self, transfer: Option<Transfer>) -> Self {
+        self.transfer = transfer;
+        self
+    }
+
+    /// The scene the world must load.
+    #[must_use]
+    pub fn scene(&self) -> &'static str {
+        if self.transfer.is_some() {
+            objects::SCENE
+        } else {
+            self.variant.scene()
         }
     }
 }

@@ -4,12 +4,13 @@
 
 use learner::eval::{training_start_in, RunErrors, PUSH_ACTION};
 use learner::keypoints::KeyPointRun;
-use learner::{Model, ModelStats, Poses};
+use learner::{Model, ModelStats, ObjectState, Poses};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
+use super::objects::{Object, Transfer, View};
 use super::protocol::PushJob;
-use crate::experiment::driver::{push_task_blocks, Core, Task, PUSH_TASK_START_Y};
+use crate::experiment::driver::{push_task_blocks, Core, Task, BLOCK_Z, PUSH_TASK_START_Y};
 use crate::experiment::ExperimentError;
 use crate::results::push_task::{EndPoses, PushJobResult, SelectionCount};
 use crate::results::run_info::{Counters, Timing};
@@ -21,6 +22,7 @@ pub struct PushTask {
     fixed_starts: Vec<f64>,
     start_range: f64,
     test_positions: Vec<f64>,
+    transfer: Option<Transfer>,
     rng: ChaCha8Rng,
     train_run: usize,
     test_run: usize,
@@ -55,6 +57,7 @@ impl PushTask {
             fixed_starts: job.protocol.fixed_starts.clone(),
             start_range: job.protocol.start_range,
             test_positions: job.protocol.test_positions.clone(),
+            transfer: job.protocol.transfer.clone(),
             rng: ChaCha8Rng::seed_from_u64(job.seed),
             train_run: 0,
             test_run: 0,
@@ -89,6 +92,22 @@ impl PushTask {
         self.previous_real = Some(actual);
     }
 
+    /// Puts the run's object in the blue block's start and the blue block
+    /// in the object's parking place (the world was just reset, so every
+    /// body is at its scene start), and shows the learner only that object.
+    fn place(core: &mut Core<impl Model>, object: Object) {
+        use pushlearn::wire::pb::{client_message::Payload, Pose};
+        let start = push_task_blocks().get(&learner::BLUE_ID).copied();
+        if let (Some(park), Some(start)) = (object.park(), start) {
+            let pose = |s: ObjectState| Pose::from_position_yaw([s.x, s.y, BLOCK_Z], s.theta);
+            core.send(Payload::set_poses([
+                (learner::BLUE_NAME.to_owned(), pose(park)),
+                (object.body().to_owned(), pose(start)),
+            ]));
+        }
+        core.set_view(Some(View { object }));
+    }
+
     /// `training_start(k)`: `u` is drawn for every run so that the random
     /// sequence does not depend on the variant.
     fn training_start(&mut self, k: usize) -> f64 {
@@ -98,6 +117,12 @@ impl PushTask {
 }
 
 impl<M: Model> Task<M> for PushTask {
+    fn initial_view(&self) -> Option<View> {
+        self.transfer.as_ref().map(|_| View {
+            object: Object::Blue,
+        })
+    }
+
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
         let n_test = self.test_positions.len();
         core.step_counter += 1;
@@ -133,6 +158,14 @@ impl<M: Model> Task<M> for PushTask {
                 Some(x0)
             };
             if let Some(x0) = x0 {
+                if let Some(transfer) = &self.transfer {
+                    let object = if self.train_run == self.n_train {
+                        transfer.test
+                    } else {
+                        transfer.training_object(self.train_run)
+                    };
+                    Self::place(core, object);
+                }
                 core.start_run((x0, PUSH_TASK_START_Y), &push_task_blocks(), true);
             }
             return;

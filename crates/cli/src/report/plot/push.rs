@@ -130,6 +130,7 @@ mod tests {
         PushReport {
             setup: Setup::for_tests("push-task", "gate"),
             variant: "random".into(),
+            transfer: None,
             folds,
             train_runs: train_runs.to_vec(),
             results: summarise(&xs, &[BLUE_ID], train_runs, &jobs).unwrap(),
