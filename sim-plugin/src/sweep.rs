@@ -20,6 +20,10 @@ pub struct SweepOptions {
     pub messages: u32,
     /// Publish rate, Hz.
     pub rate_hz: u32,
+    /// The body pushed: the blue block, or another body that takes the blue
+    /// block's start for every run while the blue block takes its place
+    /// (the new objects of the `objects` scene).
+    pub body: String,
 }
 
 impl SweepOptions {
@@ -37,6 +41,7 @@ impl Default for SweepOptions {
             action: [0.0, 0.5],
             messages: 150,
             rate_hz: 100,
+            body: BLUE_BLOCK.to_owned(),
         }
     }
 }
@@ -63,8 +68,8 @@ pub struct SweepRow {
 pub enum SweepError {
     #[error(transparent)]
     World(#[from] WorldError),
-    #[error("scene `{0}` has no body named `{BLUE_BLOCK}`")]
-    NoBlueBlock(String),
+    #[error("scene `{scene}` has no body named `{body}`")]
+    NoBody { scene: String, body: String },
     #[error("sweep command refused: {0}")]
     Command(#[from] CommandError),
     #[error(transparent)]
@@ -114,14 +119,31 @@ pub fn start_commands(rate_hz: u32, x0: f64, z: f64, action: [f64; 2]) -> [Comma
 /// One run: the command sequence of the experiment driver (stop, reset,
 /// place the actuator, push), then `messages` publish intervals.
 pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRow, SweepError> {
-    let blue = world
-        .scene()
-        .body_index(BLUE_BLOCK)
-        .ok_or_else(|| SweepError::NoBlueBlock(world.scene().name.clone()))?;
+    let index = |body: &str| {
+        world
+            .scene()
+            .body_index(body)
+            .ok_or_else(|| SweepError::NoBody {
+                scene: world.scene().name.clone(),
+                body: body.to_owned(),
+            })
+    };
+    let blue = index(BLUE_BLOCK)?;
+    let pushed = index(&options.body)?;
     let start = world.scene().bodies[blue].start;
     let z = world.scene().drive.z_clamp;
     for cmd in start_commands(options.rate_hz, x0, z, options.action) {
         world.apply(cmd)?;
+    }
+    if pushed != blue {
+        let parked = world.scene().bodies[pushed].start;
+        for (name, at) in [(BLUE_BLOCK, parked), (options.body.as_str(), start)] {
+            world.apply(Command::SetPose {
+                name: pushlearn::wire::BodyName::Body(name.to_owned()),
+                position: at.position(),
+                orientation: at.orientation(),
+            })?;
+        }
     }
     let mut message = 0;
     let mut first_contact = None;
@@ -129,7 +151,7 @@ pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRo
     let mut last = world.snapshot();
     while message < options.messages {
         let published = world.step()?;
-        contact_in_interval |= world.touched_last_step(ACTUATOR, BLUE_BLOCK);
+        contact_in_interval |= world.touched_last_step(ACTUATOR, &options.body);
         if let Some(snapshot) = published {
             message += 1;
             if contact_in_interval && first_contact.is_none() {
@@ -139,7 +161,7 @@ pub fn run(world: &mut World, options: &SweepOptions, x0: f64) -> Result<SweepRo
             last = snapshot;
         }
     }
-    let block = &last.bodies[blue];
+    let block = &last.bodies[pushed];
     let yaw = block.yaw();
     Ok(SweepRow {
         x0,

@@ -28,7 +28,7 @@ use sim_plugin::{Scene, SweepOptions, SweepRow};
     about = "The thesis's table-top pushing world on ODE",
     long_about = "The thesis's table-top pushing world on ODE (Debian's libode, double precision): \
                   an actuator sphere driven by velocity commands pushes blocks on a plane in 1 ms steps.\n\n\
-                  Scenes are TOML files or the embedded `one_block` (default) and `two_blocks`; \
+                  Scenes are TOML files or the embedded `one_block` (default), `two_blocks` and `objects`; \
                   see docs/world.md for the format.\n\n\
                   Without a subcommand, `pushlearn-sim [OPTIONS]` is `pushlearn-sim serve [OPTIONS]`.",
     args_conflicts_with_subcommands = true
@@ -108,7 +108,7 @@ enum Mode {
 
 #[derive(Debug, Args)]
 struct ServeArgs {
-    /// Built-in scene name (`one_block`, `two_blocks`) or path to a scene TOML file.
+    /// Built-in scene name (`one_block`, `two_blocks`, `objects`) or path to a scene TOML file.
     #[arg(long, value_name = "NAME_OR_FILE", default_value = DEFAULT_SCENE)]
     scene: String,
     /// Address to listen on. Anything but a loopback address exposes an
@@ -164,13 +164,18 @@ fn parse_seconds(text: &str) -> Result<Duration, String> {
 
 #[derive(Debug, Args)]
 struct SweepArgs {
-    /// Built-in scene name (`one_block`, `two_blocks`) or path to a scene TOML file.
+    /// Built-in scene name (`one_block`, `two_blocks`, `objects`) or path to a scene TOML file.
     #[arg(long, value_name = "NAME_OR_FILE", default_value = DEFAULT_SCENE)]
     scene: String,
     /// Print a JSON array of objects with the keys x0, first_contact_message, block_x,
     /// block_y, block_yaw, translation, rotation (metres, radians) instead of a table.
     #[arg(long)]
     json: bool,
+    /// The body pushed [default: the blue block, `blockA`]; another body takes the blue
+    /// block's start for every run and the blue block its place (e.g. `--scene objects
+    /// --body cylinder`, docs/world.md "New objects").
+    #[arg(long, value_name = "NAME", default_value = sim_plugin::sweep::BLUE_BLOCK)]
+    body: String,
 }
 
 fn main() -> ExitCode {
@@ -364,21 +369,30 @@ fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {
     let scene =
         Scene::load(&args.scene).with_context(|| format!("loading scene `{}`", args.scene))?;
     tracing::info!(scene = %scene.name, "running the calibration sweep");
-    let rows = sim_plugin::sweep(&scene, &SweepOptions::default()).context("running the sweep")?;
+    let options = SweepOptions {
+        body: args.body.clone(),
+        ..SweepOptions::default()
+    };
+    let rows = sim_plugin::sweep(&scene, &options).context("running the sweep")?;
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer_pretty(&mut out, &rows)?;
         writeln!(out)?;
     } else {
-        write_table(&mut out, &scene.name, &rows)?;
+        write_table(&mut out, &scene.name, &args.body, &rows)?;
     }
     Ok(())
 }
 
-fn write_table(out: &mut impl Write, scene: &str, rows: &[SweepRow]) -> std::io::Result<()> {
+fn write_table(
+    out: &mut impl Write,
+    scene: &str,
+    body: &str,
+    rows: &[SweepRow],
+) -> std::io::Result<()> {
     writeln!(
         out,
-        "calibration sweep, scene {scene}: push (0, 0.5) m/s, 150 messages at 100 Hz; blue block"
+        "calibration sweep, scene {scene}: push (0, 0.5) m/s, 150 messages at 100 Hz; body {body}"
     )?;
     writeln!(
         out,

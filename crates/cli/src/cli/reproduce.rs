@@ -280,6 +280,9 @@ const ONLY_TIMING_MARK: &str = "<!-- the last `pushlearn reproduce --only` run -
 /// The learning curves of every model of "Beyond the thesis".
 const BEYOND_FIGURE: &str = "beyond-curves";
 
+/// The new-object experiments' errors, learner by condition.
+const OBJECTS_FIGURE: &str = "beyond-objects";
+
 fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize> {
     let figure_dir = root.join(FIGURES_DIR);
     let scratch = figure_dir.join(".reproduce");
@@ -302,6 +305,10 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
     if let Ok(curves) = page::beyond_curves(results) {
         pushlearn_cli::report::plot::learners(&curves, &scratch, BEYOND_FIGURE)
             .context("drawing the figure of \"Beyond the thesis\"")?;
+    }
+    if let Ok((conditions, rows)) = page::object_reports(results) {
+        pushlearn_cli::report::plot::by_condition(&conditions, &rows, &scratch, OBJECTS_FIGURE)
+            .context("drawing the new objects' figure")?;
     }
     let mut shown: Vec<&str> = page
         .match_indices("](figures/")

@@ -62,6 +62,8 @@ enum Block<'a> {
     BeyondTargets,
     /// `beyond-ablation`: the push task's curve of each change and gate+.
     BeyondAblation,
+    /// `beyond-objects`: the new-object experiments, learner by condition.
+    BeyondObjects,
     /// `beyond-move-to-target`: Move to Target, thesis's and sampled targets.
     BeyondMoveToTarget,
     /// `commands`: every experiment's stand-alone command.
@@ -95,6 +97,7 @@ impl<'a> Block<'a> {
             "beyond-targets" => Block::BeyondTargets,
             "beyond-ablation" => Block::BeyondAblation,
             "beyond-move-to-target" => Block::BeyondMoveToTarget,
+            "beyond-objects" => Block::BeyondObjects,
             "commands" => Block::Commands,
             other => return Err(format!("unknown block `{other}`")),
         };
@@ -227,6 +230,7 @@ fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
         Block::BeyondTargets => beyond_targets(results),
         Block::BeyondAblation => beyond_ablation(results),
         Block::BeyondMoveToTarget => beyond_move_to_target(results),
+        Block::BeyondObjects => beyond_objects(results),
         Block::Commands => Ok(commands(results.produced.iter().map(|p| &p.entry))),
     }
 }
@@ -584,6 +588,63 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
             Ok((label, report))
         })
         .collect()
+}
+
+/// The new-object experiments: the conditions' labels, and for each
+/// learner (label) its report on each condition, in the manifest's order.
+///
+/// # Errors
+/// A document the reproduction does not have.
+pub fn object_reports(
+    results: &Reproduction,
+) -> Result<(Vec<String>, Vec<(String, Vec<&PushReport>)>), String> {
+    use super::manifest::{object_entry_name, object_learners, transfers};
+    let conditions = transfers();
+    let labels = conditions.iter().map(|t| t.label()).collect();
+    let rows = object_learners()
+        .into_iter()
+        .map(|(name, _)| {
+            let reports = conditions
+                .iter()
+                .map(|t| push_doc(results, &object_entry_name(name, t)))
+                .collect::<Result<Vec<_>, _>>()?;
+            let label = match (&reports[0].setup.learner, reports[0].setup.model.as_str()) {
+                (Some(l), model) => format!("{model} {} (Python)", l.version),
+                (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model)"),
+                (None, model) => model.to_owned(),
+            };
+            Ok((label, reports))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok((labels, rows))
+}
+
+/// One row per learner of [`object_reports`], one column per condition:
+/// block position / orientation error after `manifest::OBJECT_RUNS`
+/// training runs.
+fn beyond_objects(results: &Reproduction) -> Result<String, String> {
+    let (conditions, rows) = object_reports(results)?;
+    let mut out = String::from("| learner |");
+    for c in &conditions {
+        let _ = write!(out, " {c} |");
+    }
+    out.push('\n');
+    out.push_str(&"|---".repeat(conditions.len() + 1));
+    out.push_str("|\n");
+    for (label, reports) in rows {
+        let _ = write!(out, "| {label} |");
+        for report in reports {
+            let name = &report.setup.model;
+            let e = entry_at(report, name, super::manifest::OBJECT_RUNS)?;
+            let _ = write!(
+                out,
+                " {:.3} / {:.3} |",
+                e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
+            );
+        }
+        out.push('\n');
+    }
+    Ok(out)
 }
 
 /// One row per curve of [`beyond_curves`]: block position / orientation

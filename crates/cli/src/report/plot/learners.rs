@@ -73,3 +73,71 @@ pub fn learners(
     write(&grid, dir, stem, &mut written)?;
     Ok(written)
 }
+
+/// Draws `dir/{stem}.png` and `.svg`: block position and orientation error
+/// on each of `conditions` (the x axis numbers them; the title names
+/// them), one series per `(label, reports)`, `reports[c]` the learner's
+/// push task on condition `c` (its first number of training runs).
+///
+/// # Errors
+/// The directory cannot be created or the figure cannot be written.
+pub fn by_condition(
+    conditions: &[String],
+    rows: &[(String, Vec<&PushReport>)],
+    dir: &Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>, PlotError> {
+    prepare(dir)?;
+    let first = rows
+        .iter()
+        .flat_map(|(_, reports)| reports.iter())
+        .find_map(|r| r.results.first());
+    let (n_train, folds) = first.map_or((0, 0), |e| (e.train_runs, e.folds));
+    let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd| Panel {
+        title: title.to_owned(),
+        x_desc: "condition (see the title)".to_owned(),
+        y_desc: y.to_owned(),
+        x_range: 0.5..conditions.len() as f64 + 0.5,
+        offset: 0.12,
+        counts: true,
+        series: rows
+            .iter()
+            .enumerate()
+            .map(|(k, (label, reports))| Series {
+                label: label.clone(),
+                colour: palette(k),
+                points: reports
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(c, r)| {
+                        let m = get(r.results.first()?);
+                        Some(((c + 1) as f64, m.mean, m.std))
+                    })
+                    .collect(),
+                bars: true,
+            })
+            .collect(),
+    };
+    let names: Vec<String> = conditions
+        .iter()
+        .enumerate()
+        .map(|(c, name)| format!("{} {name}", c + 1))
+        .collect();
+    let grid = Grid {
+        title: format!(
+            "new objects, trained on → tested on: {}; {}, {}: mean ± mean per-position std",
+            names.join(", "),
+            plural(n_train, "training run"),
+            plural(folds, "fold")
+        ),
+        columns: 2,
+        panel_size: (560, 380),
+        panels: vec![
+            panel("block position", "error [m]", |e| e.blue.block_pos_err),
+            panel("block orientation", "error [rad]", |e| e.blue.block_ori_err),
+        ],
+    };
+    let mut written = Vec::new();
+    write(&grid, dir, stem, &mut written)?;
+    Ok(written)
+}

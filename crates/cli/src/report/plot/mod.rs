@@ -33,7 +33,7 @@ use std::path::PathBuf;
 
 pub use cost::{cost_csv, cost_growth, CostPoint};
 pub use feedback::feedback;
-pub use learners::learners;
+pub use learners::{by_condition, learners};
 pub use move_to_target::move_to_target;
 pub use push::push;
 pub use scaling::{aitm_scaling, parse_scaling_csv, ScalingRow};
