@@ -89,7 +89,8 @@ struct RunArgs {
     /// executable, else on PATH].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
-    /// Run only these jobs (ids, comma-separated), if not done.
+    /// Run only these jobs (ids, comma-separated), if not done; merges only
+    /// if that completes the sweep.
     #[arg(long, value_name = "ID,…", value_delimiter = ',')]
     only: Vec<String>,
     /// Do not merge at the end.
@@ -307,6 +308,15 @@ fn run_here(args: &RunArgs) -> Result<()> {
         pending.len()
     );
     if args.no_merge {
+        return Ok(());
+    }
+    if !args.only.is_empty() && output::complete(&args.out, &loaded.sweep).is_err() {
+        // A part of the sweep on purpose: the merge would only list the rest.
+        eprintln!(
+            "not merged: other jobs of the sweep are still missing (`pushlearn sweep plan {} --out {}`)",
+            args.sweep.display(),
+            args.out.display()
+        );
         return Ok(());
     }
     merge(&args.out, true)
