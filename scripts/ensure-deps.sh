@@ -6,7 +6,9 @@
 #   scripts/ensure-deps.sh --test     also what the test suite needs: Debian's chromium
 #                                     (the viewer's browser test) and the Python package's
 #                                     virtual environment .venv (maturin, pytest, numpy,
-#                                     scikit-learn, protobuf, gymnasium, ruff, mypy)
+#                                     scikit-learn, protobuf, gymnasium, ruff, mypy), and
+#                                     Debian's Slurm and munge, whose daemons
+#                                     scripts/slurm-test.sh starts itself
 set -euo pipefail
 
 want_test=0
@@ -48,6 +50,26 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   "${sudo_cmd[@]}" apt-get update -qq
   "${sudo_cmd[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+# The sweep's Slurm test (scripts/slurm-test.sh): a one-node cluster it starts
+# and stops itself. Without recommends: no mail server, no documentation.
+# The daemons live in /usr/sbin, which a user's PATH may lack.
+if [ "$want_test" = 1 ]; then
+  slurm_missing=()
+  has() { command -v "$1" >/dev/null 2>&1 || [ -x "/usr/sbin/$1" ]; }
+  has slurmctld || slurm_missing+=(slurmctld)
+  has slurmd || slurm_missing+=(slurmd)
+  has sbatch || slurm_missing+=(slurm-client)
+  has munged || slurm_missing+=(munge)
+  if [ ${#slurm_missing[@]} -gt 0 ]; then
+    echo "ensure-deps: installing Debian packages (no recommends): ${slurm_missing[*]}"
+    sudo_cmd=()
+    if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+    export DEBIAN_FRONTEND=noninteractive
+    "${sudo_cmd[@]}" apt-get update -qq
+    "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${slurm_missing[@]}" >/dev/null
+  fi
 fi
 
 if [ "$(pkg-config --variable=precision ode)" != "dDOUBLE" ]; then

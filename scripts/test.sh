@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite, exactly as CI runs it: installs what is missing, then
 # checks formatting and lints, runs every test of the workspace, checks
-# that the committed quick results are current, and builds, lints and tests
-# the Python package.
+# that the committed quick results are current, runs a sweep on a real
+# one-node Slurm, and builds, lints and tests the Python package.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/ensure-deps.sh --test
@@ -14,6 +14,10 @@ cargo test --workspace --locked
 cargo build --release --locked -p pushlearn-cli -p sim-plugin --bins
 target/release/pushlearn reproduce --quick --check
 target/release/pushlearn reproduce --page-only --check
+# Sweeps on a real Slurm: a one-node cluster started (and stopped) by the
+# script, the reduced ablation as a job array, merged, byte-identical to the
+# same plan run here (docs/sweeps.md). Fails, saying why, without a cluster.
+PUSHLEARN_BIN="$PWD/target/release/pushlearn" scripts/slurm-test.sh
 # The Python package (python/): installed into .venv exactly as the README
 # says (`pip install .`, maturin building the native part), then linted,
 # type-checked and tested against the binaries just built.

@@ -12,6 +12,9 @@
 //! * [`results`]: what the experiments measured, as plain data: filled by
 //!   [`experiment`], rendered by [`report`];
 //! * [`spec`]: an experiment as data, run into its report document;
+//! * [`sweep`]: a grid of push-task configurations as data, planned into
+//!   fold jobs with stable ids, their outputs, and the Slurm array script
+//!   (`pushlearn sweep`);
 //! * [`reproduce`]: every experiment behind `docs/results.md`, and the page
 //!   itself, regenerated and checked (`pushlearn reproduce`);
 //! * [`view`]: the browser viewer (`pushlearn view`).
@@ -32,4 +35,5 @@ pub mod report;
 pub mod reproduce;
 pub mod results;
 pub mod spec;
+pub mod sweep;
 pub mod view;

@@ -31,6 +31,7 @@ enum Command {
     Report(cli::report::ReportArgs),
     Reproduce(cli::reproduce::ReproduceArgs),
     ServeLearner(cli::serve_learner::ServeLearnerArgs),
+    Sweep(cli::sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +51,7 @@ fn main() -> ExitCode {
         Command::Report(args) => cli::report::run(args),
         Command::Reproduce(args) => cli::reproduce::run(args),
         Command::ServeLearner(args) => cli::serve_learner::run(args),
+        Command::Sweep(args) => cli::sweep::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

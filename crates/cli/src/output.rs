@@ -57,13 +57,15 @@ pub fn check_file(path: &Path, flag: &'static str) -> Result<(), OutputError> {
 
 /// Writes `bytes` to `path` through a temporary file beside it, renamed
 /// over `path` once complete: a reader never sees half a file, and an
-/// interrupted write leaves the old one.
+/// interrupted write leaves the old one. The temporary name carries the
+/// process id, so that two processes writing the same file (a requeued
+/// Slurm task and the one it replaced) never write into each other's.
 ///
 /// # Errors
 /// The file cannot be written or renamed.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> io::Result<()> {
     let mut temporary = path.as_os_str().to_owned();
-    temporary.push(".partial");
+    temporary.push(format!(".{}.partial", std::process::id()));
     let temporary = PathBuf::from(temporary);
     std::fs::write(&temporary, bytes)?;
     std::fs::rename(&temporary, path).inspect_err(|_| {
@@ -133,7 +135,7 @@ mod tests {
         write_atomically(&path, b"new").unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
         let mut partial = path.clone().into_os_string();
-        partial.push(".partial");
+        partial.push(format!(".{}.partial", std::process::id()));
         assert!(!Path::new(&partial).exists());
         std::fs::remove_file(&path).unwrap();
     }

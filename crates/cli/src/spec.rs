@@ -6,7 +6,7 @@
 use learner::{Model, ObjectState};
 
 use crate::experiment::push_task::objects::{self, Transfer};
-use crate::experiment::push_task::protocol::{Protocol, Variant};
+use crate::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use crate::experiment::run::{self, Plan};
 use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
 use crate::external::{ExternalModel, LearnerError};
@@ -15,6 +15,7 @@ use crate::report::draft::{self, DraftReport, DraftRowResult};
 use crate::report::layout::Printout;
 use crate::report::plot::{self, PlotError};
 use crate::report::table;
+use crate::results::push_task::PushJobResult;
 use crate::results::run_info::RunInfo;
 use crate::results::LearnerRecord;
 use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
@@ -195,13 +196,13 @@ impl Spec {
             Spec::PushTask {
                 model,
                 options,
-                variant,
-                transfer,
                 train_runs,
                 folds,
+                ..
             } => {
-                let protocol = Protocol::new(*variant, options.config_number())
-                    .with_transfer(transfer.clone());
+                let protocol = self
+                    .push_protocol()
+                    .ok_or_else(|| SpecError::Invalid("a push task has a protocol".into()))?;
                 let model = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
                 Document::Push(model.dispatch(
                     options,
@@ -243,6 +244,125 @@ impl Spec {
             ),
             Spec::DraftTables { folds } => Document::Draft(draft_tables(*folds, &plan, progress)?),
         })
+    }
+}
+
+impl Spec {
+    /// The push-task protocol of a [`Spec::PushTask`] (else `None`).
+    #[must_use]
+    pub fn push_protocol(&self) -> Option<Protocol> {
+        match self {
+            Spec::PushTask {
+                options,
+                variant,
+                transfer,
+                ..
+            } => Some(
+                Protocol::new(*variant, options.config_number()).with_transfer(transfer.clone()),
+            ),
+            _ => None,
+        }
+    }
+
+    /// Runs only the jobs `wanted` — (N_train, fold) pairs — of a
+    /// [`Spec::PushTask`] on `plan`, calling `done` with the report's setup
+    /// and each job's result as it finishes (`pushlearn sweep`: one fold of
+    /// one configuration is a job). A job's seeds depend only on the plan's
+    /// seed and its own (N_train, fold), so its result is the one the whole
+    /// experiment would have given it.
+    ///
+    /// # Errors
+    /// Not a push task, invalid options, the first failing job or the first
+    /// error of `done`.
+    pub fn run_push_jobs(
+        &self,
+        plan: &Plan,
+        wanted: &[(usize, usize)],
+        done: impl Fn(&Setup, &PushJobResult) -> Result<(), ExperimentError> + Sync,
+        progress: impl Fn(usize),
+    ) -> Result<(), SpecError> {
+        self.validate()?;
+        let (Spec::PushTask { model, options, .. }, Some(protocol)) = (self, self.push_protocol())
+        else {
+            return Err(SpecError::Invalid(format!(
+                "a sweep job is one fold of a push task, not of {}",
+                self.title()
+            )));
+        };
+        let mut plan = plan.clone();
+        let ready = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
+        let setup = plan.setup(crate::results::push_task::EXPERIMENT);
+        let mut all = PushJob::all(protocol.clone(), &[], 0, plan.seed);
+        for &(n_train, fold) in wanted {
+            all.extend(
+                PushJob::all(protocol.clone(), &[n_train], fold + 1, plan.seed)
+                    .into_iter()
+                    .filter(|job| job.fold == fold),
+            );
+        }
+        ready.dispatch(
+            options,
+            protocol.rate_hz,
+            PushSome {
+                rate_hz: protocol.rate_hz,
+                jobs: &all,
+                plan: &plan,
+                done: &|result: &PushJobResult| done(&setup, result),
+                progress: &progress,
+            },
+        )??;
+        Ok(())
+    }
+
+    /// The report of a [`Spec::PushTask`] from its jobs' results (as
+    /// [`Spec::run_push_jobs`] gave them) and the `setup` they ran under,
+    /// without timing: what `pushlearn experiment` writes for the spec, less
+    /// its machine-dependent part.
+    ///
+    /// # Errors
+    /// Not a push task, or results that do not cover every N_train.
+    pub fn push_report(
+        &self,
+        setup: Setup,
+        results: &[PushJobResult],
+    ) -> Result<PushReport, SpecError> {
+        match (self, self.push_protocol()) {
+            (
+                Spec::PushTask {
+                    train_runs, folds, ..
+                },
+                Some(protocol),
+            ) => Ok(run::push_report(
+                setup, &protocol, train_runs, *folds, results,
+            )?),
+            _ => Err(SpecError::Invalid(format!(
+                "only a push task's report is made of fold jobs, not {}'s",
+                self.title()
+            ))),
+        }
+    }
+}
+
+/// Some jobs of a push task, for [`Spec::run_push_jobs`].
+struct PushSome<'a> {
+    rate_hz: u32,
+    jobs: &'a [PushJob],
+    plan: &'a Plan,
+    done: &'a (dyn Fn(&PushJobResult) -> Result<(), ExperimentError> + Sync),
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for PushSome<'_> {
+    type Output = Result<Vec<PushJobResult>, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::push_jobs(
+            untrained,
+            self.rate_hz,
+            self.jobs,
+            self.plan,
+            self.done,
+            self.progress,
+        )
     }
 }
 

@@ -14,7 +14,7 @@ use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
-use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
+use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS, RATE_HZ};
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
 use pushlearn_cli::models::{LearnerChoice, ModelKind, ModelOptions};
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
@@ -333,7 +333,7 @@ impl WorldArgs {
 
 /// A progress bar on stderr, hidden when stdout is not a terminal (reports
 /// piped into files stay clean, and so do logs).
-fn progress(len: usize, what: &str) -> ProgressBar {
+pub(crate) fn progress(len: usize, what: &str) -> ProgressBar {
     if !std::io::stdout().is_terminal() {
         return ProgressBar::hidden();
     }
@@ -416,6 +416,76 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
         eprintln!("wrote {} CSV files to {}", written.len(), dir.display());
     }
     Ok(())
+}
+
+/// The long option names of `pushlearn experiment push-task` (without
+/// `--`): what a sweep file may set (`pushlearn sweep`).
+pub(crate) fn push_task_options() -> Vec<String> {
+    use clap::Args as _;
+    PushTaskArgs::augment_args(clap::Command::new("push-task"))
+        .get_arguments()
+        .filter_map(|arg| arg.get_long().map(str::to_owned))
+        .collect()
+}
+
+/// One sweep configuration, parsed by the same parser as `pushlearn
+/// experiment push-task` (so a sweep takes exactly its options).
+pub(crate) struct PushTaskLine {
+    args: PushTaskArgs,
+    pub(crate) spec: Spec,
+}
+
+impl PushTaskLine {
+    /// Parses `args` (`--model gate --eta 0.1 …`) as the options of
+    /// `pushlearn experiment push-task`.
+    ///
+    /// # Errors
+    /// Options the command refuses (clap's first line), or a configuration
+    /// that is not a push task with folds.
+    pub(crate) fn parse(args: &[String]) -> Result<Self> {
+        #[derive(clap::Parser)]
+        #[command(name = "push-task", no_binary_name = true)]
+        struct Line {
+            #[command(flatten)]
+            args: PushTaskArgs,
+        }
+        let line = <Line as clap::Parser>::try_parse_from(args).map_err(|err| {
+            let text = err.render().to_string();
+            let first = text.lines().next().unwrap_or_default();
+            anyhow::anyhow!("{}", first.strip_prefix("error: ").unwrap_or(first))
+        })?;
+        let spec = push_task_spec(&line.args)?;
+        if !matches!(spec, Spec::PushTask { .. }) {
+            bail!(
+                "a sweep job is one fold of a push task; --variant constant-feedback has no folds"
+            );
+        }
+        spec.validate()?;
+        // The options' fit to the model, checked now rather than in the
+        // sweep's first job of this configuration.
+        let options = &line.args.options;
+        let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
+        match line.args.learner.choice() {
+            LearnerChoice::Builtin(ModelKind::Gate) => options.gate(rate).map(drop)?,
+            LearnerChoice::Builtin(ModelKind::GatePlus) => options.gate_plus(rate).map(drop)?,
+            LearnerChoice::Builtin(ModelKind::Interaction) => {
+                options.interaction(rate).map(drop)?;
+            }
+            LearnerChoice::External(_) => options.check_external()?,
+        }
+        Ok(Self {
+            args: line.args,
+            spec,
+        })
+    }
+
+    /// The world plan of the configuration's jobs (starts no world yet).
+    ///
+    /// # Errors
+    /// No world binary, or options that do not fit the mode.
+    pub(crate) fn plan(&self) -> Result<Plan> {
+        self.args.world.plan(self.spec.scene())
+    }
 }
 
 fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {

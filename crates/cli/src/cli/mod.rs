@@ -6,6 +6,7 @@ pub mod learn;
 pub mod report;
 pub mod reproduce;
 pub mod serve_learner;
+pub mod sweep;
 pub mod view;
 
 /// Whether `err` comes from writing to a closed stdout pipe.

@@ -166,6 +166,10 @@ pub enum ExperimentError {
     /// A job ended without its results (a bug in a handler).
     #[error("{0}")]
     Incomplete(String),
+    /// A finished job's result could not be kept (`pushlearn sweep`
+    /// writes each one as it finishes).
+    #[error("cannot write the result of {job}: {why}")]
+    Output { job: String, why: String },
 }
 
 #[cfg(test)]

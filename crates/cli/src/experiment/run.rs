@@ -55,7 +55,9 @@ pub struct Plan {
 }
 
 impl Plan {
-    fn setup(&self, experiment: &str) -> Setup {
+    /// The setup its reports record for `experiment`.
+    #[must_use]
+    pub fn setup(&self, experiment: &str) -> Setup {
         Setup {
             experiment: experiment.to_owned(),
             model: self.model.clone(),
@@ -186,31 +188,91 @@ pub fn push_task<M: Model>(
     progress: impl FnMut(usize),
 ) -> Result<PushReport, ExperimentError> {
     let started = plan.started();
-    let variant = protocol.variant;
     let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
-    let untrained = Mutex::new(untrained);
-    let results = run_jobs(
+    let results = push_jobs(
+        untrained,
+        protocol.rate_hz,
         &jobs,
+        plan,
+        |_| Ok(()),
+        progress,
+    )?;
+    let mut report = push_report(
+        plan.setup(crate::results::push_task::EXPERIMENT),
+        protocol,
+        train_runs,
+        folds,
+        &results,
+    )?;
+    report.run = plan.run_info(
+        &started,
+        results.iter().map(|r| (r.counters, r.timing)),
+        RATE_HZ,
+        plan.workers().min(jobs.len()),
+    );
+    Ok(report)
+}
+
+/// Runs some push-task jobs (of [`PushJob::all`], any subset: each job's
+/// seeds depend only on its own coordinates) and returns their results in
+/// job order, calling `done` with each as it finishes — `pushlearn sweep`
+/// writes it there, so that an interrupted run keeps what it finished.
+///
+/// # Errors
+/// The first failing job, or the first error of `done`.
+pub fn push_jobs<M: Model>(
+    untrained: M,
+    rate_hz: u32,
+    jobs: &[PushJob],
+    plan: &Plan,
+    done: impl Fn(&PushJobResult) -> Result<(), ExperimentError> + Sync,
+    progress: impl FnMut(usize),
+) -> Result<Vec<PushJobResult>, ExperimentError> {
+    let Some(first) = jobs.first() else {
+        return Ok(Vec::new());
+    };
+    let scene = first.protocol.scene();
+    let untrained = Mutex::new(untrained);
+    run_jobs(
+        jobs,
         plan.workers(),
-        || plan.start(protocol.scene()),
+        || plan.start(scene),
         |job, worker| {
             let (task, timing, counters) = drive(
                 &mut worker.link,
                 &untrained,
                 PushTask::new(job),
-                protocol.rate_hz,
+                rate_hz,
                 plan.job_setup(job.latency_seed),
                 Fold {
                     seed: job.seed,
                     name: format!("N_train {} fold {}", job.n_train, job.fold),
                 },
             )?;
-            PushJobResult::from_task(job, task, counters, timing)
+            let result = PushJobResult::from_task(job, task, counters, timing)?;
+            done(&result)?;
+            Ok(result)
         },
         progress,
-    )?;
+    )
+}
+
+/// The push task's report from its jobs' results (in any order): the
+/// learning curve of every N_train of `train_runs`, and a [`RunInfo`]
+/// without timing (the caller that timed the run replaces it).
+///
+/// # Errors
+/// An N_train without results, or a block without errors.
+pub fn push_report(
+    setup: Setup,
+    protocol: &Protocol,
+    train_runs: &[usize],
+    folds: usize,
+    results: &[PushJobResult],
+) -> Result<PushReport, ExperimentError> {
+    let variant = protocol.variant;
     Ok(PushReport {
-        setup: plan.setup(crate::results::push_task::EXPERIMENT),
+        setup,
         variant: variant.as_str().to_owned(),
         transfer: protocol.transfer.clone(),
         folds,
@@ -219,14 +281,15 @@ pub fn push_task<M: Model>(
             &protocol.test_positions,
             variant.blocks(),
             train_runs,
-            &results,
+            results,
         )?,
-        run: plan.run_info(
-            &started,
+        run: RunInfo::of(
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
-            plan.workers().min(jobs.len()),
-        ),
+            1,
+            0.0,
+        )
+        .without_timing(),
     })
 }
 

@@ -25,9 +25,10 @@ fn mix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// FNV-1a of the experiment's name: stable across builds and platforms,
-/// unlike `std`'s hasher.
-fn name_hash(name: &str) -> u64 {
+/// FNV-1a of `name` (an experiment's, a sweep job's parameters): stable
+/// across builds and platforms, unlike `std`'s hasher.
+#[must_use]
+pub fn name_hash(name: &str) -> u64 {
     name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
         (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
     })

@@ -590,14 +590,15 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
         .collect()
 }
 
+/// A learner's label and its report on each new-object condition.
+pub type ObjectRow<'r> = (String, Vec<&'r PushReport>);
+
 /// The new-object experiments: the conditions' labels, and for each
 /// learner (label) its report on each condition, in the manifest's order.
 ///
 /// # Errors
 /// A document the reproduction does not have.
-pub fn object_reports(
-    results: &Reproduction,
-) -> Result<(Vec<String>, Vec<(String, Vec<&PushReport>)>), String> {
+pub fn object_reports(results: &Reproduction) -> Result<(Vec<String>, Vec<ObjectRow<'_>>), String> {
     use super::manifest::{object_entry_name, object_learners, transfers};
     let conditions = transfers();
     let labels = conditions.iter().map(|t| t.label()).collect();
