@@ -780,3 +780,63 @@ fn jitter_runs_shared_by_both_models_give_bit_identical_results() {
     eprintln!("shared cache: simulated {simulated} of {states} states ({fraction:.3})");
     assert!(fraction > 0.0 && fraction < 0.6, "{simulated} of {states}");
 }
+
+/// The new-object experiments over sockets (`docs/experiments.md` "New
+/// objects"): each run's object is put in the blue block's start, so a
+/// model trained on the cylinder predicts the cylinder better than one
+/// trained on the blue block.
+#[test]
+fn new_object_runs_push_the_object_they_are_about() {
+    let dir = TempDir::new("objects");
+    let run = |train: &str, test: &str| {
+        let json = dir.file(&format!("{train}-{test}.json"));
+        let table = succeeded(&experiment(&[
+            "push-task",
+            "--train-on",
+            train,
+            "--test-on",
+            test,
+            "--train-runs",
+            "5",
+            "--folds",
+            "2",
+            "--json",
+            &json,
+        ]));
+        assert!(
+            table.contains(&format!("new objects, {train}→{test}")),
+            "{table}"
+        );
+        // The thesis never pushed these objects: no values of its beside ours.
+        assert!(!table.contains("[0."), "{table}");
+        let v = read_json(&json);
+        assert_eq!(v["transfer"]["test"], test, "{v}");
+        assert_eq!(v["run"]["reset_errors"], 0, "{v}");
+        v
+    };
+    let own = run("cylinder", "cylinder");
+    let other = run("blue", "cylinder");
+    let error = |v: &Value| number(&v["results"][0]["block_pos_err"]["mean"]);
+    assert!(
+        error(&own) < error(&other),
+        "{} vs {}",
+        error(&own),
+        error(&other)
+    );
+    // x0 = −0.245 (test position 3) misses the cylinder (0.2 m across) but
+    // not the blue block: the model of the blue block predicts a push there.
+    let at = |v: &Value| number(&v["results"][0]["per_position"][3]["block_pos_err"]["mean"]);
+    assert!(
+        at(&other) > 0.1 && at(&own) < 0.05,
+        "{} vs {}",
+        at(&other),
+        at(&own)
+    );
+    let refused = experiment(&["push-task", "--variant", "fixed-three", "--test-on", "red"]);
+    assert!(!refused.status.success());
+    assert!(
+        text(&refused.stderr).contains("drop --variant fixed-three"),
+        "{}",
+        text(&refused.stderr)
+    );
+}

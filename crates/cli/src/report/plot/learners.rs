@@ -97,7 +97,7 @@ pub fn by_condition(
         title: title.to_owned(),
         x_desc: "condition (see the title)".to_owned(),
         y_desc: y.to_owned(),
-        x_range: 0.5..conditions.len() as f64 + 0.5,
+        x_range: 0.0..conditions.len() as f64 + 1.0,
         offset: 0.12,
         counts: true,
         series: rows
