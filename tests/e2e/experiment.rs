@@ -824,10 +824,11 @@ fn new_object_runs_push_the_object_they_are_about() {
         error(&other)
     );
     // x0 = −0.245 (test position 3) misses the cylinder (0.2 m across) but
-    // not the blue block: the model of the blue block predicts a push there.
+    // not the blue block, which a push from there moves 0.14 m
+    // (docs/world.md): the model of the blue block predicts that push.
     let at = |v: &Value| number(&v["results"][0]["per_position"][3]["block_pos_err"]["mean"]);
     assert!(
-        at(&other) > 0.1 && at(&own) < 0.05,
+        at(&other) > at(&own) + 0.05,
         "{} vs {}",
         at(&other),
         at(&own)
