@@ -40,6 +40,14 @@ fn quick_check_names_a_changed_value_and_regeneration_restores_the_committed_byt
         }
     }
     assert!(names.len() >= 9, "{names:?}");
+    // The reduced ablation's plan, which the reproduction runs as a sweep.
+    let sweeps = root.0.join("sweeps");
+    std::fs::create_dir_all(&sweeps).expect("sweeps/ in the temp root");
+    std::fs::copy(
+        repo_root().join("sweeps/ablation-ci.toml"),
+        sweeps.join("ablation-ci.toml"),
+    )
+    .expect("copy the sweep file");
 
     let target = copy.join("push-task-gate.json");
     let mut document: Value =

@@ -75,6 +75,15 @@ pub struct ReproduceArgs {
     /// executable, else on PATH].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
+
+    /// Keep the sweeps' job outputs in DIR/NAME (DIR/ablation) instead of
+    /// a temporary directory removed afterwards: an interrupted
+    /// reproduction continues the sweep where it stopped, and a sweep run
+    /// elsewhere (`pushlearn sweep run|slurm sweeps/ablation.toml --out
+    /// DIR/ablation`) is merged instead of run again. Jobs already there
+    /// are taken as they are: run them with this version.
+    #[arg(long, value_name = "DIR")]
+    sweep_dir: Option<PathBuf>,
 }
 
 /// Runs `pushlearn reproduce`.
@@ -122,11 +131,12 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     } else {
         manifest::full()
     };
+    let sweeps = manifest::sweeps(args.quick);
     let dir = root.join(if args.quick { QUICK_DIR } else { RESULTS_DIR });
     if !args.page_only {
         use_repository_python(root);
     }
-    let chosen = chosen_entries(&entries, &args.only)?;
+    let chosen = chosen_entries(&entries, &sweeps, &args.only)?;
     let command = if args.quick {
         "pushlearn reproduce --quick".to_owned()
     } else if args.page_only {
@@ -139,24 +149,39 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     // With --only, the timing of what ran (the loaded documents have none).
     let mut only_timing = None;
     let results = if args.page_only {
-        reproduce::load(&entries, &dir)?
+        reproduce::load(&entries, &sweeps, &dir)?
     } else {
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
         let settings = Settings {
             sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
             workers: args.workers.map_or(cpus, |n| n as usize),
         };
+        let run_all = |entries: &[manifest::Entry], sweeps: &[manifest::SweepEntry]| {
+            let mut ran = run_with_bars(entries, &settings)?;
+            for sweep in sweeps {
+                let swept = run_sweep(root, sweep, args.sweep_dir.as_deref(), &settings)?;
+                ran.wall_seconds += swept.timing.map_or(0.0, |t| t.wall_seconds);
+                ran.sweeps.push(swept);
+            }
+            anyhow::Ok(ran)
+        };
         match &chosen {
-            None => run_with_bars(&entries, &settings)?,
+            None => run_all(&entries, &sweeps)?,
             Some(chosen) => {
-                let ran = run_with_bars(chosen, &settings)?;
+                let ran = run_all(&chosen.entries, &chosen.sweeps)?;
                 only_timing = Some(ran.timing_page(&command));
                 let others: Vec<manifest::Entry> = entries
                     .iter()
-                    .filter(|e| !chosen.contains(e))
+                    .filter(|e| !chosen.entries.contains(e))
                     .cloned()
                     .collect();
-                reproduce::merge(&entries, ran, reproduce::load(&others, &dir)?)
+                let other_sweeps: Vec<manifest::SweepEntry> = sweeps
+                    .iter()
+                    .filter(|s| !chosen.sweeps.contains(s))
+                    .cloned()
+                    .collect();
+                let loaded = reproduce::load(&others, &other_sweeps, &dir)?;
+                reproduce::merge(&entries, &sweeps, ran, loaded)
             }
         }
     };
@@ -165,7 +190,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
     let ran: Vec<&reproduce::Produced> = results
         .produced
         .iter()
-        .filter(|p| chosen.as_ref().is_none_or(|c| c.contains(&p.entry)))
+        .filter(|p| chosen.as_ref().is_none_or(|c| c.entries.contains(&p.entry)))
         .collect();
     let states: u64 = ran
         .iter()
@@ -191,7 +216,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         println!(
             "{command}: wrote {} and {figures} figures from the {} documents in {}",
             root.join(PAGE).display(),
-            results.produced.len() + 1,
+            results.produced.len() + results.sweeps.len() + 1,
             dir.display()
         );
         return Ok(());
@@ -201,9 +226,9 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         // Only what this run produced: the other documents are the
         // committed ones, read back, and stay as they are.
         files.retain(|(name, _)| {
-            chosen
-                .iter()
-                .any(|e| name.strip_suffix(".json") == Some(e.name.as_str()))
+            let name = name.strip_suffix(".json");
+            chosen.entries.iter().any(|e| name == Some(e.name.as_str()))
+                || chosen.sweeps.iter().any(|s| name == Some(s.name))
         });
     }
     if args.check {
@@ -280,6 +305,9 @@ const ONLY_TIMING_MARK: &str = "<!-- the last `pushlearn reproduce --only` run -
 /// The learning curves of every model of "Beyond the thesis".
 const BEYOND_FIGURE: &str = "beyond-curves";
 
+/// The ablation sweep's errors, configuration by training runs.
+const ABLATION_FIGURE: &str = "ablation";
+
 /// The new-object experiments' errors, learner by condition.
 const OBJECTS_FIGURE: &str = "beyond-objects";
 
@@ -305,6 +333,10 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
     if let Ok(curves) = page::beyond_curves(results) {
         pushlearn_cli::report::plot::learners(&curves, &scratch, BEYOND_FIGURE)
             .context("drawing the figure of \"Beyond the thesis\"")?;
+    }
+    if let Some(summary) = results.sweep(manifest::ABLATION) {
+        pushlearn_cli::report::plot::ablation(summary, &scratch, ABLATION_FIGURE)
+            .context("drawing the ablation's figure")?;
     }
     if let Ok((conditions, rows)) = page::object_reports(results) {
         pushlearn_cli::report::plot::by_condition(&conditions, &rows, &scratch, OBJECTS_FIGURE)
@@ -332,12 +364,21 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
     Ok(shown.len())
 }
 
-/// The entries `--only` names, in the manifest's order; `None` without
-/// `--only`. A pattern that matches nothing is an error listing the names.
+/// What `--only` chose.
+#[derive(Debug)]
+struct Chosen {
+    entries: Vec<manifest::Entry>,
+    sweeps: Vec<manifest::SweepEntry>,
+}
+
+/// The experiments and sweeps `--only` names, in the manifest's order;
+/// `None` without `--only`. A pattern that matches nothing is an error
+/// listing the names.
 fn chosen_entries(
     entries: &[manifest::Entry],
+    sweeps: &[manifest::SweepEntry],
     patterns: &[String],
-) -> Result<Option<Vec<manifest::Entry>>> {
+) -> Result<Option<Chosen>> {
     if patterns.is_empty() {
         return Ok(None);
     }
@@ -345,22 +386,76 @@ fn chosen_entries(
         Some(prefix) => name.starts_with(prefix),
         None => name == pattern,
     };
+    let names = || {
+        entries
+            .iter()
+            .map(|e| e.name.as_str())
+            .chain(sweeps.iter().map(|s| s.name))
+    };
     for pattern in patterns {
-        if !entries.iter().any(|e| matches(pattern, &e.name)) {
-            let names: Vec<&str> = entries.iter().map(|e| e.name.as_str()).collect();
+        if !names().any(|name| matches(pattern, name)) {
             bail!(
-                "--only {pattern}: no experiment of the reproduction is called that; they are: {}",
-                names.join(", ")
+                "--only {pattern}: no experiment or sweep of the reproduction is called that; they are: {}",
+                names().collect::<Vec<_>>().join(", ")
             );
         }
     }
-    Ok(Some(
-        entries
+    let chosen = |name: &str| patterns.iter().any(|p| matches(p, name));
+    Ok(Some(Chosen {
+        entries: entries
             .iter()
-            .filter(|e| patterns.iter().any(|p| matches(p, &e.name)))
+            .filter(|e| chosen(&e.name))
             .cloned()
             .collect(),
-    ))
+        sweeps: sweeps.iter().filter(|s| chosen(s.name)).cloned().collect(),
+    }))
+}
+
+/// Runs `sweep`'s jobs as `pushlearn sweep run` does, in `sweep_dir/NAME`
+/// (kept, and what is done there is not run again) or a temporary
+/// directory (removed afterwards), and keeps its merged summary.
+fn run_sweep(
+    root: &Path,
+    sweep: &manifest::SweepEntry,
+    sweep_dir: Option<&Path>,
+    settings: &Settings,
+) -> Result<reproduce::Swept> {
+    let file = root.join(sweep.file);
+    let (dir, temporary) = match sweep_dir {
+        Some(dir) => (dir.join(sweep.name), false),
+        None => (
+            std::env::temp_dir().join(format!(
+                "pushlearn-reproduce-{}-{}",
+                sweep.name,
+                std::process::id()
+            )),
+            true,
+        ),
+    };
+    eprintln!(
+        "reproduce: the sweep {} ({}) in {} …",
+        sweep.name,
+        sweep.file,
+        dir.display()
+    );
+    let run = super::sweep::run_and_merge(&file, &dir, settings.workers, &settings.sim_bin)
+        .with_context(|| format!("the sweep {} ({})", sweep.name, sweep.file));
+    if temporary {
+        // Kept only on purpose (--sweep-dir); a failed run's half is of no
+        // use to a next run that starts afresh anyway.
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let run = run?;
+    Ok(reproduce::Swept {
+        entry: sweep.clone(),
+        summary: run.summary,
+        timing: Some(reproduce::SweepTiming {
+            jobs: run.jobs,
+            ran: run.ran,
+            wall_seconds: run.seconds,
+            workers: settings.workers,
+        }),
+    })
 }
 
 /// Runs the reproduction with one progress bar per experiment (on stderr,
@@ -512,14 +607,17 @@ mod tests {
     #[test]
     fn only_picks_names_and_prefixes_in_the_manifests_order_and_refuses_unknown_ones() {
         let entries = manifest::full();
-        assert!(chosen_entries(&entries, &[]).unwrap().is_none());
+        let sweeps = manifest::sweeps(false);
+        assert!(chosen_entries(&entries, &sweeps, &[]).unwrap().is_none());
         let picked = chosen_entries(
             &entries,
+            &sweeps,
             &["beyond-sampled-*".to_owned(), "push-task-gate".to_owned()],
         )
         .unwrap()
         .unwrap();
-        let names: Vec<&str> = picked.iter().map(|e| e.name.as_str()).collect();
+        assert!(picked.sweeps.is_empty());
+        let names: Vec<&str> = picked.entries.iter().map(|e| e.name.as_str()).collect();
         assert_eq!(
             names,
             [
@@ -528,9 +626,15 @@ mod tests {
                 "beyond-sampled-gate-plus"
             ]
         );
-        let error = chosen_entries(&entries, &["beyond-typo".to_owned()])
+        let error = chosen_entries(&entries, &sweeps, &["beyond-typo".to_owned()])
             .unwrap_err()
             .to_string();
         assert!(error.contains("--only beyond-typo") && error.contains("beyond-push-gate-plus"));
+        assert!(error.contains("ablation"), "{error}");
+        let ablation = chosen_entries(&entries, &sweeps, &["ablation".to_owned()])
+            .unwrap()
+            .unwrap();
+        assert!(ablation.entries.is_empty());
+        assert_eq!(ablation.sweeps, sweeps);
     }
 }

@@ -4,7 +4,6 @@
 //! (`docs/sweeps.md`).
 
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -18,6 +17,7 @@ use pushlearn_cli::experiment::ExperimentError;
 use pushlearn_cli::output::write_atomically;
 use pushlearn_cli::spec::Document;
 use pushlearn_cli::sweep::output::{self, JobOutput, JOBS, MERGED, PLAN, SLURM, TIMING};
+use pushlearn_cli::sweep::summary::Summary;
 use pushlearn_cli::sweep::{slurm, Job, Sweep};
 
 use super::experiment::{end_worlds_on_signal, progress, PushTaskLine};
@@ -173,7 +173,7 @@ pub fn run(args: SweepArgs) -> Result<()> {
         SweepCommand::Plan(args) => plan(&args),
         SweepCommand::Run(args) => run_here(&args),
         SweepCommand::Slurm(args) => submit(&args),
-        SweepCommand::Merge(args) => merge(&args.dir, !args.no_figures),
+        SweepCommand::Merge(args) => merge(&args.dir, !args.no_figures).map(|_| ()),
         SweepCommand::Task(args) => task(&args),
     }
 }
@@ -285,28 +285,11 @@ fn prepare(dir: &Path, loaded: &Loaded) -> Result<()> {
 fn run_here(args: &RunArgs) -> Result<()> {
     end_worlds_on_signal();
     let loaded = load(&args.sweep)?;
-    prepare(&args.out, &loaded)?;
-    let selected = loaded.selected(&args.only)?;
-    let pending: Vec<Job> = output::pending(&args.out, &selected)
-        .into_iter()
-        .cloned()
-        .collect();
     let cpus = std::thread::available_parallelism().map_or(1, usize::from);
     let workers = args.workers.map_or(cpus, |n| n as usize);
     let sim = find_sim_binary(args.sim_bin.as_deref())?;
-    eprintln!(
-        "{}; {} to run, {} done before",
-        loaded.sweep.shape(),
-        pending.len(),
-        selected.len() - pending.len()
-    );
-    let started = Instant::now();
-    run_jobs(&loaded, &pending, &args.out, workers, &sim)?;
-    let seconds = started.elapsed().as_secs_f64();
-    eprintln!(
-        "ran {} jobs in {seconds:.1} s with {workers} worlds",
-        pending.len()
-    );
+    let selected = loaded.selected(&args.only)?;
+    run_pending(&loaded, &selected, &args.out, workers, &sim)?;
     if args.no_merge {
         return Ok(());
     }
@@ -319,7 +302,73 @@ fn run_here(args: &RunArgs) -> Result<()> {
         );
         return Ok(());
     }
-    merge(&args.out, true)
+    merge(&args.out, true).map(|_| ())
+}
+
+/// What [`run_and_merge`] did.
+pub struct LocalRun {
+    pub summary: Summary,
+    /// Jobs in the plan, and how many of them this run ran (the others had
+    /// their output in the directory already).
+    pub jobs: usize,
+    pub ran: usize,
+    /// Wall time of running and merging.
+    pub seconds: f64,
+}
+
+/// `pushlearn sweep run SWEEP --out DIR` for `pushlearn reproduce`: every
+/// job of the sweep file not done in `dir` yet, with `workers` worlds, then
+/// the merge (without figures).
+///
+/// # Errors
+/// The sweep file is invalid, a job fails, or an output cannot be written.
+pub fn run_and_merge(
+    sweep_file: &Path,
+    dir: &Path,
+    workers: usize,
+    sim: &Path,
+) -> Result<LocalRun> {
+    let started = Instant::now();
+    let loaded = load(sweep_file)?;
+    let jobs = loaded.sweep.jobs();
+    let ran = run_pending(&loaded, &jobs, dir, workers, sim)?;
+    let summary = merge(dir, false)?;
+    Ok(LocalRun {
+        summary,
+        jobs: jobs.len(),
+        ran,
+        seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Writes the plan into `dir` and runs those of `selected` whose output is
+/// not there yet; returns how many ran.
+fn run_pending(
+    loaded: &Loaded,
+    selected: &[Job],
+    dir: &Path,
+    workers: usize,
+    sim: &Path,
+) -> Result<usize> {
+    prepare(dir, loaded)?;
+    let pending: Vec<Job> = output::pending(dir, selected)
+        .into_iter()
+        .cloned()
+        .collect();
+    eprintln!(
+        "{}; {} to run, {} done before",
+        loaded.sweep.shape(),
+        pending.len(),
+        selected.len() - pending.len()
+    );
+    let started = Instant::now();
+    run_jobs(loaded, &pending, dir, workers, sim)?;
+    let seconds = started.elapsed().as_secs_f64();
+    eprintln!(
+        "ran {} jobs in {seconds:.1} s with {workers} worlds",
+        pending.len()
+    );
+    Ok(pending.len())
 }
 
 /// Runs `jobs` (none done yet) into `dir`, grouped by configuration and
@@ -541,7 +590,7 @@ fn task(args: &TaskArgs) -> Result<()> {
     Ok(())
 }
 
-fn merge(dir: &Path, figures: bool) -> Result<()> {
+fn merge(dir: &Path, figures: bool) -> Result<Summary> {
     let loaded = load(&dir.join(PLAN)).with_context(|| {
         format!(
             "{} is not a sweep's output directory (it has no readable {PLAN})",
@@ -567,7 +616,7 @@ fn merge(dir: &Path, figures: bool) -> Result<()> {
         return Err(incomplete.into());
     }
     let jobs = sweep.jobs();
-    let mut summary = Summary::default();
+    let mut summary = Summary::new(sweep);
     let started = Instant::now();
     for group in jobs.chunk_by(|a, b| a.configuration == b.configuration && a.seed == b.seed) {
         let first = &group[0];
@@ -611,10 +660,7 @@ fn merge(dir: &Path, figures: bool) -> Result<()> {
             summary.add(configuration, first.seed, report);
         }
     }
-    write_atomically(
-        &merged.join("summary.md"),
-        summary.markdown(sweep).as_bytes(),
-    )?;
+    write_atomically(&merged.join("summary.md"), summary.markdown().as_bytes())?;
     write_atomically(&merged.join("summary.csv"), summary.csv().as_bytes())?;
     eprintln!(
         "merged {} jobs of {} configurations × {} seeds into {} in {:.1} s",
@@ -624,89 +670,5 @@ fn merge(dir: &Path, figures: bool) -> Result<()> {
         merged.display(),
         started.elapsed().as_secs_f64()
     );
-    Ok(())
-}
-
-/// A summary row's configuration id, options, model name and N_train.
-type RowKey = (String, String, String, usize);
-
-/// One row per configuration and N_train, over seeds: the blue block's
-/// position and orientation errors and the actuator's, each the mean over
-/// seeds of the learning curve's value (and the spread of those means).
-#[derive(Default)]
-struct Summary {
-    /// Per row, each seed's (position, orientation, actuator) errors.
-    rows: Vec<(RowKey, Vec<[f64; 3]>)>,
-}
-
-impl Summary {
-    fn add(
-        &mut self,
-        configuration: &pushlearn_cli::sweep::Configuration,
-        _seed: u64,
-        report: &pushlearn_cli::results::PushReport,
-    ) {
-        for entry in &report.results {
-            let key = (
-                configuration.id.clone(),
-                configuration.label(),
-                report.setup.model.clone(),
-                entry.train_runs,
-            );
-            let value = [
-                entry.blue.block_pos_err.mean,
-                entry.blue.block_ori_err.mean,
-                entry.blue.actuator_pos_err.mean,
-            ];
-            match self.rows.iter_mut().find(|(k, _)| *k == key) {
-                Some((_, values)) => values.push(value),
-                None => self.rows.push((key, vec![value])),
-            }
-        }
-    }
-
-    fn stats(values: &[[f64; 3]], i: usize) -> (f64, f64) {
-        let n = values.len() as f64;
-        let mean = values.iter().map(|v| v[i]).sum::<f64>() / n;
-        let var = values.iter().map(|v| (v[i] - mean).powi(2)).sum::<f64>() / n;
-        (mean, var.sqrt())
-    }
-
-    fn markdown(&self, sweep: &Sweep) -> String {
-        let mut s = format!(
-            "{}.\n\nMeans over the {} seeds (± their spread) of the learning curves' mean errors of the blue block (position in m, orientation in rad) and of the actuator (m); each seed's value is over its {} folds.\n\n",
-            sweep.shape(),
-            sweep.seeds.len(),
-            sweep.folds
-        );
-        s.push_str("| configuration | options | model | N_train | block position | block orientation | actuator |\n");
-        s.push_str("|---|---|---|--:|--:|--:|--:|\n");
-        for ((id, label, model, n), values) in &self.rows {
-            let cell = |i| {
-                let (mean, spread) = Self::stats(values, i);
-                format!("{mean:.4} ± {spread:.4}")
-            };
-            let _ = writeln!(
-                s,
-                "| {id} | {label} | {model} | {n} | {} | {} | {} |",
-                cell(0),
-                cell(1),
-                cell(2)
-            );
-        }
-        s
-    }
-
-    fn csv(&self) -> String {
-        let mut s = String::from("configuration,options,model,train_runs,seeds,block_pos_err,block_pos_err_spread,block_ori_err,block_ori_err_spread,actuator_pos_err,actuator_pos_err_spread\n");
-        for ((id, label, model, n), values) in &self.rows {
-            let _ = write!(s, "{id},\"{label}\",{model},{n},{}", values.len());
-            for i in 0..3 {
-                let (mean, spread) = Self::stats(values, i);
-                let _ = write!(s, ",{mean},{spread}");
-            }
-            s.push('\n');
-        }
-        s
-    }
+    Ok(summary)
 }

@@ -103,11 +103,10 @@ impl Entry {
                     let _ = write!(line, " --variant {}", variant.as_str());
                 }
                 if let Some(t) = transfer {
-                    let train: Vec<&str> = t.train.iter().map(|o| o.as_str()).collect();
                     let _ = write!(
                         line,
                         " --train-on {} --test-on {}",
-                        train.join(","),
+                        t.train_names(","),
                         t.test.as_str()
                     );
                 }
@@ -511,6 +510,45 @@ fn objects() -> Vec<Entry> {
         }
     }
     entries
+}
+
+/// A sweep (`docs/sweeps.md`) whose merged errors a reproduction keeps as
+/// a document ([`crate::sweep::summary::Summary`]); its jobs run as
+/// `pushlearn sweep run` runs them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SweepEntry {
+    /// Its document's file name without `.json`.
+    pub name: &'static str,
+    /// The sweep file, relative to the repository root.
+    pub file: &'static str,
+}
+
+impl SweepEntry {
+    /// The stand-alone command that runs it (its summary is then
+    /// `DIR/merged/summary.md`; `pushlearn reproduce --sweep-dir runs`
+    /// takes it from there).
+    #[must_use]
+    pub fn command(&self) -> String {
+        format!("pushlearn sweep run {} --out runs/{}", self.file, self.name)
+    }
+}
+
+/// The ablation's document name (docs/results.md "Ablation").
+pub const ABLATION: &str = "ablation";
+
+/// The sweeps of a reproduction: the ablation, or for `--quick` its reduced
+/// version (the one the Slurm test runs), so CI checks the sweep's path
+/// into a document too.
+#[must_use]
+pub fn sweeps(quick: bool) -> Vec<SweepEntry> {
+    vec![SweepEntry {
+        name: ABLATION,
+        file: if quick {
+            "sweeps/ablation-ci.toml"
+        } else {
+            "sweeps/ablation.toml"
+        },
+    }]
 }
 
 /// A reduced reproduction that still exercises every experiment and both

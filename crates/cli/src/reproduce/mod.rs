@@ -29,8 +29,9 @@ use crate::experiment::workers::WorldSource;
 use crate::experiment::Mode;
 use crate::results::run_info::RunTiming;
 use crate::spec::{Document, SpecError};
+use crate::sweep::summary::Summary;
 use calibration::CalibrationRow;
-use manifest::Entry;
+use manifest::{Entry, SweepEntry};
 
 /// Where the committed results live, relative to the repository root.
 pub const RESULTS_DIR: &str = "docs/results";
@@ -89,15 +90,46 @@ pub struct Produced {
     pub timing: Vec<RunTiming>,
 }
 
+/// What one sweep of a reproduction produced.
+#[derive(Debug)]
+pub struct Swept {
+    pub entry: SweepEntry,
+    pub summary: Summary,
+    /// How it ran, when it did (a document read back has none).
+    pub timing: Option<SweepTiming>,
+}
+
+/// A sweep's run: machine-dependent, so only in timing.md.
+#[derive(Clone, Copy, Debug)]
+pub struct SweepTiming {
+    /// Jobs in the plan.
+    pub jobs: usize,
+    /// Of them, run by this reproduction (the rest had their output in the
+    /// sweep directory already).
+    pub ran: usize,
+    pub wall_seconds: f64,
+    pub workers: usize,
+}
+
 /// The documents of a whole reproduction.
 #[derive(Debug)]
 pub struct Reproduction {
     pub calibration: Vec<CalibrationRow>,
     pub produced: Vec<Produced>,
+    pub sweeps: Vec<Swept>,
     pub wall_seconds: f64,
 }
 
 impl Reproduction {
+    /// The summary of the sweep named `name`, if the reproduction has it.
+    #[must_use]
+    pub fn sweep(&self, name: &str) -> Option<&Summary> {
+        self.sweeps
+            .iter()
+            .find(|s| s.entry.name == name)
+            .map(|s| &s.summary)
+    }
+
     /// The document named `name`, if the reproduction made one.
     #[must_use]
     pub fn document(&self, name: &str) -> Option<&Document> {
@@ -130,6 +162,16 @@ impl Reproduction {
                 })?;
             files.push((format!("{}.json", p.entry.name), text));
         }
+        for swept in &self.sweeps {
+            let text = swept
+                .summary
+                .to_json()
+                .map_err(|source| ReproduceError::Json {
+                    name: swept.entry.name.to_owned(),
+                    source,
+                })?;
+            files.push((format!("{}.json", swept.entry.name), text));
+        }
         Ok(files)
     }
 
@@ -144,11 +186,13 @@ impl Reproduction {
             page,
             "Machine-dependent, so kept out of the checked documents; rewritten by every run.\n"
         );
-        let _ = writeln!(
-            page,
-            "| Experiment | Messages | Simulated states | Wall [s] | Handling p50 / p99 [µs] | Max [ms] | Over budget |"
-        );
-        let _ = writeln!(page, "|---|---|---|---|---|---|---|");
+        if !self.produced.is_empty() {
+            let _ = writeln!(
+                page,
+                "| Experiment | Messages | Simulated states | Wall [s] | Handling p50 / p99 [µs] | Max [ms] | Over budget |"
+            );
+            let _ = writeln!(page, "|---|---|---|---|---|---|---|");
+        }
         let (mut messages, mut simulated, mut wall) = (0u64, 0u64, 0.0);
         for p in &self.produced {
             let run = p.document.runs();
@@ -179,6 +223,21 @@ impl Reproduction {
                 "| {} | {m} | {sim} | {w:.1} | {p50:.1} / {p99:.1} | {max:.2} | {slow} |",
                 p.entry.name
             );
+        }
+        if self.sweeps.iter().any(|s| s.timing.is_some()) {
+            let _ = writeln!(
+                page,
+                "\n| Sweep | File | Jobs | Run now | Worlds | Wall [s] |\n|---|---|---|---|---|---|"
+            );
+        }
+        for swept in &self.sweeps {
+            if let Some(t) = swept.timing {
+                let _ = writeln!(
+                    page,
+                    "| {} | `{}` | {} | {} | {} | {:.1} |",
+                    swept.entry.name, swept.entry.file, t.jobs, t.ran, t.workers, t.wall_seconds
+                );
+            }
         }
         let floor = simulated as f64 * 85e-6;
         let _ = writeln!(
@@ -278,15 +337,21 @@ pub fn run(
     Ok(Reproduction {
         calibration,
         produced,
+        sweeps: Vec::new(),
         wall_seconds: started.elapsed().as_secs_f64(),
     })
 }
 
-/// One reproduction of `entries` from the documents `ran` produced and the
-/// ones `loaded` read back, in the order of `entries`; the calibration and
-/// the wall time are `ran`'s.
+/// One reproduction of `entries` and `sweeps` from the documents `ran`
+/// produced and the ones `loaded` read back, in the manifest's order; the
+/// calibration and the wall time are `ran`'s.
 #[must_use]
-pub fn merge(entries: &[Entry], ran: Reproduction, loaded: Reproduction) -> Reproduction {
+pub fn merge(
+    entries: &[Entry],
+    sweeps: &[SweepEntry],
+    ran: Reproduction,
+    loaded: Reproduction,
+) -> Reproduction {
     let mut pool: Vec<Produced> = ran.produced.into_iter().chain(loaded.produced).collect();
     let mut produced = Vec::with_capacity(pool.len());
     for entry in entries {
@@ -294,9 +359,17 @@ pub fn merge(entries: &[Entry], ran: Reproduction, loaded: Reproduction) -> Repr
             produced.push(pool.swap_remove(at));
         }
     }
+    let mut pool: Vec<Swept> = ran.sweeps.into_iter().chain(loaded.sweeps).collect();
+    let mut swept = Vec::with_capacity(pool.len());
+    for entry in sweeps {
+        if let Some(at) = pool.iter().position(|s| s.entry.name == entry.name) {
+            swept.push(pool.swap_remove(at));
+        }
+    }
     Reproduction {
         calibration: ran.calibration,
         produced,
+        sweeps: swept,
         wall_seconds: ran.wall_seconds,
     }
 }
@@ -307,7 +380,11 @@ pub fn merge(entries: &[Entry], ran: Reproduction, loaded: Reproduction) -> Repr
 ///
 /// # Errors
 /// A document is missing or unreadable, named.
-pub fn load(entries: &[Entry], dir: &Path) -> Result<Reproduction, ReproduceError> {
+pub fn load(
+    entries: &[Entry],
+    sweeps: &[SweepEntry],
+    dir: &Path,
+) -> Result<Reproduction, ReproduceError> {
     let read = |name: &str| {
         let path = dir.join(name);
         std::fs::read_to_string(&path).map_err(|e| ReproduceError::Load {
@@ -336,9 +413,23 @@ pub fn load(entries: &[Entry], dir: &Path) -> Result<Reproduction, ReproduceErro
             timing: Vec::new(),
         });
     }
+    let mut swept = Vec::new();
+    for entry in sweeps {
+        let name = format!("{}.json", entry.name);
+        let summary = serde_json::from_str(&read(&name)?).map_err(|e| ReproduceError::Load {
+            path: dir.join(&name).display().to_string(),
+            reason: e.to_string(),
+        })?;
+        swept.push(Swept {
+            entry: entry.clone(),
+            summary,
+            timing: None,
+        });
+    }
     Ok(Reproduction {
         calibration,
         produced,
+        sweeps: swept,
         wall_seconds: 0.0,
     })
 }

@@ -24,8 +24,9 @@ use crate::experiment::{LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use crate::models::ModelKind;
 use crate::report::reference::{self, Ms};
 use crate::results::push_task::{CurveEntry, SelectionCount};
-use crate::results::{MttReport, PushReport};
+use crate::results::{MttReport, PushReport, Setup};
 use crate::spec::Document;
+use crate::sweep::summary::{change_label, Metric};
 
 /// How a generated block's line starts.
 const DIRECTIVE: &str = "<!-- reproduce:";
@@ -66,6 +67,8 @@ enum Block<'a> {
     BeyondObjects,
     /// `beyond-move-to-target`: Move to Target, thesis's and sampled targets.
     BeyondMoveToTarget,
+    /// `ablation`: the ablation sweep, configuration by training runs.
+    Ablation,
     /// `commands`: every experiment's stand-alone command.
     Commands,
 }
@@ -98,6 +101,7 @@ impl<'a> Block<'a> {
             "beyond-ablation" => Block::BeyondAblation,
             "beyond-move-to-target" => Block::BeyondMoveToTarget,
             "beyond-objects" => Block::BeyondObjects,
+            "ablation" => Block::Ablation,
             "commands" => Block::Commands,
             other => return Err(format!("unknown block `{other}`")),
         };
@@ -177,15 +181,14 @@ fn value(spec: &str, results: &Reproduction) -> Result<String, String> {
             .map_err(|_| format!("`{d}` in `{{{{{spec}}}}}` is not a number of decimals"))?,
         None => 4,
     };
-    let document = results
-        .document(name)
-        .ok_or_else(|| format!("no document `{name}` in this reproduction"))?;
-    let json: serde_json::Value = serde_json::from_str(
-        &document
-            .to_json()
-            .map_err(|e| format!("cannot serialise `{name}`: {e}"))?,
-    )
-    .map_err(|e| format!("cannot read `{name}` back: {e}"))?;
+    let text = match (results.document(name), results.sweep(name)) {
+        (Some(document), _) => document.to_json(),
+        (None, Some(summary)) => summary.to_json(),
+        (None, None) => return Err(format!("no document `{name}` in this reproduction")),
+    }
+    .map_err(|e| format!("cannot serialise `{name}`: {e}"))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("cannot read `{name}` back: {e}"))?;
     let mut at = &json;
     for step in path.split('.') {
         let (key, indices) = match step.find('[') {
@@ -231,7 +234,8 @@ fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
         Block::BeyondAblation => beyond_ablation(results),
         Block::BeyondMoveToTarget => beyond_move_to_target(results),
         Block::BeyondObjects => beyond_objects(results),
-        Block::Commands => Ok(commands(results.produced.iter().map(|p| &p.entry))),
+        Block::Ablation => ablation(results),
+        Block::Commands => Ok(commands(results)),
     }
 }
 
@@ -580,14 +584,100 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
         .iter()
         .map(|name| {
             let report = push_doc(results, name)?;
-            let label = match (&report.setup.learner, report.setup.model.as_str()) {
-                (Some(l), model) => format!("{model} {} (Python)", l.version),
-                (None, "gate") => "gate (thesis model)".to_owned(),
-                (None, model) => model.to_owned(),
-            };
-            Ok((label, report))
+            Ok((learner_label(&report.setup), report))
         })
         .collect()
+}
+
+/// An error in the ablation's table: three decimals, or for one that has
+/// run away (a diverging configuration) its order of magnitude.
+fn error(value: f64) -> String {
+    if value.abs() < 100.0 {
+        format!("{value:.3}")
+    } else {
+        format!("{value:.1e}")
+    }
+}
+
+/// A ratio to the defaults' error as a change: `-20 %`, or `×1234` past ten
+/// times.
+fn change(ratio: f64) -> String {
+    if ratio > 10.0 {
+        format!("×{ratio:.0}")
+    } else {
+        format!("{:+.0} %", 100.0 * (ratio - 1.0))
+    }
+}
+
+/// The ablation's summary: one row per configuration, the blue block's
+/// position / orientation error (mean over seeds) at each number of
+/// training runs, and the change against the model's defaults at 10 runs
+/// (or the largest number below).
+fn ablation(results: &Reproduction) -> Result<String, String> {
+    let name = super::manifest::ABLATION;
+    let summary = results
+        .sweep(name)
+        .ok_or_else(|| format!("no sweep `{name}` in this reproduction"))?;
+    let runs = summary.train_runs();
+    let at = runs
+        .iter()
+        .copied()
+        .filter(|&n| n <= 10)
+        .max()
+        .or_else(|| runs.first().copied())
+        .ok_or_else(|| format!("the sweep `{name}` has no rows"))?;
+    let mut out = String::from("| model | change |");
+    for n in &runs {
+        let _ = write!(out, " N = {n} |");
+    }
+    let _ = writeln!(out, " vs defaults at N = {at} |");
+    out.push_str("|---|---|");
+    out.push_str(&"---|".repeat(runs.len() + 1));
+    out.push('\n');
+    let pos_ori = |row: &crate::sweep::summary::Row| {
+        (
+            row.mean_spread(Metric::BlockPosition).0,
+            row.mean_spread(Metric::BlockOrientation).0,
+        )
+    };
+    for (id, options, model) in summary.configurations() {
+        let _ = write!(out, "| {model} | {} |", change_label(options));
+        for &n in &runs {
+            match summary.row(id, n) {
+                Some(row) => {
+                    let (pos, ori) = pos_ori(row);
+                    let _ = write!(out, " {} / {} |", error(pos), error(ori));
+                }
+                None => out.push_str(" – |"),
+            }
+        }
+        let defaults = summary.defaults_of(model).and_then(|d| summary.row(d, at));
+        match (defaults, summary.row(id, at)) {
+            (Some(base), Some(row)) if base.configuration != row.configuration => {
+                let ((p0, o0), (p, o)) = (pos_ori(base), pos_ori(row));
+                let _ = writeln!(out, " {} / {} |", change(p / p0), change(o / o0));
+            }
+            _ => out.push_str(" – |\n"),
+        }
+    }
+    let _ = writeln!(
+        out,
+        "\nBlock position [m] / orientation [rad]: each the mean over the {} of the learning curve's mean error ({} each, all 21 test positions); {}.",
+        crate::report::plural(summary.seeds.len(), "seed"),
+        crate::report::plural(summary.folds, "fold"),
+        summary.shape
+    );
+    Ok(out)
+}
+
+/// A learner as the page's tables and figures name it: a Python learner by
+/// its model and version, the thesis's models as such, the others by name.
+fn learner_label(setup: &Setup) -> String {
+    match (&setup.learner, setup.model.as_str()) {
+        (Some(l), model) => format!("{model} {} (Python)", l.version),
+        (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model)"),
+        (None, model) => model.to_owned(),
+    }
 }
 
 /// A learner's label and its report on each new-object condition.
@@ -609,12 +699,7 @@ pub fn object_reports(results: &Reproduction) -> Result<(Vec<String>, Vec<Object
                 .iter()
                 .map(|t| push_doc(results, &object_entry_name(name, t)))
                 .collect::<Result<Vec<_>, _>>()?;
-            let label = match (&reports[0].setup.learner, reports[0].setup.model.as_str()) {
-                (Some(l), model) => format!("{model} {} (Python)", l.version),
-                (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model)"),
-                (None, model) => model.to_owned(),
-            };
-            Ok((label, reports))
+            Ok((learner_label(&reports[0].setup), reports))
         })
         .collect::<Result<Vec<_>, String>>()?;
     Ok((labels, rows))
@@ -1053,10 +1138,13 @@ fn selectors(results: &Reproduction) -> Result<String, String> {
     Ok(out)
 }
 
-fn commands<'e>(entries: impl Iterator<Item = &'e Entry>) -> String {
+fn commands(results: &Reproduction) -> String {
     let mut out = String::from("```sh\n");
-    for entry in entries {
-        let _ = writeln!(out, "{}", entry.command(RESULTS_DIR));
+    for p in &results.produced {
+        let _ = writeln!(out, "{}", p.entry.command(RESULTS_DIR));
+    }
+    for swept in &results.sweeps {
+        let _ = writeln!(out, "{}", swept.entry.command());
     }
     out.push_str("```\n");
     out
@@ -1077,6 +1165,7 @@ mod tests {
                 document: Document::Push(push_report("random", &[1, 10])),
                 timing: Vec::new(),
             }],
+            sweeps: Vec::new(),
             wall_seconds: 0.0,
         }
     }
@@ -1128,5 +1217,73 @@ mod tests {
         assert!(err.to_string().contains("no document `nothing`"), "{err}");
         let err = generate("<!-- reproduce: curves gate -->\n", &results).unwrap_err();
         assert!(err.to_string().contains("push-task-gate-latency5"), "{err}");
+    }
+
+    #[test]
+    fn the_ablation_table_has_a_row_per_configuration_and_compares_with_the_defaults() {
+        use crate::sweep::summary::{Row, SeedErrors, Summary};
+        let row = |id: &str, options: &str, model: &str, n: usize, pos: f64| Row {
+            configuration: id.into(),
+            options: options.into(),
+            model: model.into(),
+            train_runs: n,
+            seeds: [1, 2]
+                .map(|seed| SeedErrors {
+                    seed,
+                    block_pos_err: pos,
+                    block_ori_err: 3.0 * pos,
+                    actuator_pos_err: 0.0,
+                })
+                .to_vec(),
+        };
+        let mut results = reproduction();
+        let entry = super::super::manifest::sweeps(true).remove(0);
+        let err = generate("<!-- reproduce: ablation -->\n", &results).unwrap_err();
+        assert!(err.to_string().contains("no sweep `ablation`"), "{err}");
+        results.sweeps.push(crate::reproduce::Swept {
+            entry,
+            summary: Summary {
+                shape: "3 configurations × 2 seeds × 2 training-run counts × 2 folds = 24 jobs"
+                    .into(),
+                seeds: vec![1, 2],
+                folds: 2,
+                rows: vec![
+                    row("a", "model=gate", "gate", 1, 0.2),
+                    row("a", "model=gate", "gate", 10, 0.1),
+                    row("b", "flag=use-dyns model=gate", "gate", 1, 0.3),
+                    row("b", "flag=use-dyns model=gate", "gate", 10, 0.08),
+                    row(
+                        "c",
+                        "model=interaction selector=tree",
+                        "interaction",
+                        10,
+                        0.5,
+                    ),
+                ],
+            },
+            timing: None,
+        });
+        let page = generate("<!-- reproduce: ablation -->\n", &results).unwrap();
+        let lines: Vec<&str> = page.lines().collect();
+        assert_eq!(
+            lines[0],
+            "| model | change | N = 1 | N = 10 | vs defaults at N = 10 |"
+        );
+        assert_eq!(
+            lines[2],
+            "| gate | defaults | 0.200 / 0.600 | 0.100 / 0.300 | – |"
+        );
+        assert_eq!(
+            lines[3],
+            "| gate | flag=use-dyns | 0.300 / 0.900 | 0.080 / 0.240 | -20 % / -20 % |"
+        );
+        // No defaults row for the interaction model: nothing to compare with.
+        assert_eq!(
+            lines[4],
+            "| interaction | selector=tree | – | 0.500 / 1.500 | – |"
+        );
+        assert!(page.contains("over the 2 seeds"), "{page}");
+        assert_eq!(error(7_531_199.0), "7.5e6");
+        assert_eq!(change(12.4), "×12");
     }
 }

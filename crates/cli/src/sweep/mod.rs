@@ -8,7 +8,9 @@
 //! * this module: the sweep file, its grid and its jobs ([`Sweep`]);
 //! * [`output`]: a job's output file, written atomically, and the
 //!   output directory's layout (what is done, what is missing);
-//! * [`slurm`]: the `sbatch` job-array script.
+//! * [`slurm`]: the `sbatch` job-array script;
+//! * [`summary`]: the merged sweep as one table of errors per
+//!   configuration, N_train and seed.
 //!
 //! A job's result depends only on its configuration, its seed and its
 //! (N_train, fold) (`crate::experiment::seed`), so neither the order jobs run
@@ -17,6 +19,7 @@
 
 pub mod output;
 pub mod slurm;
+pub mod summary;
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;

@@ -232,6 +232,23 @@ pub(super) struct Series {
     pub(super) bars: bool,
 }
 
+/// One series per `(label, points)`, in the palette's colours, with bars:
+/// the several-learners figures' way of drawing their series.
+pub(super) fn coloured(
+    series: impl IntoIterator<Item = (String, Vec<(f64, f64, f64)>)>,
+) -> Vec<Series> {
+    series
+        .into_iter()
+        .enumerate()
+        .map(|(k, (label, points))| Series {
+            label,
+            colour: palette(k),
+            points,
+            bars: true,
+        })
+        .collect()
+}
+
 impl Series {
     fn tops(&self) -> impl Iterator<Item = f64> + '_ {
         self.points.iter().map(|&(_, m, s)| m + s)

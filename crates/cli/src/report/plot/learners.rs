@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use learner::eval::MeanStd;
 
-use super::draw::{palette, prepare, write, Grid, Panel, Series};
+use super::draw::{coloured, prepare, write, Grid, Panel};
 use super::PlotError;
 use crate::report::plural;
 use crate::results::push_task::CurveEntry;
@@ -36,23 +36,17 @@ pub fn learners(
         x_range: 0.0..n_max + 1.0,
         offset: 0.3,
         counts: true,
-        series: curves
-            .iter()
-            .enumerate()
-            .map(|(k, (label, report))| Series {
-                label: label.clone(),
-                colour: palette(k),
-                points: report
-                    .results
-                    .iter()
-                    .map(|e| {
-                        let m = get(e);
-                        (e.train_runs as f64, m.mean, m.std)
-                    })
-                    .collect(),
-                bars: true,
-            })
-            .collect(),
+        series: coloured(curves.iter().map(|(label, report)| {
+            let points = report
+                .results
+                .iter()
+                .map(|e| {
+                    let m = get(e);
+                    (e.train_runs as f64, m.mean, m.std)
+                })
+                .collect();
+            (label.clone(), points)
+        })),
     };
     let grid = Grid {
         title: format!(
@@ -100,23 +94,17 @@ pub fn by_condition(
         x_range: 0.0..conditions.len() as f64 + 1.0,
         offset: 0.12,
         counts: true,
-        series: rows
-            .iter()
-            .enumerate()
-            .map(|(k, (label, reports))| Series {
-                label: label.clone(),
-                colour: palette(k),
-                points: reports
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(c, r)| {
-                        let m = get(r.results.first()?);
-                        Some(((c + 1) as f64, m.mean, m.std))
-                    })
-                    .collect(),
-                bars: true,
-            })
-            .collect(),
+        series: coloured(rows.iter().map(|(label, reports)| {
+            let points = reports
+                .iter()
+                .enumerate()
+                .filter_map(|(c, r)| {
+                    let m = get(r.results.first()?);
+                    Some(((c + 1) as f64, m.mean, m.std))
+                })
+                .collect();
+            (label.clone(), points)
+        })),
     };
     let names: Vec<String> = conditions
         .iter()

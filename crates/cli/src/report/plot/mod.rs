@@ -16,6 +16,7 @@
 //! * `feedback`, `move_to_target`: those experiments' figures;
 //! * `cost`, `scaling`: the performance figures of `docs/performance.md`.
 
+mod ablation;
 mod cost;
 mod curves;
 mod draw;
@@ -31,6 +32,7 @@ mod test_support;
 
 use std::path::PathBuf;
 
+pub use ablation::ablation;
 pub use cost::{cost_csv, cost_growth, CostPoint};
 pub use feedback::feedback;
 pub use learners::{by_condition, learners};
