@@ -166,11 +166,12 @@ fn check_finite(snapshot: &crate::world::Snapshot) -> Result<(), Fault> {
     Ok(())
 }
 
-/// Runs the inputs the fuzzers keep (`fuzz/seeds/TARGET`, and every fixed
-/// crash in `fuzz/regressions/TARGET`) through `check`, so that the normal
-/// test suite exercises them without a nightly toolchain.
-#[cfg(test)]
-pub(crate) fn kept_fuzz_inputs(target: &str) -> Vec<(std::path::PathBuf, Vec<u8>)> {
+/// The inputs the fuzzers keep for `target` (`fuzz/seeds/TARGET`, and every
+/// fixed crash in `fuzz/regressions/TARGET`), so that the normal test
+/// suites — this crate's and those of the crates other targets test — run
+/// them through the target's function without a nightly toolchain.
+#[must_use]
+pub fn kept_fuzz_inputs(target: &str) -> Vec<(std::path::PathBuf, Vec<u8>)> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
     let mut out = Vec::new();
     for kind in ["seeds", "regressions"] {

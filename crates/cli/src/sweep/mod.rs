@@ -76,6 +76,17 @@ fn invalid(text: impl Into<String>) -> SweepError {
     SweepError::Invalid(text.into())
 }
 
+/// The most jobs a sweep may plan: a hundred times the ablation's 4560 is
+/// 456 000; this leaves room for far larger studies while a typo such as
+/// `folds = 2000000000` is refused instead of exhausting memory.
+pub const MAX_JOBS: usize = 10_000_000;
+
+fn too_many(place: &str) -> SweepError {
+    invalid(format!(
+        "{place} has more than {MAX_JOBS} jobs (configurations × seeds × training-run counts × folds): split it into several sweeps"
+    ))
+}
+
 /// One configuration: `pushlearn experiment push-task` options, sorted by
 /// name (so the order of a file's keys does not change the id).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -253,6 +264,8 @@ impl Sweep {
         if grids.is_empty() {
             push(fixed.clone());
         }
+        // Configurations the grids so far expand to (duplicates included).
+        let mut planned = 0usize;
         for (g, grid) in grids.iter().enumerate() {
             let place = format!("[[grid]] number {}", g + 1);
             let mut axes: Vec<(String, Vec<Option<Option<String>>>)> = Vec::new();
@@ -277,6 +290,17 @@ impl Sweep {
                 };
                 axes.push((name.clone(), values));
             }
+            // Bounded before it is expanded: a few lines of TOML can name
+            // more configurations than memory holds.
+            let size = axes
+                .iter()
+                .try_fold(1, |n: usize, (_, values)| n.checked_mul(values.len()))
+                .and_then(|n| n.checked_add(planned))
+                .filter(|&n| n <= MAX_JOBS);
+            match size {
+                Some(n) => planned = n,
+                None => return Err(too_many(&place)),
+            }
             // The product, the (alphabetically) last key fastest.
             let mut product: Vec<Vec<(String, Option<Option<String>>)>> = vec![fixed.clone()];
             for (name, values) in &axes {
@@ -292,6 +316,13 @@ impl Sweep {
                     .collect();
             }
             product.into_iter().for_each(&mut push);
+        }
+        let jobs = [seeds.len(), train_runs.len(), folds]
+            .into_iter()
+            .try_fold(configurations.len(), usize::checked_mul)
+            .filter(|&n| n <= MAX_JOBS);
+        if jobs.is_none() {
+            return Err(too_many("the sweep"));
         }
         Ok(Self {
             configurations,
@@ -616,5 +647,78 @@ mod tests {
             "{}",
             err("train-runs = [1\n")
         );
+    }
+
+    /// What the `sweep_file` fuzz target checks: any text is refused with
+    /// an error or planned into as many jobs as it says, each id once.
+    fn planned_or_refused(text: &str) -> Result<(), String> {
+        let Ok(sweep) = Sweep::parse(text, &known()) else {
+            return Ok(());
+        };
+        let jobs = sweep.jobs();
+        let ids: BTreeSet<&str> = jobs.iter().map(|j| j.id.as_str()).collect();
+        if jobs.len() != sweep.len() || ids.len() != jobs.len() || jobs.is_empty() {
+            return Err(format!(
+                "{} jobs, {} ids, len {}",
+                jobs.len(),
+                ids.len(),
+                sweep.len()
+            ));
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn a_sweep_too_large_to_plan_is_refused_before_it_is_expanded() {
+        for text in [
+            "train-runs = [1]\nfolds = 9223372036854775807\n",
+            "train-runs = [1]\nfolds = 20000000\n",
+        ] {
+            let error = Sweep::parse(text, &known()).unwrap_err().to_string();
+            assert!(error.contains("more than 10000000 jobs"), "{error}");
+        }
+        // 8 keys of 10 values: 10^8 configurations, named in one line each.
+        let mut grid = String::from("train-runs = [1]\n[[grid]]\n");
+        for key in [
+            "model", "eta", "selector", "flag", "variant", "mode", "learner", "no-reuse",
+        ] {
+            let values: Vec<String> = (0..10).map(|v| format!("\"{v}\"")).collect();
+            grid.push_str(&format!("{key} = [{}]\n", values.join(", ")));
+        }
+        let error = Sweep::parse(&grid, &known()).unwrap_err().to_string();
+        assert!(error.contains("[[grid]] number 1 has more than"), "{error}");
+        assert!(Sweep::parse("train-runs = [1]\nfolds = 10000000\n", &known()).is_ok());
+    }
+
+    #[test]
+    fn the_fuzzers_kept_sweep_files_are_planned_or_refused() {
+        let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("sweep_file");
+        assert!(
+            kept.len() >= 3,
+            "fuzz/seeds/sweep_file has {} inputs",
+            kept.len()
+        );
+        for (path, bytes) in kept {
+            let text = String::from_utf8_lossy(&bytes);
+            assert_eq!(planned_or_refused(&text), Ok(()), "{}", path.display());
+        }
+    }
+
+    proptest::proptest! {
+        /// Any text, and any small edit of a valid file, is refused or
+        /// planned consistently (the `sweep_file` fuzz target's property).
+        #[test]
+        fn any_text_is_planned_or_refused(text in "\\PC{0,200}") {
+            proptest::prop_assert_eq!(planned_or_refused(&text), Ok(()));
+        }
+
+        #[test]
+        fn an_edited_sweep_file_is_planned_or_refused(at in 0..FILE.len(), junk in "[\\[\\]=\",0-9a-z \\n-]{0,6}") {
+            let mut text = FILE.to_owned();
+            if text.is_char_boundary(at) {
+                text.insert_str(at, &junk);
+            }
+            proptest::prop_assert_eq!(planned_or_refused(&text), Ok(()));
+        }
     }
 }

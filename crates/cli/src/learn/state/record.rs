@@ -257,6 +257,26 @@ mod tests {
         );
     }
 
+    /// The `journal` fuzz target's kept inputs, through its property: damage
+    /// is found exactly where the good records end.
+    #[test]
+    fn the_fuzzers_kept_journals_are_read_up_to_their_damage() {
+        let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("journal");
+        assert!(
+            kept.len() >= 10,
+            "fuzz/seeds/journal has {} inputs",
+            kept.len()
+        );
+        for (path, bytes) in kept {
+            let read = read_records(&bytes);
+            let end = read.records.last().map_or(0, |r| r.2);
+            match read.bad {
+                Some((offset, _)) => assert_eq!(offset, end, "{}", path.display()),
+                None => assert_eq!(end, bytes.len(), "{}", path.display()),
+            }
+        }
+    }
+
     proptest! {
         /// The journal reader takes any bytes without panicking, and never
         /// returns a record it did not verify (the same code path as the
