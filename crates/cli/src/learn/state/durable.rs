@@ -15,7 +15,7 @@ use super::record::encode_record;
 use super::recovery::{cut_tail, recover, Recovery};
 use super::segment::{open_segment, segments};
 use super::snapshot::write_snapshot;
-use super::{io_error, Settings, StateError};
+use super::{io_error, Settings, StateError, StateLock};
 use crate::frame::StartHeights;
 use crate::learn::{Episodes, LearnError, Learner, OnState};
 use pushlearn::wire::pb::client_message::Payload;
@@ -48,6 +48,9 @@ pub struct Durable<M: Model + 'static> {
     tx: Option<mpsc::Sender<ToWriter<M>>>,
     shared: Arc<WriterShared>,
     thread: Option<JoinHandle<()>>,
+    /// Released only when dropped, after `Drop` has joined the journal
+    /// thread: nobody else may write the directory before it is done.
+    _lock: StateLock,
 }
 
 impl<M: Model + 'static> std::fmt::Debug for Durable<M> {
@@ -69,15 +72,16 @@ pub enum Opened {
 }
 
 impl<M: Model + 'static> Durable<M> {
-    /// Opens (creating if need be) the memory in `dir`: recovers the stored
-    /// learner, or starts `fresh()` if there is none; cuts a damaged journal
-    /// tail; writes a snapshot of the result, starts a new journal segment
-    /// and, for a resumed learner, journals a re-synchronisation (the world
-    /// has moved on while the daemon was down). Snapshots follow every
-    /// `snapshot_every` records.
+    /// Opens (creating if need be) the memory in `dir`: takes its lock
+    /// ([`StateLock`]), recovers the stored learner, or starts `fresh()` if
+    /// there is none; cuts a damaged journal tail; writes a snapshot of the
+    /// result, starts a new journal segment and, for a resumed learner,
+    /// journals a re-synchronisation (the world has moved on while the
+    /// daemon was down). Snapshots follow every `snapshot_every` records.
     ///
     /// # Errors
-    /// See [`recover`]; I/O errors writing the directory.
+    /// Another learner holds the directory ([`StateError::Locked`]); see
+    /// [`recover`]; I/O errors writing the directory.
     pub fn open(
         dir: &Path,
         settings: &Settings,
@@ -85,6 +89,23 @@ impl<M: Model + 'static> Durable<M> {
         snapshot_every: u64,
     ) -> Result<(Self, Opened), StateError> {
         fs::create_dir_all(dir).map_err(io_error(dir))?;
+        Self::open_locked(StateLock::acquire(dir)?, settings, fresh, snapshot_every)
+    }
+
+    /// [`Durable::open`] with the lock already taken (the daemon takes it
+    /// before connecting to the world, so that a second one is refused
+    /// before it does anything).
+    ///
+    /// # Errors
+    /// As [`Durable::open`].
+    pub fn open_locked(
+        lock: StateLock,
+        settings: &Settings,
+        fresh: impl FnOnce() -> Learner<M>,
+        snapshot_every: u64,
+    ) -> Result<(Self, Opened), StateError> {
+        let dir = lock.dir().to_path_buf();
+        let dir = dir.as_path();
         let (learner, opened) = match recover::<M>(dir, settings)? {
             None => (fresh(), Opened::Fresh),
             Some((learner, recovery)) => {
@@ -139,6 +160,7 @@ impl<M: Model + 'static> Durable<M> {
             tx: Some(tx),
             shared,
             thread: Some(thread),
+            _lock: lock,
         };
         if matches!(opened, Opened::Resumed(_)) {
             durable.resync_journalled()?;
@@ -393,5 +415,33 @@ mod tests {
         assert_same(&fingerprint(&recovered), &fingerprint(&reference));
         // Only the current segment is left.
         assert_eq!(segments(&dir.0).unwrap().len(), 1);
+    }
+
+    #[test]
+    fn a_second_open_of_a_directory_in_use_is_refused_and_changes_nothing() {
+        let dir = TempDir::new("two-opens");
+        let all = frames(40);
+        let (mut first, _) = Durable::open(&dir.0, &settings(), fresh, 1000).unwrap();
+        for f in &all[..30] {
+            OnState::on_state(&mut first, f, &heights()).unwrap();
+        }
+        let before = segments(&dir.0).unwrap();
+        let err = Durable::open(&dir.0, &settings(), fresh, 1000).unwrap_err();
+        assert!(
+            matches!(&err, StateError::Locked { dir: d, holder: Some(pid) }
+                if *d == dir.0 && *pid == std::process::id()),
+            "{err:?}"
+        );
+        // The refused open neither recovered, snapshotted nor cut: the
+        // first learner goes on undisturbed.
+        assert_eq!(segments(&dir.0).unwrap(), before);
+        for f in &all[30..] {
+            OnState::on_state(&mut first, f, &heights()).unwrap();
+        }
+        assert_eq!(first.close().unwrap(), 40);
+        // Closed, the directory is free again.
+        let (second, opened) = Durable::open(&dir.0, &settings(), fresh, 1000).unwrap();
+        assert!(matches!(opened, Opened::Resumed(r) if r.records() == 40));
+        drop(second);
     }
 }

@@ -37,6 +37,7 @@ use serde::{Deserialize, Serialize};
 use super::Policy;
 
 mod durable;
+mod lock;
 mod record;
 mod recovery;
 mod segment;
@@ -45,6 +46,7 @@ mod snapshot;
 mod testing;
 
 pub use durable::{Durable, Opened};
+pub use lock::{StateLock, LOCK_FILE};
 pub use record::{decode_entry, read_records, Entry, SegmentRead};
 pub use recovery::{recover, Cut, Recovery};
 pub use snapshot::{write_snapshot_file, SNAPSHOT_FILE};
@@ -78,6 +80,13 @@ pub enum StateError {
     OtherModel { path: PathBuf, differences: String },
     #[error("cannot keep the learner's memory: {0}")]
     Writer(String),
+    #[error(
+        "{} is in use by another learner ({}); only one `pushlearn learn` may use a \
+         --state directory at a time",
+        dir.display(),
+        match holder { Some(pid) => format!("pid {pid}"), None => "pid unknown".to_owned() }
+    )]
+    Locked { dir: PathBuf, holder: Option<u32> },
 }
 
 fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StateError + '_ {
