@@ -11,8 +11,8 @@ use pushlearn::duration;
 use pushlearn_cli::learn::pretrain::{pretrain, Pretrain};
 use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
 use pushlearn_cli::learn::state::{
-    load_model, write_snapshot_file, Durable, EpisodeSettings, Opened, Settings, StateLock,
-    DEFAULT_SNAPSHOT_EVERY, SNAPSHOT_FILE,
+    holds_memory, load_model, write_snapshot_file, Durable, EpisodeSettings, Opened, Settings,
+    StateLock, DEFAULT_SNAPSHOT_EVERY,
 };
 use pushlearn_cli::learn::{
     EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop,
@@ -273,10 +273,7 @@ impl<'a> WithModel for Daemon<'a> {
                 model_options: args.options.canonical(),
                 episodes: args.episode_settings(),
             };
-            let resuming = args
-                .state
-                .as_ref()
-                .filter(|dir| dir.join(SNAPSHOT_FILE).exists());
+            let resuming = args.state.as_ref().filter(|dir| holds_memory(dir));
             let model = match resuming {
                 Some(dir) => {
                     if args.pretrain.is_some() || args.memory.is_some() {
