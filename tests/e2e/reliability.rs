@@ -32,9 +32,15 @@ struct Learn {
 
 impl Learn {
     fn start(args: &[&str], log_filter: &str) -> Learn {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_pushlearn"))
-            .arg("learn")
-            .args(args)
+        let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+        command.arg("learn").args(args);
+        Learn::spawn(command, log_filter)
+    }
+
+    /// `command` (a `pushlearn learn`, perhaps behind a wrapper) in the
+    /// background.
+    fn spawn(mut command: Command, log_filter: &str) -> Learn {
+        let mut child = command
             .env("RUST_LOG", log_filter)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -66,6 +72,18 @@ impl Learn {
 
     /// Waits for a successful end; returns stdout (stderr is in `log`).
     fn finish(&mut self) -> String {
+        let (status, stdout) = self.end();
+        assert!(
+            status.success(),
+            "pushlearn learn failed ({status}):\n{stdout}\n{}",
+            self.log.join("\n")
+        );
+        stdout
+    }
+
+    /// Waits for the daemon to end by itself; its status and stdout (stderr
+    /// is in `log`).
+    fn end(&mut self) -> (std::process::ExitStatus, String) {
         let deadline = Instant::now() + CHILD_LIMIT;
         let status = loop {
             while let Ok(line) = self.lines.try_recv() {
@@ -89,12 +107,7 @@ impl Learn {
         while let Ok(line) = self.lines.recv_timeout(CHILD_LIMIT) {
             self.log.push(plain(&line));
         }
-        assert!(
-            status.success(),
-            "pushlearn learn failed ({status}):\n{stdout}\n{}",
-            self.log.join("\n")
-        );
-        stdout
+        (status, stdout)
     }
 
     /// Waits for the journal's trace line (`pushlearn_cli::learn::state=trace`)
@@ -438,6 +451,95 @@ fn a_second_learner_on_a_state_directory_in_use_is_refused_until_the_first_dies(
     assert!(after.status.success(), "{stderr}");
     assert!(
         stderr.contains(&format!("memory: resumed from {state_arg}")),
+        "{stderr}"
+    );
+}
+
+/// The journal's file reaching a size limit (RLIMIT_FSIZE, with SIGXFSZ
+/// ignored so that the write fails with EFBIG instead of killing the
+/// process) mid-run, as a full disk would: the daemon stops with one error
+/// naming the file and the OS error and a non-zero status; restarted
+/// without the limit it has every acknowledged record, bit-identical to an
+/// uninterrupted learner over them.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_journal_that_cannot_grow_stops_the_learner_and_a_restart_loses_no_acknowledged_update() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr.to_string();
+    let dir = TempDir::new("learn-fsize");
+    let state = dir.0.join("memory");
+    let state_arg = state.to_string_lossy().into_owned();
+    let args = ["--sim", &addr, "--action", "0,0.5", "--state", &state_arg];
+    assert!(
+        Command::new("prlimit")
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success()),
+        "this test needs prlimit (util-linux)"
+    );
+    // 16 KiB: the first snapshot (about 1.6 KiB) fits, the journal (147
+    // bytes a state of this scene) reaches it after about a hundred states.
+    let mut limited = Command::new("sh");
+    limited
+        .args([
+            "-c",
+            r#"trap '' XFSZ; exec prlimit --fsize=16384 "$0" "$@""#,
+            env!("CARGO_BIN_EXE_pushlearn"),
+            "learn",
+        ])
+        .args(args);
+    let mut learn = Learn::spawn(limited, "pushlearn_cli::learn::state=trace");
+    let (status, _) = learn.end();
+    let log = learn.log.join("\n");
+    assert_eq!(status.code(), Some(1), "{log}");
+    let segment = format!("{state_arg}/log-00000000000000000000");
+    let errors: Vec<_> = learn
+        .log
+        .iter()
+        .filter(|l| l.starts_with("error: "))
+        .collect();
+    assert!(
+        errors.len() == 1
+            && errors[0].starts_with(&format!(
+                "error: cannot keep the learner's memory: {segment}: File too large (os error 27)"
+            )),
+        "{log}"
+    );
+    assert!(
+        learn
+            .log
+            .iter()
+            .any(|l| l.contains("ERROR") && l.contains(&format!("the journal stopped: {segment}"))),
+        "{log}"
+    );
+    let acknowledged = learn
+        .log
+        .iter()
+        .filter_map(|l| l.split("acknowledged=").nth(1)?.trim().parse::<u64>().ok())
+        .max()
+        .unwrap_or(0);
+
+    let (recovered, recovery) = recover::<GateModel>(&state, &settings())
+        .expect("recoverable")
+        .expect("a stored learner");
+    assert!(
+        recovery.records() >= acknowledged && recovery.records() > 0,
+        "{recovery} but {acknowledged} were acknowledged"
+    );
+    assert!(
+        fingerprint(&recovered) == fingerprint(&uninterrupted(recovery.records())),
+        "the recovered learner ({recovery}) differs from an uninterrupted one"
+    );
+    let mut resumed = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    resumed.arg("learn").args(args).args(["--messages", "20"]);
+    let out = run(resumed);
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "memory: resumed from {state_arg}: {} records",
+            recovery.records()
+        )),
         "{stderr}"
     );
 }
