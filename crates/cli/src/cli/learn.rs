@@ -47,8 +47,12 @@ use super::experiment::{parse_numbers, parse_pose};
 ///
 /// With --state DIR the learner's memory is kept on disk (snapshots plus a
 /// checksummed journal of every state, docs/reliability.md): a daemon
-/// killed at any moment resumes where it left off. If the world goes away
-/// the daemon reconnects with backoff for up to --reconnect-for seconds.
+/// killed at any moment resumes where it left off, a damaged newest
+/// snapshot is replaced by the previous one and the journal after it, and a
+/// write that fails (a full or read-only disk) stops the daemon with status
+/// 1 and the file and OS error named; restarted, it has lost no
+/// acknowledged state. If the world goes away the daemon reconnects with
+/// backoff for up to --reconnect-for seconds.
 #[derive(Debug, Args)]
 #[command(
     group = clap::ArgGroup::new("policy").required(true).args(["action", "target"]),
