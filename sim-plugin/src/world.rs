@@ -507,7 +507,10 @@ impl World {
             self.reset()?;
             return Err(err);
         }
-        if self.step_count % u64::from(self.publish_every) == 0 {
+        if self
+            .step_count
+            .is_multiple_of(u64::from(self.publish_every))
+        {
             Ok(Some(self.snapshot()))
         } else {
             Ok(None)
@@ -600,7 +603,7 @@ pub fn check_command(scene: &Scene, cmd: &Command) -> Result<(), CommandError> {
             Ok(())
         }
         Command::SetPublishRate(hz) => {
-            if *hz == 0 || STEPS_PER_SECOND % hz != 0 {
+            if *hz == 0 || !STEPS_PER_SECOND.is_multiple_of(*hz) {
                 Err(CommandError::BadPublishRate(*hz))
             } else {
                 Ok(())

@@ -1,5 +1,6 @@
 //! Faults around `pushlearn learn`: killed with SIGKILL mid-training and
-//! restarted from its `--state` directory, and its world restarted under it.
+//! restarted from its `--state` directory, stopped by SIGTERM/SIGINT, two of
+//! them on one directory, and its world restarted under it.
 
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
@@ -10,8 +11,9 @@ use std::time::{Duration, Instant};
 
 use learner::{Action, GateConfig, GateModel, Model};
 use pushlearn::client::SimClient;
-use pushlearn_cli::learn::state::{recover, Settings};
-use pushlearn_cli::learn::{serve, Learner, Policy, ServeOptions};
+use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
+use pushlearn_cli::learn::state::{recover, Durable, Settings};
+use pushlearn_cli::learn::{serve, LearnError, Learner, OnState, Policy, ServeOptions, Stop};
 use serde_json::Value;
 
 use crate::daemon::Daemon;
@@ -30,9 +32,15 @@ struct Learn {
 
 impl Learn {
     fn start(args: &[&str], log_filter: &str) -> Learn {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_pushlearn"))
-            .arg("learn")
-            .args(args)
+        let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+        command.arg("learn").args(args);
+        Learn::spawn(command, log_filter)
+    }
+
+    /// `command` (a `pushlearn learn`, perhaps behind a wrapper) in the
+    /// background.
+    fn spawn(mut command: Command, log_filter: &str) -> Learn {
+        let mut child = command
             .env("RUST_LOG", log_filter)
             .stdin(Stdio::null())
             .stdout(Stdio::piped())
@@ -62,8 +70,20 @@ impl Learn {
         }
     }
 
-    /// Waits for a successful end; returns stdout.
+    /// Waits for a successful end; returns stdout (stderr is in `log`).
     fn finish(&mut self) -> String {
+        let (status, stdout) = self.end();
+        assert!(
+            status.success(),
+            "pushlearn learn failed ({status}):\n{stdout}\n{}",
+            self.log.join("\n")
+        );
+        stdout
+    }
+
+    /// Waits for the daemon to end by itself; its status and stdout (stderr
+    /// is in `log`).
+    fn end(&mut self) -> (std::process::ExitStatus, String) {
         let deadline = Instant::now() + CHILD_LIMIT;
         let status = loop {
             while let Ok(line) = self.lines.try_recv() {
@@ -83,12 +103,35 @@ impl Learn {
             .take()
             .and_then(|o| o.join().ok())
             .unwrap_or_default();
-        assert!(
-            status.success(),
-            "pushlearn learn failed ({status}):\n{stdout}\n{}",
-            self.log.join("\n")
-        );
-        stdout
+        // The rest of stderr: the reader ends when the pipe closes.
+        while let Ok(line) = self.lines.recv_timeout(CHILD_LIMIT) {
+            self.log.push(plain(&line));
+        }
+        (status, stdout)
+    }
+
+    /// Waits for the journal's trace line (`pushlearn_cli::learn::state=trace`)
+    /// acknowledging at least `n` records; returns the count it gave.
+    fn acknowledged(&mut self, n: u64) -> u64 {
+        self.wait_for(&format!("{n} acknowledged records"), |line| {
+            let got: u64 = line
+                .split("acknowledged=")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse()
+                .ok()?;
+            (got >= n).then_some(got)
+        })
+    }
+
+    /// Sends `signal` (a name `kill -s` takes) to the daemon.
+    fn signal(&self, signal: &str) {
+        let status = Command::new("kill")
+            .args(["-s", signal, &self.child.id().to_string()])
+            .status()
+            .expect("run kill");
+        assert!(status.success(), "kill -s {signal} failed");
     }
 
     /// Reads the log until `found` returns something.
@@ -179,9 +222,15 @@ fn uninterrupted(n: u64) -> Learner<GateModel> {
             max_messages: Some(n),
             ..ServeOptions::default()
         };
-        serve(&mut client, &mut learner, options, |_| {})
-            .await
-            .expect("reference run");
+        serve(
+            &mut client,
+            &mut learner,
+            options,
+            std::future::pending(),
+            |_| {},
+        )
+        .await
+        .expect("reference run");
     });
     learner
 }
@@ -219,16 +268,7 @@ fn a_learner_killed_mid_training_resumes_bit_identically_and_cuts_a_torn_tail() 
     ];
     let mut learn = Learn::start(&args, "pushlearn_cli::learn::state=trace");
     // Acknowledged records, as the journal reports them after each fsync.
-    let acknowledged = learn.wait_for("400 acknowledged records", |line| {
-        let n: u64 = line
-            .split("acknowledged=")
-            .nth(1)?
-            .split_whitespace()
-            .next()?
-            .parse()
-            .ok()?;
-        (n >= 400).then_some(n)
-    });
+    let acknowledged = learn.acknowledged(400);
     learn.child.kill().expect("SIGKILL");
     let _ = learn.child.wait();
 
@@ -240,7 +280,6 @@ fn a_learner_killed_mid_training_resumes_bit_identically_and_cuts_a_torn_tail() 
         "{recovery} but {acknowledged} were acknowledged"
     );
     let reference = uninterrupted(recovery.records());
-    let fingerprint = |l: &Learner<GateModel>| serde_json::to_string(l).expect("serialise");
     assert!(
         fingerprint(&recovered) == fingerprint(&reference),
         "the recovered learner ({recovery}) differs from an uninterrupted one"
@@ -302,6 +341,351 @@ fn observation(name: &str, id: u32, position: [f64; 3]) -> learner::Observation 
         position,
         orientation: [0.0, 0.0, 0.0, 1.0],
     }
+}
+
+fn fingerprint(l: &Learner<GateModel>) -> String {
+    serde_json::to_string(l).expect("serialise")
+}
+
+/// `pushlearn learn --state` stopped by SIGTERM, restarted, stopped by
+/// SIGINT: each time it exits 0 with its one-line message, and the
+/// directory holds a final snapshot of every record with nothing left to
+/// replay after it.
+#[test]
+fn a_learner_stopped_by_sigterm_or_sigint_flushes_its_journal_and_writes_a_final_snapshot() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr.to_string();
+    let dir = TempDir::new("learn-sigterm");
+    let state = dir.0.join("memory");
+    let state_arg = state.to_string_lossy().into_owned();
+    let args = [
+        "--sim",
+        &addr,
+        "--action",
+        "0,0.5",
+        "--state",
+        &state_arg,
+        "--snapshot-every",
+        "150",
+    ];
+    let mut at_least = 300;
+    let mut records = 0;
+    for signal in ["TERM", "INT"] {
+        let mut learn = Learn::start(&args, "pushlearn_cli::learn::state=trace");
+        let acknowledged = learn.acknowledged(at_least);
+        learn.signal(signal);
+        let stdout = learn.finish();
+        let stderr = learn.log.join("\n");
+        let (recovered, recovery) = recover::<GateModel>(&state, &settings())
+            .expect("recoverable")
+            .expect("a stored learner");
+        assert!(
+            recovery.records() >= acknowledged,
+            "{recovery} but {acknowledged} were acknowledged"
+        );
+        // The final snapshot covers every record: an empty journal tail.
+        assert_eq!((recovery.replayed, &recovery.cut), (0, &None), "{recovery}");
+        records = recovery.records();
+        assert!(
+            stdout.contains("stopped (interrupted)")
+                && stdout.contains(&format!("memory: {records} records on disk in {state_arg}")),
+            "{stdout}"
+        );
+        let line = format!(
+            "pushlearn learn: SIG{signal}: stopped cleanly; journal flushed and final snapshot \
+             written ({records} records in {state_arg})"
+        );
+        assert!(
+            stderr.lines().any(|l| l == line),
+            "no `{line}` in\n{stderr}"
+        );
+        if signal == "TERM" {
+            // The snapshot is the learner after exactly those records (the
+            // second run's has a resync in it, which a fresh world's
+            // learner does not).
+            assert!(
+                fingerprint(&recovered) == fingerprint(&uninterrupted(records)),
+                "the final snapshot ({recovery}) differs from an uninterrupted learner"
+            );
+        }
+        at_least = records + 300;
+    }
+    // The second run resumed the first's memory: its resync and more.
+    assert!(records > 600, "{records}");
+}
+
+/// Two learners on one state directory: the second is refused before it
+/// does anything, naming the directory and the holder; once the holder is
+/// gone, even by SIGKILL, the directory is free.
+#[test]
+fn a_second_learner_on_a_state_directory_in_use_is_refused_until_the_first_dies() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr.to_string();
+    let dir = TempDir::new("learn-lock");
+    let state = dir.0.join("memory");
+    let state_arg = state.to_string_lossy().into_owned();
+    let args = ["--sim", &addr, "--action", "0,0.5", "--state", &state_arg];
+    let mut first = Learn::start(&args, "pushlearn_cli::learn::state=trace");
+    first.acknowledged(50);
+    let second = || {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+        command.arg("learn").args(args).args(["--messages", "20"]);
+        run(command)
+    };
+    let refused = second();
+    let stderr = text(&refused.stderr);
+    assert!(!refused.status.success(), "{stderr}");
+    let expected = format!(
+        "{state_arg} is in use by another learner (pid {}); only one `pushlearn learn` may use \
+         a --state directory at a time",
+        first.child.id()
+    );
+    assert!(stderr.contains(&expected), "{stderr}");
+    // Refused before connecting: the world never saw a second learner.
+    assert!(!stderr.contains("model on scene"), "{stderr}");
+
+    first.child.kill().expect("SIGKILL");
+    let _ = first.child.wait();
+    let after = second();
+    let stderr = text(&after.stderr);
+    assert!(after.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("memory: resumed from {state_arg}")),
+        "{stderr}"
+    );
+}
+
+/// The journal's file reaching a size limit (RLIMIT_FSIZE, with SIGXFSZ
+/// ignored so that the write fails with EFBIG instead of killing the
+/// process) mid-run, as a full disk would: the daemon stops with one error
+/// naming the file and the OS error and a non-zero status; restarted
+/// without the limit it has every acknowledged record, bit-identical to an
+/// uninterrupted learner over them.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_journal_that_cannot_grow_stops_the_learner_and_a_restart_loses_no_acknowledged_update() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr.to_string();
+    let dir = TempDir::new("learn-fsize");
+    let state = dir.0.join("memory");
+    let state_arg = state.to_string_lossy().into_owned();
+    let args = ["--sim", &addr, "--action", "0,0.5", "--state", &state_arg];
+    assert!(
+        Command::new("prlimit")
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success()),
+        "this test needs prlimit (util-linux)"
+    );
+    // 16 KiB: the first snapshot (about 1.6 KiB) fits, the journal (147
+    // bytes a state of this scene) reaches it after about a hundred states.
+    let mut limited = Command::new("sh");
+    limited
+        .args([
+            "-c",
+            r#"trap '' XFSZ; exec prlimit --fsize=16384 "$0" "$@""#,
+            env!("CARGO_BIN_EXE_pushlearn"),
+            "learn",
+        ])
+        .args(args);
+    let mut learn = Learn::spawn(limited, "pushlearn_cli::learn::state=trace");
+    let (status, _) = learn.end();
+    let log = learn.log.join("\n");
+    assert_eq!(status.code(), Some(1), "{log}");
+    let segment = format!("{state_arg}/log-00000000000000000000");
+    let errors: Vec<_> = learn
+        .log
+        .iter()
+        .filter(|l| l.starts_with("error: "))
+        .collect();
+    assert!(
+        errors.len() == 1
+            && errors[0].starts_with(&format!(
+                "error: cannot keep the learner's memory: {segment}: File too large (os error 27)"
+            )),
+        "{log}"
+    );
+    assert!(
+        learn
+            .log
+            .iter()
+            .any(|l| l.contains("ERROR") && l.contains(&format!("the journal stopped: {segment}"))),
+        "{log}"
+    );
+    let acknowledged = learn
+        .log
+        .iter()
+        .filter_map(|l| l.split("acknowledged=").nth(1)?.trim().parse::<u64>().ok())
+        .max()
+        .unwrap_or(0);
+
+    let (recovered, recovery) = recover::<GateModel>(&state, &settings())
+        .expect("recoverable")
+        .expect("a stored learner");
+    assert!(
+        recovery.records() >= acknowledged && recovery.records() > 0,
+        "{recovery} but {acknowledged} were acknowledged"
+    );
+    assert!(
+        fingerprint(&recovered) == fingerprint(&uninterrupted(recovery.records())),
+        "the recovered learner ({recovery}) differs from an uninterrupted one"
+    );
+    let mut resumed = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    resumed.arg("learn").args(args).args(["--messages", "20"]);
+    let out = run(resumed);
+    let stderr = text(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "memory: resumed from {state_arg}: {} records",
+            recovery.records()
+        )),
+        "{stderr}"
+    );
+}
+
+/// Hands states to a learner and completes a shutdown future after `after`
+/// of them, or at the first resync (the world lost), as a test's stand-in
+/// for SIGTERM; with a world to kill, it kills it at state `after`.
+struct StopAfter<'a, H> {
+    inner: &'a mut H,
+    after: u64,
+    states: u64,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
+    kill_world: Option<Daemon>,
+}
+
+impl<'a, H> StopAfter<'a, H> {
+    fn new(inner: &'a mut H, after: u64) -> (Self, impl std::future::Future<Output = ()>) {
+        let (tx, rx) = tokio::sync::oneshot::channel();
+        let wrapper = StopAfter {
+            inner,
+            after,
+            states: 0,
+            stop: Some(tx),
+            kill_world: None,
+        };
+        // A sender dropped unfired must not stop anything.
+        let shutdown = async move {
+            if rx.await.is_err() {
+                std::future::pending::<()>().await;
+            }
+        };
+        (wrapper, shutdown)
+    }
+
+    fn fire(&mut self) {
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
+    }
+}
+
+impl<H: OnState> OnState for StopAfter<'_, H> {
+    fn on_state(
+        &mut self,
+        frame: &learner::Frame,
+        heights: &pushlearn_cli::frame::StartHeights,
+    ) -> Result<Vec<pushlearn::wire::pb::client_message::Payload>, LearnError> {
+        self.states += 1;
+        let commands = self.inner.on_state(frame, heights);
+        if self.states == self.after {
+            match self.kill_world.as_mut() {
+                Some(world) => {
+                    world.stop();
+                }
+                None => self.fire(),
+            }
+        }
+        commands
+    }
+
+    fn resync(&mut self) -> Result<(), LearnError> {
+        if self.kill_world.is_some() {
+            self.fire();
+        }
+        self.inner.resync()
+    }
+
+    fn episodes(&self) -> Option<&pushlearn_cli::learn::Episodes> {
+        self.inner.episodes()
+    }
+}
+
+/// The shutdown future without signals: the serving loop stops between two
+/// states, and closing the memory leaves a final snapshot of exactly the
+/// states handled.
+#[test]
+fn a_shutdown_future_stops_the_serving_loop_and_close_snapshots_every_state() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let dir = TempDir::new("learn-shutdown");
+    let (mut durable, _) =
+        Durable::open(&dir.0, &settings(), fresh, 1000).expect("open the memory");
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    let (stop, summary) = runtime.block_on(async {
+        let mut client = SimClient::connect(world.addr).await.expect("connect");
+        let (mut stopping, shutdown) = StopAfter::new(&mut durable, 120);
+        serve(
+            &mut client,
+            &mut stopping,
+            ServeOptions::default(),
+            shutdown,
+            |_| {},
+        )
+        .await
+        .expect("serve")
+    });
+    assert_eq!((stop, summary.messages), (Stop::Interrupted, 120));
+    assert_eq!(durable.close().expect("close"), 120);
+    let (recovered, recovery) = recover::<GateModel>(&dir.0, &settings())
+        .expect("recoverable")
+        .expect("a stored learner");
+    assert_eq!(
+        (recovery.snapshot_records, recovery.replayed, recovery.cut),
+        (120, 0, None)
+    );
+    assert!(fingerprint(&recovered) == fingerprint(&uninterrupted(120)));
+}
+
+/// A stop that comes while the world is gone ends the reconnection at once
+/// instead of waiting out --reconnect-for.
+#[test]
+fn a_shutdown_while_reconnecting_stops_at_once() {
+    let world = Daemon::start(&["--mode", "lockstep"]);
+    let addr = world.addr;
+    let mut learner = fresh();
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    let served = runtime.block_on(async {
+        let client = SimClient::connect(addr).await.expect("connect");
+        let (mut stopping, shutdown) = StopAfter::new(&mut learner, 30);
+        stopping.kill_world = Some(world);
+        // Without the stop this would retry for ten minutes, far beyond
+        // the test's limit.
+        let reconnect = Reconnect::new(addr.to_string(), Some(Duration::from_secs(600)));
+        tokio::time::timeout(
+            CHILD_LIMIT,
+            serve_resilient(
+                client,
+                &mut stopping,
+                ServeOptions::default(),
+                &reconnect,
+                shutdown,
+                |_| {},
+            ),
+        )
+        .await
+        .expect("stopped before the test's limit")
+        .expect("serve")
+    });
+    assert_eq!(served.stop, Stop::Interrupted);
+    assert!(served.client.is_none());
+    assert_eq!((served.states, served.reconnects), (30, 0));
 }
 
 #[test]

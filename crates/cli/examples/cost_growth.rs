@@ -131,7 +131,7 @@ fn main() -> anyhow::Result<()> {
         );
         gate.learn(&frames)?;
         interaction.learn(&frames)?;
-        if run as u64 % args.window != 0 && run != args.runs {
+        if !(run as u64).is_multiple_of(args.window) && run != args.runs {
             continue;
         }
         let g = gate.point(run);

@@ -77,7 +77,7 @@ impl Samples {
         match self.shape {
             Shape::Uniform => x.iter_mut().for_each(|v| *v = self.rng.grid(1000)),
             Shape::Runs => {
-                if self.step % WALK == 0 {
+                if self.step.is_multiple_of(WALK) {
                     self.walk.iter_mut().for_each(|v| *v = self.rng.grid(1000));
                 }
                 self.step += 1;

@@ -340,7 +340,7 @@ impl Physics {
     }
 
     fn next_step_publishes(&self) -> bool {
-        (self.world.step_count() + 1) % u64::from(self.world.publish_interval_steps()) == 0
+        (self.world.step_count() + 1).is_multiple_of(u64::from(self.world.publish_interval_steps()))
     }
 
     /// Applies an accepted command (an Advance only counts as applied).

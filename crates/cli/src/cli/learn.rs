@@ -11,8 +11,8 @@ use pushlearn::duration;
 use pushlearn_cli::learn::pretrain::{pretrain, Pretrain};
 use pushlearn_cli::learn::reconnect::{serve_resilient, Reconnect};
 use pushlearn_cli::learn::state::{
-    load_model, write_snapshot_file, Durable, EpisodeSettings, Opened, Settings,
-    DEFAULT_SNAPSHOT_EVERY, SNAPSHOT_FILE,
+    holds_memory, load_model, write_snapshot_file, Durable, EpisodeSettings, Opened, Settings,
+    StateLock, DEFAULT_SNAPSHOT_EVERY,
 };
 use pushlearn_cli::learn::{
     EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop,
@@ -31,7 +31,10 @@ use super::experiment::{parse_numbers, parse_pose};
 /// blockBShadow, and a --target as blockAShadowTarget, for `pushlearn
 /// view`). A lock-step world is advanced after every state; in a
 /// realtime world the work per message is measured against the 2/f budget
-/// (20 ms at 100 Hz). Stop with Ctrl-C: a summary follows.
+/// (20 ms at 100 Hz). Stop with Ctrl-C (SIGINT) or SIGTERM: the state being
+/// handled is finished, the actuator stopped, a summary printed and, with
+/// --state, the journal flushed and a final snapshot written; the daemon
+/// then exits with status 0.
 ///
 /// An untrained model does not know yet what pushing does: with --pretrain
 /// thesis it first makes the thesis's eight fixed training pushes against
@@ -44,8 +47,12 @@ use super::experiment::{parse_numbers, parse_pose};
 ///
 /// With --state DIR the learner's memory is kept on disk (snapshots plus a
 /// checksummed journal of every state, docs/reliability.md): a daemon
-/// killed at any moment resumes where it left off. If the world goes away
-/// the daemon reconnects with backoff for up to --reconnect-for seconds.
+/// killed at any moment resumes where it left off, a damaged newest
+/// snapshot is replaced by the previous one and the journal after it, and a
+/// write that fails (a full or read-only disk) stops the daemon with status
+/// 1 and the file and OS error named; restarted, it has lost no
+/// acknowledged state. If the world goes away the daemon reconnects with
+/// backoff for up to --reconnect-for seconds.
 #[derive(Debug, Args)]
 #[command(
     group = clap::ArgGroup::new("policy").required(true).args(["action", "target"]),
@@ -126,7 +133,9 @@ pub struct LearnArgs {
     options: ModelOptions,
 
     /// Keep the learner's memory in DIR (created if missing) and resume from
-    /// it: a snapshot plus a journal of every state since.
+    /// it: a snapshot plus a journal of every state since. One daemon at a
+    /// time: a second one on DIR is refused (DIR/lock, an OS lock released
+    /// when its holder ends, however it ends).
     #[arg(long, value_name = "DIR")]
     state: Option<PathBuf>,
 
@@ -185,7 +194,7 @@ pub fn run(args: LearnArgs) -> Result<()> {
             .exit();
         }
     }
-    check_outputs(&args)?;
+    let lock = check_outputs(&args)?;
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -209,14 +218,16 @@ pub fn run(args: LearnArgs) -> Result<()> {
             client,
             policy,
             args: &args,
+            lock,
         };
         args.model.dispatch(&args.options, rate, job)?.await
     })
 }
 
 /// The files the daemon writes, checked before it connects: a typo must
-/// not cost a long run's model.
-fn check_outputs(args: &LearnArgs) -> Result<()> {
+/// not cost a long run's model. Takes the --state directory's lock: a second
+/// daemon on it is refused before it touches the world.
+fn check_outputs(args: &LearnArgs) -> Result<Option<StateLock>> {
     if let Some(file) = &args.save_model {
         pushlearn_cli::output::check_file(file, "--save-model")?;
     }
@@ -224,18 +235,21 @@ fn check_outputs(args: &LearnArgs) -> Result<()> {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the --state directory {}", dir.display()))?;
     }
+    let lock = args.state.as_deref().map(StateLock::acquire).transpose()?;
     if let Some(path) = &args.memory {
         if !path.exists() {
             anyhow::bail!("--memory {}: no such file or directory", path.display());
         }
     }
-    Ok(())
+    Ok(lock)
 }
 
 struct Daemon<'a> {
     client: SimClient,
     policy: Policy,
     args: &'a LearnArgs,
+    /// The --state directory's, taken by [`check_outputs`].
+    lock: Option<StateLock>,
 }
 
 impl<'a> WithModel for Daemon<'a> {
@@ -246,11 +260,12 @@ impl<'a> WithModel for Daemon<'a> {
             mut client,
             policy,
             args,
+            lock,
         } = self;
         Box::pin(async move {
             let hello = client.hello();
             eprintln!(
-                "pushlearn learn: {} model on scene {} ({} Hz, {}); Ctrl-C to stop",
+                "pushlearn learn: {} model on scene {} ({} Hz, {}); Ctrl-C or SIGTERM to stop",
                 args.model, hello.scene, hello.publish_rate, hello.timing_mode
             );
             let settings = Settings {
@@ -262,10 +277,7 @@ impl<'a> WithModel for Daemon<'a> {
                 model_options: args.options.canonical(),
                 episodes: args.episode_settings(),
             };
-            let resuming = args
-                .state
-                .as_ref()
-                .filter(|dir| dir.join(SNAPSHOT_FILE).exists());
+            let resuming = args.state.as_ref().filter(|dir| holds_memory(dir));
             let model = match resuming {
                 Some(dir) => {
                     if args.pretrain.is_some() || args.memory.is_some() {
@@ -283,27 +295,38 @@ impl<'a> WithModel for Daemon<'a> {
                 Learner::new(model, policy, args.shadows, args.seed)
                     .with_episodes(episodes.episodes, episodes.max_steps)
             };
-            let Some(dir) = &args.state else {
+            let (Some(dir), Some(lock)) = (&args.state, lock) else {
                 let mut learner = fresh();
-                attached(client, &mut learner, args).await?;
+                let signal = attached(client, &mut learner, args).await?;
                 finish(&learner)?;
-                return save(&learner, &settings, args);
+                save(&learner, &settings, args)?;
+                if let Some(signal) = signal {
+                    eprintln!("pushlearn learn: {signal}: stopped cleanly");
+                }
+                return Ok(());
             };
-            let (mut durable, opened) = Durable::open(dir, &settings, fresh, args.snapshot_every)
-                .with_context(|| {
-                format!("cannot use the learner memory in {}", dir.display())
-            })?;
+            let (mut durable, opened) =
+                Durable::open_locked(lock, &settings, fresh, args.snapshot_every).with_context(
+                    || format!("cannot use the learner memory in {}", dir.display()),
+                )?;
             match &opened {
                 Opened::Fresh => eprintln!("memory: new, in {}", dir.display()),
                 Opened::Resumed(recovery) => {
                     eprintln!("memory: resumed from {}: {recovery}", dir.display());
                 }
             }
-            attached(client, &mut durable, args).await?;
+            let signal = attached(client, &mut durable, args).await?;
             finish(durable.learner())?;
             save(durable.learner(), &settings, args)?;
             let stored = durable.close()?;
             println!("memory: {stored} records on disk in {}", dir.display());
+            if let Some(signal) = signal {
+                eprintln!(
+                    "pushlearn learn: {signal}: stopped cleanly; journal flushed and final \
+                     snapshot written ({stored} records in {})",
+                    dir.display()
+                );
+            }
             Ok(())
         })
     }
@@ -344,8 +367,48 @@ async fn experienced<M: Model + 'static>(
     Ok(model)
 }
 
-/// Serves until stopped, reconnecting as --reconnect-for allows.
-async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArgs) -> Result<()> {
+/// Installs the SIGTERM and SIGINT handlers now and returns the future that
+/// completes on the first of them, naming it. From here on neither signal
+/// kills the daemon: the serving loop stops, the journal is flushed and a
+/// final snapshot written. Installed only once serving starts, so that
+/// Ctrl-C still ends pretraining at once (nothing is kept from it anyway).
+#[cfg(unix)]
+fn stop_signal() -> Result<impl std::future::Future<Output = &'static str>> {
+    use tokio::signal::unix::{signal, SignalKind};
+    let mut interrupt = signal(SignalKind::interrupt()).context("cannot listen for SIGINT")?;
+    let mut terminate = signal(SignalKind::terminate()).context("cannot listen for SIGTERM")?;
+    Ok(async move {
+        tokio::select! {
+            _ = terminate.recv() => "SIGTERM",
+            _ = interrupt.recv() => "SIGINT",
+        }
+    })
+}
+
+/// Ctrl-C only, where there are no Unix signals.
+#[cfg(not(unix))]
+fn stop_signal() -> Result<impl std::future::Future<Output = &'static str>> {
+    Ok(async {
+        if let Err(err) = tokio::signal::ctrl_c().await {
+            tracing::error!("cannot listen for Ctrl-C: {err}");
+            std::future::pending::<()>().await;
+        }
+        "Ctrl-C"
+    })
+}
+
+/// Serves until stopped, reconnecting as --reconnect-for allows. Returns the
+/// signal that stopped it, if one did.
+async fn attached(
+    client: SimClient,
+    learner: &mut impl OnState,
+    args: &LearnArgs,
+) -> Result<Option<&'static str>> {
+    let signal = stop_signal()?;
+    let caught = std::cell::Cell::new(None);
+    let shutdown = async {
+        caught.set(Some(signal.await));
+    };
     let options = ServeOptions {
         max_messages: args.messages,
         report_every: args.report_every,
@@ -356,18 +419,25 @@ async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArg
         args.sim.clone(),
         (!args.reconnect_for.is_zero()).then_some(args.reconnect_for),
     );
-    let served = serve_resilient(client, learner, options, &reconnect, |event| match event {
-        Event::Work(summary) => eprintln!("{summary}"),
-        Event::Progress(episodes) => eprintln!("{}", describe_progress(episodes)),
-        Event::EpisodeEnded(episodes) => {
-            if let Some(ended) = episodes.ended.last() {
-                println!(
-                    "{}",
-                    describe_episode(episodes.ended.len(), episodes.total, ended)
-                );
+    let served = serve_resilient(
+        client,
+        learner,
+        options,
+        &reconnect,
+        shutdown,
+        |event| match event {
+            Event::Work(summary) => eprintln!("{summary}"),
+            Event::Progress(episodes) => eprintln!("{}", describe_progress(episodes)),
+            Event::EpisodeEnded(episodes) => {
+                if let Some(ended) = episodes.ended.last() {
+                    println!(
+                        "{}",
+                        describe_episode(episodes.ended.len(), episodes.total, ended)
+                    );
+                }
             }
-        }
-    })
+        },
+    )
     .await?;
     println!(
         "stopped ({}): {}",
@@ -387,7 +457,7 @@ async fn attached(client: SimClient, learner: &mut impl OnState, args: &LearnArg
     if let Some(client) = served.client {
         client.close().await?;
     }
-    Ok(())
+    Ok(caught.get())
 }
 
 fn describe_progress(episodes: &Episodes) -> String {

@@ -239,7 +239,7 @@ impl<M: Model> Task<M> for MttTask {
         let block = M::poses(world).blocks.get(&BLUE_ID).copied();
         let errors = target_errors(block, self.target);
         let running = model.has_target() && core.step_counter <= self.max_steps;
-        if !running || steps % TRACE_EVERY == 0 {
+        if !running || steps.is_multiple_of(TRACE_EVERY) {
             self.trace.push(steps, errors);
         }
         if running {

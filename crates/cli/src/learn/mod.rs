@@ -9,6 +9,7 @@
 //! realtime it measures each message's work against the 2/f budget
 //! (`docs/spec/experiments.md` §6).
 
+use std::future::Future;
 use std::time::{Duration, Instant};
 
 use learner::{object_name, Action, Frame, Model, ObjectState, ParseError, Target, TargetError};
@@ -386,16 +387,24 @@ pub enum Stop {
     EpisodesDone,
 }
 
-/// Runs `learner` against the world behind `client` until interrupted
-/// (SIGINT), the message limit or the last attempt at the target. `report`
+/// Runs `learner` against the world behind `client` until `shutdown`
+/// completes, the message limit or the last attempt at the target. `report`
 /// receives the periodic summaries and the attempts' progress.
 ///
+/// `shutdown` is the caller's: the binary completes it on SIGTERM or SIGINT,
+/// a test whenever it likes, so that a clean stop is tested without
+/// signals. It is only waited on between states: a state being handled is
+/// handled to the end (journalled, learnt, its commands sent) first.
+///
 /// # Errors
-/// Socket errors, a refused command, a refused target.
+/// Socket errors, a refused command, a refused target, a learner memory
+/// that cannot be kept. When the learner fails, the actuator is stopped
+/// first (as far as the connection allows).
 pub async fn serve(
     client: &mut SimClient,
     learner: &mut impl OnState,
     options: ServeOptions,
+    shutdown: impl Future<Output = ()>,
     mut report: impl FnMut(Event<'_>),
 ) -> Result<(Stop, WorkSummary), LearnError> {
     let lockstep = client.hello().timing() == Ok(TimingMode::Lockstep);
@@ -405,8 +414,7 @@ pub async fn serve(
     client.set_timeout(None);
     let mut times = WorkTimes::default();
     let mut last_report = Instant::now();
-    let interrupt = tokio::signal::ctrl_c();
-    tokio::pin!(interrupt);
+    tokio::pin!(shutdown);
     // After a Reset, the first state that shows it: in realtime, states
     // published before the world applied it may still be on their way.
     let mut reset_seq = None;
@@ -425,15 +433,29 @@ pub async fn serve(
             }
         };
         let state = tokio::select! {
+            // Biased: in lock-step the next state is always ready at once,
+            // and a stop asked for must win over it.
+            biased;
+            () = &mut shutdown => break Stop::Interrupted,
             state = next => state?,
-            _ = &mut interrupt => break Stop::Interrupted,
         };
         reset_seq = None;
         let received = Instant::now();
         let frame = frame_from_state(&state);
         let modelled = Instant::now();
         let ended_before = learner.episodes().map_or(0, |e| e.ended.len());
-        let commands = learner.on_state(&frame, &heights)?;
+        let commands = match learner.on_state(&frame, &heights) {
+            Ok(commands) => commands,
+            Err(err) => {
+                // The daemon stops here: in a free-running world the last
+                // Move would stay in force. Best effort — the error that
+                // stops the daemon is the learner's, not this one.
+                if client.send(Payload::move_(0.0, 0.0)).await.is_ok() {
+                    let _ = client.sync().await;
+                }
+                return Err(err);
+            }
+        };
         times.record_model(modelled.elapsed());
         for command in commands {
             let reset = command.kind() == "reset";

@@ -5,7 +5,10 @@
 //! blow-up (it has reset itself, `docs/protocol.md` §6) it re-synchronises too.
 //! In neither case does the model train on a transition across the gap.
 
+use std::future::Future;
 use std::time::{Duration, Instant};
+
+use futures::FutureExt;
 
 use super::{serve, Episodes, Event, LearnError, OnState, ServeOptions, Stop, WorkSummary};
 use crate::frame::StartHeights;
@@ -95,7 +98,8 @@ impl<H: OnState> OnState for Counting<'_, H> {
 
 /// [`serve`], surviving a lost world: reconnects as `reconnect` says and
 /// re-synchronises `learner`; `options.max_messages` counts over all
-/// connections.
+/// connections. `shutdown` stops it as it stops [`serve`], also while
+/// reconnecting.
 ///
 /// # Errors
 /// As [`serve`], and the world staying unreachable for longer than allowed
@@ -105,8 +109,12 @@ pub async fn serve_resilient(
     learner: &mut impl OnState,
     options: ServeOptions,
     reconnect: &Reconnect,
+    shutdown: impl Future<Output = ()>,
     mut report: impl FnMut(Event<'_>),
 ) -> Result<Served, LearnError> {
+    // Shared: every connection's serving loop and the reconnection wait on
+    // the same stop, and one that has come stays come.
+    let shutdown = shutdown.shared();
     let mut counting = Counting {
         inner: learner,
         states: 0,
@@ -120,7 +128,15 @@ pub async fn serve_resilient(
                 .map(|n| n.saturating_sub(counting.states)),
             ..options
         };
-        let err = match serve(&mut client, &mut counting, left, &mut report).await {
+        let err = match serve(
+            &mut client,
+            &mut counting,
+            left,
+            shutdown.clone(),
+            &mut report,
+        )
+        .await
+        {
             Ok((stop, summary)) => {
                 return Ok(Served {
                     client: Some(client),
@@ -149,7 +165,7 @@ pub async fn serve_resilient(
                 let expected = client.hello().clone();
                 let connected = tokio::select! {
                     connected = connect_with_backoff(reconnect, limit) => connected?,
-                    _ = tokio::signal::ctrl_c() => {
+                    () = shutdown.clone() => {
                         return Ok(Served {
                             client: None,
                             stop: Stop::Interrupted,

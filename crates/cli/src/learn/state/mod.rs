@@ -3,8 +3,12 @@
 //! world state handled since (`docs/reliability.md` has the whole design).
 //!
 //! * `DIR/snapshot`: the whole [`Learner`](super::Learner) after `S` journal records, written
-//!   to `snapshot.tmp`, fsynced, atomically renamed over the old one and the
-//!   directory fsynced; a checksum over its contents is verified on load.
+//!   to `snapshot.tmp`, fsynced, read back, then the old one renamed to
+//!   `snapshot.prev` and the new one into its place, and the directory
+//!   fsynced; a checksum over its contents is verified on load. The
+//!   previous snapshot and the journal after it are kept: a newest snapshot
+//!   found damaged is never loaded, recovery starts from the previous one.
+//! * `DIR/lock`: held (an OS advisory lock) by the one daemon using `DIR`.
 //! * `DIR/log-S` (20 digits): the journal segment of the records `S+1, S+2,
 //!   …` — each world state the learner handled (its bodies' poses, bit for
 //!   bit) or a re-synchronisation. Replaying them through
@@ -24,9 +28,14 @@
 //! everything after it — it is never loaded. Then a fresh snapshot is written
 //! and a new segment started, so that every start begins from a clean state.
 //!
+//! A write that fails (a full or read-only file system) stops the journal
+//! for good: the daemon stops at its next state with the error, and a
+//! restart recovers every acknowledged record.
+//!
 //! The parts: `record` (the journal's record codec), `snapshot`, `segment`
-//! (the journal's files), `recovery` and `durable` (the daemon's side: the
-//! group-commit writer).
+//! (the journal's files), `recovery`, `durable` (the daemon's side: the
+//! group-commit writer), `lock` (one daemon per directory) and `storage`
+//! (the files written, and the tests' seam for a failing disk).
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -37,20 +46,26 @@ use serde::{Deserialize, Serialize};
 use super::Policy;
 
 mod durable;
+mod lock;
 mod record;
 mod recovery;
 mod segment;
 mod snapshot;
+mod storage;
 #[cfg(test)]
 mod testing;
 
 pub use durable::{Durable, Opened};
+pub use lock::{StateLock, LOCK_FILE};
 pub use record::{decode_entry, read_records, Entry, SegmentRead};
-pub use recovery::{recover, Cut, Recovery};
-pub use snapshot::{write_snapshot_file, SNAPSHOT_FILE};
+pub use recovery::{recover, Cut, FellBack, Recovery};
+pub use snapshot::{
+    write_snapshot_file, DAMAGED_SNAPSHOT_FILE, PREVIOUS_SNAPSHOT_FILE, SNAPSHOT_FILE,
+};
 
 /// Records between two snapshots by default: 5 minutes at 100 Hz. Recovery
-/// replays at most this many records; a snapshot clones the learner once.
+/// replays at most this many records (twice as many from the previous
+/// snapshot, when the newest is damaged); a snapshot clones the learner once.
 pub const DEFAULT_SNAPSHOT_EVERY: u64 = 30_000;
 
 /// Why the memory cannot be loaded or kept.
@@ -78,6 +93,13 @@ pub enum StateError {
     OtherModel { path: PathBuf, differences: String },
     #[error("cannot keep the learner's memory: {0}")]
     Writer(String),
+    #[error(
+        "{} is in use by another learner ({}); only one `pushlearn learn` may use a \
+         --state directory at a time",
+        dir.display(),
+        match holder { Some(pid) => format!("pid {pid}"), None => "pid unknown".to_owned() }
+    )]
+    Locked { dir: PathBuf, holder: Option<u32> },
 }
 
 fn io_error(path: &Path) -> impl FnOnce(io::Error) -> StateError + '_ {
@@ -138,33 +160,76 @@ impl Default for EpisodeSettings {
 /// # Errors
 /// Nothing stored at `path`, a damaged memory, or a model made otherwise.
 pub fn load_model<M: Model>(path: &Path, expected: &Settings) -> Result<(M, u64), StateError> {
-    let (snapshot, dir) = if path.is_dir() {
-        (path.join(SNAPSHOT_FILE), path)
-    } else {
-        (path.to_path_buf(), path.parent().unwrap_or(Path::new(".")))
+    let check = |stored: &Settings| {
+        let made_otherwise = expected.differences_in(stored, MAKING_THE_MODEL);
+        if made_otherwise.is_empty() {
+            Ok(())
+        } else {
+            Err(StateError::OtherModel {
+                path: path.to_path_buf(),
+                differences: made_otherwise.join("; "),
+            })
+        }
     };
-    let bytes = std::fs::read(&snapshot).map_err(io_error(&snapshot))?;
-    let stored = snapshot::stored_settings(&bytes, &snapshot)?;
-    let made_otherwise = expected.differences_in(&stored, MAKING_THE_MODEL);
-    if !made_otherwise.is_empty() {
-        return Err(StateError::OtherModel {
-            path: path.to_path_buf(),
-            differences: made_otherwise.join("; "),
-        });
-    }
     if path.is_dir() {
-        let (learner, recovery) = recover::<M>(dir, &stored)?.ok_or_else(|| StateError::Io {
-            path: snapshot.clone(),
+        let stored = stored_settings_in(path)?;
+        check(&stored)?;
+        let (learner, recovery) = recover::<M>(path, &stored)?.ok_or_else(|| StateError::Io {
+            path: path.join(SNAPSHOT_FILE),
             source: io::Error::from(io::ErrorKind::NotFound),
         })?;
+        if let Some(fell_back) = &recovery.fell_back {
+            tracing::warn!(
+                "{}: damaged, not loaded ({}); starting from the previous snapshot",
+                fell_back.snapshot.display(),
+                fell_back.reason
+            );
+        }
         if let Some(cut) = &recovery.cut {
-            tracing::warn!("{}: damaged journal tail, not loaded: {cut}", dir.display());
+            tracing::warn!(
+                "{}: damaged journal tail, not loaded: {cut}",
+                path.display()
+            );
         }
         Ok((learner.into_model(), recovery.records()))
     } else {
-        let (records, learner) = snapshot::decode_snapshot::<M>(&bytes, &snapshot, dir, &stored)?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let bytes = std::fs::read(path).map_err(io_error(path))?;
+        let stored = snapshot::stored_settings(&bytes, path)?;
+        check(&stored)?;
+        let (records, learner) = snapshot::decode_snapshot::<M>(&bytes, path, dir, &stored)?;
         Ok((learner.into_model(), records))
     }
+}
+
+/// The settings of the memory in `dir`: its newest intact snapshot's.
+fn stored_settings_in(dir: &Path) -> Result<Settings, StateError> {
+    let mut first_error = None;
+    for name in [SNAPSHOT_FILE, PREVIOUS_SNAPSHOT_FILE] {
+        let path = dir.join(name);
+        let read = std::fs::read(&path)
+            .map_err(io_error(&path))
+            .and_then(|bytes| snapshot::stored_settings(&bytes, &path));
+        match read {
+            Ok(settings) => return Ok(settings),
+            Err(err) => {
+                first_error.get_or_insert(err);
+            }
+        }
+    }
+    Err(first_error.unwrap_or_else(|| StateError::Io {
+        path: dir.join(SNAPSHOT_FILE),
+        source: io::Error::from(io::ErrorKind::NotFound),
+    }))
+}
+
+/// Whether `dir` holds a learner's memory (a snapshot, the newest or the
+/// previous one): a daemon started on it resumes it.
+#[must_use]
+pub fn holds_memory(dir: &Path) -> bool {
+    [SNAPSHOT_FILE, PREVIOUS_SNAPSHOT_FILE]
+        .iter()
+        .any(|name| dir.join(name).exists())
 }
 
 /// The settings that made a model: a kept model (`load_model`) must match

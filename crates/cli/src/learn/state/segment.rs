@@ -1,9 +1,10 @@
 //! The journal's files: `DIR/log-S` (20 digits) holds the records `S+1,
 //! S+2, …`.
 
-use std::fs::{self, File, OpenOptions};
+use std::fs::{self, File};
 use std::path::{Path, PathBuf};
 
+use super::storage::{Storage, StorageFile};
 use super::{io_error, StateError};
 
 const SEGMENT_PREFIX: &str = "log-";
@@ -37,14 +38,14 @@ pub(super) fn sync_dir(dir: &Path) -> Result<(), StateError> {
         .map_err(io_error(dir))
 }
 
-pub(super) fn open_segment(dir: &Path, start: u64) -> Result<(File, PathBuf), StateError> {
+/// Creates the segment of the records after `start` (empty).
+pub(super) fn open_segment(
+    storage: &dyn Storage,
+    dir: &Path,
+    start: u64,
+) -> Result<(Box<dyn StorageFile>, PathBuf), StateError> {
     let path = dir.join(segment_name(start));
-    let file = OpenOptions::new()
-        .create(true)
-        .truncate(true)
-        .write(true)
-        .open(&path)
-        .map_err(io_error(&path))?;
+    let file = storage.create(&path).map_err(io_error(&path))?;
     sync_dir(dir)?;
     Ok((file, path))
 }

@@ -1,8 +1,8 @@
 //! The snapshot: the whole learner after a number of journal records,
 //! written crash-safely and verified by a checksum on load.
 
-use std::fs::{self, File};
-use std::io::Write;
+use std::fs;
+use std::io::{self, Write};
 use std::path::Path;
 
 use learner::Model;
@@ -10,11 +10,20 @@ use serde::{Deserialize, Serialize};
 
 use super::record::{crc32, Cursor};
 use super::segment::sync_dir;
+use super::storage::{Disk, Storage};
 use super::{io_error, Settings, StateError};
 use crate::learn::Learner;
 
-/// The snapshot's file name in the state directory.
+/// The newest snapshot's file name in the state directory.
 pub const SNAPSHOT_FILE: &str = "snapshot";
+/// The snapshot before it, kept (with the journal after it) for when the
+/// newest is found damaged.
+pub const PREVIOUS_SNAPSHOT_FILE: &str = "snapshot.prev";
+/// A newest snapshot found damaged, moved aside by the next start (kept for
+/// a look, never read).
+pub const DAMAGED_SNAPSHOT_FILE: &str = "snapshot.damaged";
+/// A snapshot being written.
+const TMP_FILE: &str = "snapshot.tmp";
 const SNAPSHOT_MAGIC: &[u8; 8] = b"PLSNAP01";
 const FORMAT_VERSION: u32 = 1;
 
@@ -119,19 +128,60 @@ fn decode_header<'a>(
     Ok((header, c.bytes))
 }
 
-/// Writes the snapshot crash-safely: temporary file, fsync, atomic rename,
-/// fsync of the directory (so that the rename itself is durable).
+/// Writes the snapshot of `records` into `dir` crash-safely: `snapshot.tmp`
+/// first, fsynced and read back; only once it holds exactly what was meant
+/// does the current `snapshot` become `snapshot.prev` (replacing the one
+/// before) and the new one `snapshot` — two renames, each atomic — and the
+/// directory is fsynced so that they are durable. Until the new snapshot is
+/// verified the previous two stay as they were; at every moment one intact
+/// snapshot is in the directory, which recovery falls back to when the
+/// newest is damaged or (between the renames) missing.
 pub(super) fn write_snapshot<M: Model>(
+    storage: &dyn Storage,
     dir: &Path,
     records: u64,
     settings: &Settings,
     learner: &Learner<M>,
 ) -> Result<(), StateError> {
-    write_snapshot_file(&dir.join(SNAPSHOT_FILE), records, settings, learner)
+    let bytes = encode(records, settings, learner)?;
+    let tmp = dir.join(TMP_FILE);
+    write_synced(storage, &tmp, &bytes)?;
+    let back = fs::read(&tmp).map_err(io_error(&tmp))?;
+    if back != bytes {
+        return Err(StateError::Writer(format!(
+            "{}: the snapshot reads back otherwise than it was written; the previous \
+             snapshots are kept",
+            tmp.display()
+        )));
+    }
+    let newest = dir.join(SNAPSHOT_FILE);
+    match fs::rename(&newest, dir.join(PREVIOUS_SNAPSHOT_FILE)) {
+        Ok(()) => {}
+        // The first snapshot, or the newest was damaged and moved aside.
+        Err(err) if err.kind() == io::ErrorKind::NotFound => {}
+        Err(err) => return Err(io_error(&newest)(err)),
+    }
+    fs::rename(&tmp, &newest).map_err(io_error(&newest))?;
+    sync_dir(dir)
 }
 
-/// [`write_snapshot`] to any file: `path.tmp` first, then renamed over
-/// `path` (`pushlearn learn --save-model`).
+fn encode<M: Model>(
+    records: u64,
+    settings: &Settings,
+    learner: &Learner<M>,
+) -> Result<Vec<u8>, StateError> {
+    encode_snapshot(records, settings, learner)
+        .map_err(|err| StateError::Writer(format!("cannot serialise the learner: {err}")))
+}
+
+fn write_synced(storage: &dyn Storage, path: &Path, bytes: &[u8]) -> Result<(), StateError> {
+    let mut file = storage.create(path).map_err(io_error(path))?;
+    file.write_all(bytes).map_err(io_error(path))?;
+    file.sync_all().map_err(io_error(path))
+}
+
+/// A snapshot to any file: `path.tmp` first, fsynced, then renamed over
+/// `path` and the directory fsynced (`pushlearn learn --save-model`).
 ///
 /// # Errors
 /// The learner cannot be serialised or the file written.
@@ -141,15 +191,11 @@ pub fn write_snapshot_file<M: Model>(
     settings: &Settings,
     learner: &Learner<M>,
 ) -> Result<(), StateError> {
-    let bytes = encode_snapshot(records, settings, learner)
-        .map_err(|err| StateError::Writer(format!("cannot serialise the learner: {err}")))?;
+    let bytes = encode(records, settings, learner)?;
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = std::path::PathBuf::from(tmp);
-    let mut file = File::create(&tmp).map_err(io_error(&tmp))?;
-    file.write_all(&bytes).map_err(io_error(&tmp))?;
-    file.sync_all().map_err(io_error(&tmp))?;
-    drop(file);
+    write_synced(&Disk, &tmp, &bytes)?;
     fs::rename(&tmp, path).map_err(io_error(path))?;
     let dir = path
         .parent()

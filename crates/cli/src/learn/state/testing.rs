@@ -114,3 +114,157 @@ pub(super) fn reference(n: usize) -> String {
     }
     fingerprint(&l)
 }
+
+/// `ENOSPC` and `EROFS` (the same numbers on Linux and macOS).
+pub(super) const ENOSPC: i32 = 28;
+pub(super) const EROFS: i32 = 30;
+
+/// What a [`FailingDisk`] does once its budget is spent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Fault {
+    /// Writes fail with ENOSPC; files can still be created.
+    Full,
+    /// Writes and creating files fail with EROFS.
+    ReadOnly,
+    /// Nothing fails, but the byte at the budget is written flipped: a disk
+    /// that lies.
+    Flip,
+}
+
+/// Real files under a byte budget shared by all of them: the write that
+/// crosses it is short, as the kernel's is, and the next one fails.
+pub(super) struct FailingDisk {
+    fault: Fault,
+    budget: u64,
+    written: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    /// Each file's runs of bytes, in the order written.
+    regions: std::sync::Arc<std::sync::Mutex<Vec<Region>>>,
+}
+
+/// Bytes `start..end` of everything a [`FailingDisk`] wrote went to `file`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(super) struct Region {
+    pub(super) file: PathBuf,
+    pub(super) start: u64,
+    pub(super) end: u64,
+}
+
+impl FailingDisk {
+    pub(super) fn new(fault: Fault, budget: u64) -> std::sync::Arc<FailingDisk> {
+        std::sync::Arc::new(FailingDisk {
+            fault,
+            budget,
+            written: std::sync::Arc::default(),
+            regions: std::sync::Arc::default(),
+        })
+    }
+
+    /// Where the bytes went: consecutive writes to one file are one region.
+    pub(super) fn regions(&self) -> Vec<Region> {
+        self.regions
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .clone()
+    }
+
+    /// Bytes written so far, over every file.
+    pub(super) fn written(&self) -> u64 {
+        self.written.load(std::sync::atomic::Ordering::SeqCst)
+    }
+
+    fn errno(&self) -> i32 {
+        match self.fault {
+            Fault::ReadOnly => EROFS,
+            Fault::Full | Fault::Flip => ENOSPC,
+        }
+    }
+}
+
+impl super::storage::Storage for FailingDisk {
+    fn create(&self, path: &Path) -> std::io::Result<Box<dyn super::storage::StorageFile>> {
+        if self.fault == Fault::ReadOnly && self.written() >= self.budget {
+            return Err(std::io::Error::from_raw_os_error(self.errno()));
+        }
+        let file = fs::File::create(path)?;
+        Ok(Box::new(FailingFile {
+            file,
+            path: path.to_path_buf(),
+            regions: self.regions.clone(),
+            fault: self.fault,
+            budget: self.budget,
+            written: self.written.clone(),
+            errno: self.errno(),
+        }))
+    }
+}
+
+struct FailingFile {
+    file: fs::File,
+    path: PathBuf,
+    regions: std::sync::Arc<std::sync::Mutex<Vec<Region>>>,
+    fault: Fault,
+    budget: u64,
+    written: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    errno: i32,
+}
+
+impl std::io::Write for FailingFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        use std::sync::atomic::Ordering;
+        let written = self.written.load(Ordering::SeqCst);
+        if self.fault == Fault::Flip {
+            let mut bytes = buf.to_vec();
+            if let Some(at) = self.budget.checked_sub(written) {
+                if let Some(byte) = usize::try_from(at).ok().and_then(|at| bytes.get_mut(at)) {
+                    *byte ^= 0x01;
+                }
+            }
+            let n = self.file.write(&bytes)?;
+            self.wrote(n);
+            return Ok(n);
+        }
+        let left = self.budget.saturating_sub(written);
+        if left == 0 && !buf.is_empty() {
+            return Err(std::io::Error::from_raw_os_error(self.errno));
+        }
+        let take = buf.len().min(usize::try_from(left).unwrap_or(usize::MAX));
+        let n = self.file.write(&buf[..take])?;
+        self.wrote(n);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.file.flush()
+    }
+}
+
+impl FailingFile {
+    fn wrote(&self, n: usize) {
+        let n = n as u64;
+        let start = self
+            .written
+            .fetch_add(n, std::sync::atomic::Ordering::SeqCst);
+        let mut regions = self
+            .regions
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        match regions.last_mut() {
+            Some(last) if last.file == self.path && last.end == start => last.end += n,
+            _ => regions.push(Region {
+                file: self.path.clone(),
+                start,
+                end: start + n,
+            }),
+        }
+    }
+}
+
+impl super::storage::StorageFile for FailingFile {
+    fn sync_data(&mut self) -> std::io::Result<()> {
+        self.file.sync_data()
+    }
+
+    fn sync_all(&mut self) -> std::io::Result<()> {
+        self.file.sync_all()
+    }
+}

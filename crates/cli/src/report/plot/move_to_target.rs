@@ -167,7 +167,7 @@ mod tests {
 
     fn mtt_report(runs_per_target: usize) -> MttReport {
         let run = |k: usize| MttRun {
-            reached: k % 2 == 0,
+            reached: k.is_multiple_of(2),
             steps: 100,
             pos_err: 0.2,
             ori_err: 0.1,
