@@ -15,7 +15,7 @@ use pushlearn_cli::learn::{serve, Learner, Policy, ServeOptions};
 use serde_json::Value;
 
 use crate::daemon::Daemon;
-use crate::experiment::TempDir;
+use crate::experiment::{read_json, TempDir};
 use crate::process::{run, text, CHILD_LIMIT};
 
 const ACTION: Action = Action { vx: 0.0, vy: 0.5 };
@@ -392,4 +392,143 @@ fn sixty_four_clients_at_100_hz_miss_nothing_and_the_daemons_memory_stays_bounde
     assert!(rss.len() >= 2, "{report}");
     let growth = rss.iter().max().unwrap_or(&0) - rss[0];
     assert!(growth < 64 * 1024, "RSS grew by {growth} KiB: {report}");
+}
+
+/// The `pushlearn-sim` children of process `parent` (from `/proc`).
+fn world_children(parent: u32) -> Vec<u32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .filter_map(|entry| entry.ok()?.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|&pid| {
+            let Ok(stat) = std::fs::read_to_string(format!("/proc/{pid}/stat")) else {
+                return false;
+            };
+            // `pid (comm) state ppid …`; comm may hold spaces, so split
+            // after its closing parenthesis.
+            let Some((head, tail)) = stat.rsplit_once(')') else {
+                return false;
+            };
+            let ppid = tail.split_whitespace().nth(1).and_then(|p| p.parse().ok());
+            head.ends_with("(pushlearn-sim") && ppid == Some(parent)
+        })
+        .collect()
+}
+
+/// CPU time (user + system, in clock ticks) process `pid` has used.
+fn cpu_ticks(pid: u32) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let (_, tail) = stat.rsplit_once(')')?;
+    let fields: Vec<&str> = tail.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of stat, 12 and 13 after comm.
+    Some(fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?)
+}
+
+/// Issue 22 item 5: ODE aborts its process on internal assertions, so a
+/// world may die in the middle of an experiment. A worker's world is killed
+/// (SIGKILL) while it steps a job: the experiment names the job, the run
+/// and the last command, restarts the world, retries the job once, and its
+/// report is bit-identical to an undisturbed run's (jobs are seeded; the run
+/// cache keeps nothing of the dead world's half-recorded job).
+#[test]
+fn a_world_killed_mid_experiment_is_restarted_and_its_job_retried_bit_identically() {
+    let dir = TempDir::new("world-death");
+    let sim = crate::daemon::binary();
+    let sim = sim.to_str().expect("UTF-8 target path");
+    let args = |json: &str| -> Vec<String> {
+        [
+            "experiment",
+            "push-task",
+            "--model",
+            "gate",
+            "--mode",
+            "lockstep",
+            "--train-runs",
+            "1,2",
+            "--folds",
+            "2",
+            "--workers",
+            "2",
+            "--sim-bin",
+            sim,
+            "--json",
+            json,
+        ]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect()
+    };
+    let (calm, disturbed) = (dir.file("calm.json"), dir.file("disturbed.json"));
+    let mut command = Command::new(env!("CARGO_BIN_EXE_pushlearn"));
+    command.args(args(&calm));
+    let out = run(command);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+
+    let (stdout, stderr) = (dir.file("stdout"), dir.file("stderr"));
+    let mut experiment = Command::new(env!("CARGO_BIN_EXE_pushlearn"))
+        .args(args(&disturbed))
+        .env_remove("RUST_LOG")
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&stdout).expect("stdout file"))
+        .stderr(std::fs::File::create(&stderr).expect("stderr file"))
+        .spawn()
+        .expect("pushlearn starts");
+    let deadline = Instant::now() + CHILD_LIMIT * 3;
+    // A world that has used 0.2 s of CPU is stepping a job (starting and
+    // waiting cost next to nothing): kill it then.
+    let victim = loop {
+        assert!(
+            experiment.try_wait().expect("waiting").is_none(),
+            "the experiment ended before a world could be killed:\n{}",
+            std::fs::read_to_string(&stderr).unwrap_or_default()
+        );
+        assert!(Instant::now() < deadline, "no busy world to kill");
+        let busy = world_children(experiment.id())
+            .into_iter()
+            .find(|&pid| cpu_ticks(pid).is_some_and(|ticks| ticks >= 20));
+        if let Some(pid) = busy {
+            break pid;
+        }
+        thread::sleep(Duration::from_millis(10));
+    };
+    let killed = Command::new("kill")
+        .args(["-KILL", &victim.to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(killed.success());
+    let status = loop {
+        if let Some(status) = experiment.try_wait().expect("waiting") {
+            break status;
+        }
+        if Instant::now() > deadline {
+            let _ = experiment.kill();
+            panic!("the disturbed experiment did not finish");
+        }
+        thread::sleep(Duration::from_millis(10));
+    };
+    let log = std::fs::read_to_string(&stderr).unwrap_or_default();
+    assert!(status.success(), "{status}:\n{log}");
+
+    // Said once, with the job, the run, the signal and the last command.
+    let said: Vec<&str> = log
+        .lines()
+        .filter(|l| l.contains("the world process died"))
+        .collect();
+    assert_eq!(said.len(), 1, "{log}");
+    let line = said[0];
+    for part in [
+        "N_train ",
+        " fold ",
+        " run ",
+        " of the run: the world process died (signal: 9 (SIGKILL)); the last command sent was ",
+        "; restarting the world and retrying the job once",
+    ] {
+        assert!(line.contains(part), "{part:?} not in {line}");
+    }
+
+    let (a, b) = (read_json(&calm), read_json(&disturbed));
+    let exact = |v: &Value| serde_json::to_string(&v["results"]).expect("serialises");
+    assert_eq!(exact(&a), exact(&b));
+    assert_eq!(a["run"]["messages"], b["run"]["messages"]);
 }
