@@ -532,3 +532,152 @@ fn a_world_killed_mid_experiment_is_restarted_and_its_job_retried_bit_identicall
     assert_eq!(exact(&a), exact(&b));
     assert_eq!(a["run"]["messages"], b["run"]["messages"]);
 }
+
+/// The gate model, sleeping [`SLEEP`] in every [`SLEEP_EVERY`]-th
+/// prediction: a learner too slow for the 2/f budget on some states. Clones
+/// (each fold's untrained copy) share the counters.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+struct Sleepy {
+    inner: GateModel,
+    #[serde(skip)]
+    predictions: std::sync::Arc<std::sync::atomic::AtomicU64>,
+    #[serde(skip)]
+    slept: std::sync::Arc<std::sync::atomic::AtomicU64>,
+}
+
+/// 30 ms against the 20 ms budget at 100 Hz. The predictions a state
+/// triggers are fewer than [`SLEEP_EVERY`], so no state sleeps twice.
+const SLEEP: Duration = Duration::from_millis(30);
+const SLEEP_EVERY: u64 = 97;
+
+impl Model for Sleepy {
+    type World = <GateModel as Model>::World;
+    fn parse(&self, frame: &learner::Frame) -> Result<Self::World, learner::ParseError> {
+        self.inner.parse(frame)
+    }
+    fn poses(world: &Self::World) -> learner::Poses {
+        GateModel::poses(world)
+    }
+    fn reset_objects(&mut self, world: &Self::World) {
+        self.inner.reset_objects(world);
+    }
+    fn update(&mut self, world: &Self::World, action: Action) {
+        self.inner.update(world, action);
+    }
+    fn predict(&self, world: &Self::World, action: Action) -> Self::World {
+        use std::sync::atomic::Ordering;
+        if self.predictions.fetch_add(1, Ordering::SeqCst) % SLEEP_EVERY == SLEEP_EVERY - 1 {
+            self.slept.fetch_add(1, Ordering::SeqCst);
+            thread::sleep(SLEEP);
+        }
+        self.inner.predict(world, action)
+    }
+    fn set_training(&mut self, on: bool) {
+        self.inner.set_training(on);
+    }
+    fn is_training(&self) -> bool {
+        self.inner.is_training()
+    }
+    fn set_target(&mut self, target: Option<learner::Target>) -> Result<(), learner::TargetError> {
+        self.inner.set_target(target)
+    }
+    fn has_target(&self) -> bool {
+        self.inner.has_target()
+    }
+    fn act(&mut self, rng: &mut dyn rand::Rng) -> Action {
+        self.inner.act(rng)
+    }
+    fn stats(&self) -> learner::ModelStats {
+        self.inner.stats()
+    }
+    fn start_fold(&mut self, seed: u64) {
+        self.inner.start_fold(seed);
+    }
+}
+
+/// Issue 22 item 6: in realtime the world does not wait for a slow learner.
+/// A learner that sleeps 30 ms (over the 20 ms budget at 100 Hz) on some
+/// states runs a push-task fold against a free-running world: the report
+/// counts exactly the states it slept on as over budget, and a second
+/// client of the world saw it publish every state, 10 physics steps apart,
+/// throughout (a world waiting for its learner would have stalled).
+#[test]
+fn a_learner_over_budget_in_realtime_is_counted_and_the_world_never_waits() {
+    use pushlearn_cli::experiment::push_task::protocol::{Protocol, Variant};
+    use pushlearn_cli::experiment::run::{push_task, Plan};
+    use pushlearn_cli::experiment::workers::WorldSource;
+    use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
+    use std::sync::atomic::{AtomicBool, Ordering};
+
+    // 2000 steps per wall-clock second: 200 states a second, so that the
+    // fold takes a quarter of the thesis's 500-step pace.
+    let world = Daemon::start(&["--mode", "realtime", "--real-time-rate", "2000"]);
+    let done = std::sync::Arc::new(AtomicBool::new(false));
+    let addr = world.addr;
+    let observer = {
+        let done = std::sync::Arc::clone(&done);
+        thread::spawn(move || {
+            let runtime = tokio::runtime::Builder::new_current_thread()
+                .enable_all()
+                .build()
+                .expect("a runtime");
+            runtime.block_on(async {
+                let mut client = SimClient::connect(addr).await.expect("observer connects");
+                let mut seen = Vec::new();
+                while !done.load(Ordering::SeqCst) {
+                    let state = client.next_state().await.expect("a state");
+                    seen.push((state.publish_seq, state.step));
+                }
+                seen
+            })
+        })
+    };
+    let model = Sleepy {
+        inner: GateModel::new(GateConfig::hz100()),
+        predictions: Default::default(),
+        slept: Default::default(),
+    };
+    let slept = std::sync::Arc::clone(&model.slept);
+    let plan = Plan {
+        mode: Mode::Realtime,
+        latency_max: LATENCY_MAX_STEPS,
+        workers: 1,
+        source: WorldSource::Connect(addr.to_string()),
+        seed: 1,
+        model: "sleepy gate".into(),
+        learner: None,
+        runs: None,
+    };
+    let report = push_task(
+        model,
+        &Protocol::new(Variant::Random, 0),
+        &[1],
+        1,
+        &plan,
+        |_| {},
+    )
+    .expect("the realtime push task runs");
+    done.store(true, Ordering::SeqCst);
+    let seen = observer.join().expect("the observer");
+
+    let slept = slept.load(Ordering::SeqCst);
+    let timing = report.run.timing.as_ref().expect("timing");
+    assert!(slept >= 20, "only {slept} sleeps");
+    assert_eq!(timing.too_slow, slept, "{timing:?}");
+    assert_eq!(report.run.budget_seconds, 0.02);
+
+    // Every state the world published, at its rate: consecutive
+    // publish_seq, 10 steps (1000 / 100 Hz) apart except across a reset
+    // (which restarts the step counter).
+    assert!(
+        seen.len() as u64 >= report.run.messages,
+        "{} < {}",
+        seen.len(),
+        report.run.messages
+    );
+    for pair in seen.windows(2) {
+        let ((seq0, step0), (seq1, step1)) = (pair[0], pair[1]);
+        assert_eq!(seq1, seq0 + 1, "{pair:?}");
+        assert!(step1 == step0 + 10 || step1 <= 10, "{pair:?}");
+    }
+}
