@@ -23,6 +23,7 @@ use pushlearn::recording::{Frame, Recording};
 use pushlearn::wire::pb::{self, client_message::Payload, server_message, sim_control::Action};
 use pushlearn::wire::{validate, InvalidCommand, ServerConnection, TimingMode, WireError};
 use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::Semaphore;
 use tokio::time::Instant;
 
 /// How long a realtime replay goes on answering a client after the last
@@ -109,12 +110,29 @@ impl Replay {
     }
 
     /// Serves every connection to `listener` with its own replay from the
-    /// start, until the process ends.
-    pub async fn serve(self: Arc<Self>, listener: TcpListener) -> std::io::Result<()> {
+    /// start, until the process ends; at most `max_clients` at once, one
+    /// more is told so (an `Error` of kind `TOO_MANY_CLIENTS`, as the world
+    /// does) and closed.
+    pub async fn serve(
+        self: Arc<Self>,
+        listener: TcpListener,
+        max_clients: usize,
+    ) -> std::io::Result<()> {
+        let max_clients = max_clients.clamp(1, Semaphore::MAX_PERMITS);
+        let places = Arc::new(Semaphore::new(max_clients));
         loop {
             let (stream, peer) = listener.accept().await?;
+            let Ok(place) = Arc::clone(&places).try_acquire_owned() else {
+                tokio::spawn(crate::server::connection::turn_away(
+                    stream,
+                    peer,
+                    max_clients,
+                ));
+                continue;
+            };
             let replay = Arc::clone(&self);
             tokio::spawn(async move {
+                let _place = place;
                 match replay.serve_one(stream, peer).await {
                     Ok(served) => tracing::info!(
                         %peer,

@@ -12,6 +12,7 @@ mod client;
 mod ctl;
 mod docs;
 mod experiment;
+mod exposure;
 mod first_hour;
 mod learner;
 mod python;

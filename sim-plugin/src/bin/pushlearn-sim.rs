@@ -12,6 +12,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, Context};
+use clap::builder::TypedValueParser as _;
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use sim_plugin::replay::Replay;
 use sim_plugin::scene::DEFAULT_SCENE;
@@ -96,6 +97,10 @@ struct ReplayArgs {
     /// Serve a realtime recording as fast as the client reads, without its recorded pauses.
     #[arg(long)]
     fast: bool,
+    /// Clients served at once; one more gets an `Error` and is closed.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_CLIENTS,
+          value_parser = clap::value_parser!(u64).range(1..).map(|n| n as usize))]
+    max_clients: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -359,7 +364,7 @@ fn run_replay(args: &ReplayArgs) -> anyhow::Result<()> {
         drop(out);
         tokio::select! {
             () = shutdown => tracing::info!("shutting down"),
-            served = Arc::new(replay).serve(listener) => served.context("accepting clients")?,
+            served = Arc::new(replay).serve(listener, args.max_clients) => served.context("accepting clients")?,
         }
         Ok(())
     })

@@ -168,7 +168,7 @@ async fn write_queue(
 }
 
 /// Tells a client beyond `max_clients` so, and closes.
-pub(super) async fn turn_away(stream: TcpStream, peer: SocketAddr, max_clients: usize) {
+pub(crate) async fn turn_away(stream: TcpStream, peer: SocketAddr, max_clients: usize) {
     tracing::warn!(%peer, "turning a client away: {max_clients} clients are connected");
     let (_reader, mut writer) = ServerConnection::new(stream).split();
     let refusal = pb::ServerMessage::error(

@@ -21,7 +21,7 @@
 //! accepted commands; neither side ever waits for the other, so no client can
 //! stall the physics and the physics never stalls a connection.
 
-mod connection;
+pub(crate) mod connection;
 mod convert;
 mod gate;
 mod outbox;

@@ -4,9 +4,10 @@ use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 
 use anyhow::{Context, Result};
+use clap::builder::TypedValueParser as _;
 use clap::Args;
 use pushlearn::client::{ClientOptions, SimClient, DEFAULT_ADDR};
-use pushlearn_cli::view::{Viewer, DEFAULT_PORT};
+use pushlearn_cli::view::{Viewer, DEFAULT_MAX_CONNECTIONS, DEFAULT_PORT};
 
 /// Watch a running world (pushlearn-sim) live in the browser: a top-down
 /// view of every body, the learner's predictions and target, the simulated
@@ -35,6 +36,12 @@ pub struct ViewArgs {
     /// everyone who can reach it pause and reset the world.
     #[arg(long, value_name = "ADDR", default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
     bind: IpAddr,
+
+    /// The most browser connections served at once (page loads and open
+    /// tabs); one more is answered `503 Service Unavailable`.
+    #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_CONNECTIONS,
+          value_parser = clap::value_parser!(u64).range(1..).map(|n| n as usize))]
+    max_connections: usize,
 }
 
 /// Runs `pushlearn view`.
@@ -53,7 +60,9 @@ pub fn run(args: ViewArgs) -> Result<()> {
                      or point --sim at it)"
                 )
             })?;
-        let viewer = Viewer::bind(SocketAddr::new(args.bind, args.port)).await?;
+        let viewer = Viewer::bind(SocketAddr::new(args.bind, args.port))
+            .await?
+            .with_max_connections(args.max_connections);
         if !args.bind.is_loopback() {
             tracing::warn!(
                 bind = %args.bind,

@@ -36,6 +36,11 @@ impl FeedbackTask {
 }
 
 impl<M: Model> Task<M> for FeedbackTask {
+    fn run_name(&self) -> String {
+        let n_test = self.test_positions.len();
+        format!("test run {} of {n_test}", (self.test_run + 1).min(n_test))
+    }
+
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
         let n_test = self.test_positions.len();
         let poses = M::poses(world);

@@ -183,6 +183,12 @@ pub trait Task<M: Model> {
     fn initial_view(&self) -> Option<View> {
         None
     }
+
+    /// Which run of the job is in progress or next, for messages (e.g.
+    /// `training run 2 of 3`); empty if the task has no runs to name.
+    fn run_name(&self) -> String {
+        String::new()
+    }
 }
 
 /// The state machine of `docs/spec/experiments.md` §2 for one job: a fresh model and
@@ -260,6 +266,19 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     #[must_use]
     pub fn is_done(&self) -> bool {
         self.core.done
+    }
+
+    /// Where in its job the driver is, for messages: the task's run and the
+    /// message of the run (e.g. `test run 4 of 21, message 37`).
+    #[must_use]
+    pub fn position(&self) -> String {
+        let run = self.task.run_name();
+        let message = format!("message {} of the run", self.core.step_counter);
+        if run.is_empty() {
+            message
+        } else {
+            format!("{run}, {message}")
+        }
     }
 
     /// The publish rate this driver sets, for the 2/f budget.

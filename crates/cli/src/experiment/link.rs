@@ -64,6 +64,9 @@ pub struct WorldLink {
     /// Set when recorded runs are reused (lock-step only; see
     /// [`super::replay`]), with the batch the last driver left unsent.
     replay: Option<(Cursor, Vec<Payload>)>,
+    /// The last batch written to the world, for the message when the world
+    /// dies.
+    last_sent: Vec<Payload>,
 }
 
 impl WorldLink {
@@ -90,6 +93,7 @@ impl WorldLink {
             client,
             pacing,
             replay: None,
+            last_sent: Vec::new(),
         })
     }
 
@@ -164,16 +168,35 @@ impl WorldLink {
             client,
             pacing,
             replay,
+            last_sent,
         } = self;
+        let mut sent = Sent(last_sent);
         match replay {
             Some((cursor, pending)) => {
                 // After the last driver's commands, as on the socket: a latency
                 // seed must end the job's first batch to start a root there.
                 pending.extend(setup);
-                runtime.block_on(drive_replaying(client, cursor, pending, driver))
+                cursor.start_job();
+                let driven =
+                    runtime.block_on(drive_replaying(client, cursor, pending, driver, &mut sent));
+                if driven.is_err() {
+                    // What this job recorded is not kept: a world that failed
+                    // mid-job may have been wrong before it failed (ODE
+                    // aborts on an internal assertion), and stored states
+                    // reach later jobs unchecked.
+                    cursor.withdraw_job();
+                }
+                driven
             }
-            None => runtime.block_on(drive(client, *pacing, driver, setup)),
+            None => runtime.block_on(drive_tracked(client, *pacing, driver, setup, &mut sent)),
         }
+    }
+
+    /// The last batch of commands written to the world, as `move(0, 0.5) +
+    /// advance`.
+    #[must_use]
+    pub fn last_sent(&self) -> String {
+        describe(&self.last_sent)
     }
 
     /// Closes the connection.
@@ -198,19 +221,89 @@ pub async fn drive<M: Model, T: Task<M>>(
     driver: &mut Driver<M, T>,
     setup: Vec<Payload>,
 ) -> Result<Timing, ExperimentError> {
+    let mut last = Vec::new();
+    drive_tracked(client, pacing, driver, setup, &mut Sent(&mut last)).await
+}
+
+/// The last batch written to a world.
+struct Sent<'a>(&'a mut Vec<Payload>);
+
+impl Sent<'_> {
+    /// Sends `batch` in one write, remembering it.
+    async fn send_all(
+        &mut self,
+        client: &mut SimClient,
+        batch: Vec<Payload>,
+    ) -> Result<Option<u64>, ExperimentError> {
+        if !batch.is_empty() {
+            self.0.clone_from(&batch);
+        }
+        Ok(client.send_all(batch).await?)
+    }
+
+    /// Sends `batch` and an Advance in one write; the Advance's seq.
+    async fn send_with_advance(
+        &mut self,
+        client: &mut SimClient,
+        mut batch: Vec<Payload>,
+    ) -> Result<u64, ExperimentError> {
+        batch.push(Payload::advance());
+        self.send_all(client, batch)
+            .await?
+            .ok_or_else(|| ExperimentError::Incomplete("an Advance was not sent".into()))
+    }
+}
+
+/// `move(0, 0.5) + advance`: a batch of commands for messages.
+fn describe(batch: &[Payload]) -> String {
+    use pushlearn::wire::pb::sim_control::Action;
+    if batch.is_empty() {
+        return "none".to_owned();
+    }
+    batch
+        .iter()
+        .map(|p| match p {
+            Payload::Actuator(a) => {
+                let d = a.direction.unwrap_or_default();
+                format!("{}({}, {})", p.kind(), d.x, d.y)
+            }
+            Payload::SetPose(poses) => {
+                let names: Vec<&str> = poses.models.iter().map(|m| m.name.as_str()).collect();
+                format!("set_pose({})", names.join(", "))
+            }
+            Payload::Control(c) => match c.action {
+                Some(Action::PublishRateHz(hz)) => format!("publish_rate({hz})"),
+                Some(Action::LatencySeed(seed)) => format!("latency_seed({seed})"),
+                _ => p.kind().to_owned(),
+            },
+        })
+        .collect::<Vec<_>>()
+        .join(" + ")
+}
+
+/// [`drive`], remembering the last batch sent in `sent`.
+async fn drive_tracked<M: Model, T: Task<M>>(
+    client: &mut SimClient,
+    pacing: Pacing,
+    driver: &mut Driver<M, T>,
+    setup: Vec<Payload>,
+    sent: &mut Sent<'_>,
+) -> Result<Timing, ExperimentError> {
     // In lock-step the driver's commands take effect at the next Advance
     // whenever they arrive, so they go out with it in one write; in realtime
     // they go out at once.
     let mut pending = setup;
     if pacing == Pacing::Realtime {
-        client.send_all(std::mem::take(&mut pending)).await?;
+        sent.send_all(client, std::mem::take(&mut pending)).await?;
     }
     let budget = budget(driver.publish_rate_hz());
     let mut timing = Timing::default();
     while !driver.is_done() {
         let state = match pacing {
             Pacing::Lockstep => {
-                let advance = send_with_advance(client, std::mem::take(&mut pending)).await?;
+                let advance = sent
+                    .send_with_advance(client, std::mem::take(&mut pending))
+                    .await?;
                 client.wait_applied(advance).await?
             }
             Pacing::Realtime => client.next_state().await?,
@@ -220,27 +313,15 @@ pub async fn drive<M: Model, T: Task<M>>(
         match pacing {
             Pacing::Lockstep => pending = commands,
             Pacing::Realtime => {
-                client.send_all(commands).await?;
+                sent.send_all(client, commands).await?;
             }
         }
         timing.record(received.elapsed(), budget);
     }
-    client.send_all(pending).await?;
+    sent.send_all(client, pending).await?;
     // Surfaces a refusal of the last commands here rather than in the next job.
     client.sync().await?;
     Ok(timing)
-}
-
-/// Sends `batch` and an Advance in one write; the Advance's seq.
-async fn send_with_advance(
-    client: &mut SimClient,
-    mut batch: Vec<Payload>,
-) -> Result<u64, ExperimentError> {
-    batch.push(Payload::advance());
-    client
-        .send_all(batch)
-        .await?
-        .ok_or_else(|| ExperimentError::Incomplete("an Advance was not sent".into()))
 }
 
 /// [`drive`] in lock-step through a [`RunCache`]: states the cache holds
@@ -252,6 +333,7 @@ async fn drive_replaying<M: Model, T: Task<M>>(
     cursor: &mut Cursor,
     pending: &mut Vec<Payload>,
     driver: &mut Driver<M, T>,
+    sent: &mut Sent<'_>,
 ) -> Result<Timing, ExperimentError> {
     let budget = budget(driver.publish_rate_hz());
     let mut timing = Timing::default();
@@ -260,9 +342,9 @@ async fn drive_replaying<M: Model, T: Task<M>>(
             Next::Stored(frame) => frame,
             Next::Simulate { resync, batch } => {
                 if let Some(path) = resync {
-                    resync_world(client, cursor, path).await?;
+                    resync_world(client, cursor, path, sent).await?;
                 }
-                let state = send_and_advance(client, cursor, batch).await?;
+                let state = send_and_advance(client, cursor, batch, sent).await?;
                 cursor.simulated(frame_from_state(&state))?
             }
         };
@@ -278,9 +360,10 @@ async fn send_and_advance(
     client: &mut SimClient,
     cursor: &mut Cursor,
     batch: Vec<Payload>,
+    sent: &mut Sent<'_>,
 ) -> Result<pushlearn::wire::pb::WorldState, ExperimentError> {
     cursor.sent(&batch);
-    let advance = send_with_advance(client, batch).await?;
+    let advance = sent.send_with_advance(client, batch).await?;
     Ok(client.wait_applied(advance).await?)
 }
 
@@ -291,14 +374,15 @@ async fn resync_world(
     client: &mut SimClient,
     cursor: &mut Cursor,
     path: Path,
+    sent: &mut Sent<'_>,
 ) -> Result<(), ExperimentError> {
     if let Some(rate) = path.rate.filter(|&rate| cursor.needs_rate(rate)) {
         let set_rate = Payload::publish_rate(rate);
         cursor.sent(std::slice::from_ref(&set_rate));
-        client.send(set_rate).await?;
+        sent.send_all(client, vec![set_rate]).await?;
     }
     for (step, (batch, expected)) in (path.first_step..).zip(path.steps) {
-        let state = send_and_advance(client, cursor, batch).await?;
+        let state = send_and_advance(client, cursor, batch, sent).await?;
         cursor.resimulated();
         if frame_from_state(&state) != *expected {
             return Err(ReplayError::Diverged { step }.into());

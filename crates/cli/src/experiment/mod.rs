@@ -163,6 +163,10 @@ pub enum ExperimentError {
     /// An external learner stopped answering (`crate::external`).
     #[error("{job}: {why}")]
     Learner { job: String, why: String },
+    /// A world process died during a job (and, if `retried`, again on the
+    /// job's retry).
+    #[error("{0}")]
+    WorldDied(Box<workers::WorldDeath>),
     /// A job ended without its results (a bug in a handler).
     #[error("{0}")]
     Incomplete(String),

@@ -193,6 +193,17 @@ impl MttTask {
 const TRAINING_RUN_COUNT: usize = TRAINING_RUNS.len();
 
 impl<M: Model> Task<M> for MttTask {
+    fn run_name(&self) -> String {
+        if self.train_run < TRAINING_RUN_COUNT {
+            format!(
+                "training run {} of {TRAINING_RUN_COUNT}",
+                self.train_run + 1
+            )
+        } else {
+            "the test run".to_owned()
+        }
+    }
+
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
         core.step_counter += 1;
         if core.run_started {

@@ -107,15 +107,15 @@ impl Tree {
     }
 
     /// Adds a frame, or checks it against the one another worker recorded
-    /// for the same edge meanwhile.
-    fn insert(&mut self, edge: Edge, frame: Arc<Frame>) -> Result<usize, ReplayError> {
+    /// for the same edge meanwhile; the node, and whether it is new.
+    fn insert(&mut self, edge: Edge, frame: Arc<Frame>) -> Result<(usize, bool), ReplayError> {
         let existing = match &edge {
             Edge::Root { rate, batch } => self.root(*rate, batch),
             Edge::Child { parent, batch } => self.child(*parent, batch),
         };
         if let Some(n) = existing {
             return if *self.nodes[n].frame == *frame {
-                Ok(n)
+                Ok((n, false))
             } else {
                 Err(ReplayError::Diverged {
                     step: self.depth(n),
@@ -132,7 +132,20 @@ impl Tree {
             frame,
             children: Vec::new(),
         });
-        Ok(n)
+        Ok((n, true))
+    }
+
+    /// Makes `nodes` (and so everything recorded after them) unreachable:
+    /// no lookup finds them again, and their edges are simulated afresh.
+    /// They stay in the arena, so that a link standing on one of them (or
+    /// below) can still walk its path back to the root.
+    fn withdraw(&mut self, nodes: &[usize]) {
+        for &n in nodes {
+            match self.nodes[n].edge {
+                Edge::Root { .. } => self.roots.retain(|&r| r != n),
+                Edge::Child { parent, .. } => self.nodes[parent].children.retain(|&c| c != n),
+            }
+        }
     }
 
     fn depth(&self, mut n: usize) -> usize {
@@ -274,6 +287,9 @@ pub(crate) struct Cursor {
     /// The latency seed the driver's last batch ended with, which the next
     /// reset batch joins to make a root.
     seed: Option<Payload>,
+    /// The nodes this link added since its job started
+    /// ([`Cursor::withdraw_job`]).
+    recorded: Vec<usize>,
 }
 
 /// A batch that makes the following stream independent of what came before:
@@ -345,7 +361,30 @@ impl Cursor {
             live_only: false,
             latency,
             seed: None,
+            recorded: Vec::new(),
         }
+    }
+
+    /// A job starts: what it records from now on is withdrawn if it fails.
+    pub(crate) fn start_job(&mut self) {
+        self.recorded.clear();
+    }
+
+    /// The job failed: the states it recorded are taken out of the cache
+    /// (a later job simulates them again), and this link no longer assumes
+    /// its world is anywhere in the tree.
+    pub(crate) fn withdraw_job(&mut self) {
+        let recorded = std::mem::take(&mut self.recorded);
+        if !recorded.is_empty() {
+            tracing::debug!(
+                states = recorded.len(),
+                "withdrawing a failed job's recording"
+            );
+            self.cache.tree().withdraw(&recorded);
+        }
+        self.at = None;
+        self.real_at = None;
+        self.recording = None;
     }
 
     /// The root `batch` starts, if any: the batch itself, or with latency
@@ -450,7 +489,10 @@ impl Cursor {
         let frame = Arc::new(frame);
         match self.recording.take() {
             Some(edge) => {
-                let n = self.cache.tree().insert(edge, Arc::clone(&frame))?;
+                let (n, new) = self.cache.tree().insert(edge, Arc::clone(&frame))?;
+                if new {
+                    self.recorded.push(n);
+                }
                 self.at = Some(n);
                 self.real_at = Some(n);
             }
@@ -773,6 +815,40 @@ mod tests {
             c.simulated(frame(0.25)),
             Err(ReplayError::Diverged { step: 2 })
         );
+    }
+
+    /// A job whose world died half-way: what it recorded is withdrawn, so
+    /// the next link simulates those states again instead of replaying them;
+    /// what other jobs recorded before stays.
+    #[test]
+    fn a_failed_jobs_recording_is_withdrawn() {
+        let cache = Arc::new(RunCache::new());
+        let push = |x: f64| vec![Payload::move_(x, 0.0)];
+        let mut done = Cursor::new(Arc::clone(&cache), 100, false);
+        done.start_job();
+        simulate(&mut done, reset_batch(), 0.0);
+        simulate(&mut done, push(1.0), 0.1);
+
+        let mut dying = Cursor::new(Arc::clone(&cache), 100, false);
+        dying.start_job();
+        assert_eq!(stored(&mut dying, reset_batch()), frame(0.0));
+        assert_eq!(stored(&mut dying, push(1.0)), frame(0.1));
+        simulate(&mut dying, push(2.0), 0.2);
+        simulate(&mut dying, push(3.0), 0.3);
+        // Its world dies before the next state arrives.
+        assert!(matches!(dying.next(push(4.0)), Next::Simulate { .. }));
+        dying.withdraw_job();
+
+        let mut retry = Cursor::new(Arc::clone(&cache), 100, false);
+        retry.start_job();
+        assert_eq!(stored(&mut retry, reset_batch()), frame(0.0));
+        assert_eq!(stored(&mut retry, push(1.0)), frame(0.1));
+        // The dead world's states are not served: the world is brought to
+        // the last kept state and simulates on from there.
+        let resync = simulate(&mut retry, push(2.0), 0.2).expect("a resync to the kept state");
+        assert_eq!(resync.steps.len(), 2);
+        assert!(simulate(&mut retry, push(3.0), 0.3).is_none());
+        assert_eq!(cache.counts().replayed, 4);
     }
 
     #[test]

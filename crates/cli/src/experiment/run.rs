@@ -8,12 +8,11 @@ use learner::{Model, ObjectState};
 
 use super::constant_feedback::FeedbackTask;
 use super::driver::{Driver, Task};
-use super::link::WorldLink;
 use super::move_to_target::{MttJob, MttTask};
 use super::push_task::protocol::{Protocol, PushJob, Variant};
 use super::push_task::task::PushTask;
 use super::replay::{CacheCounts, RunCache};
-use super::workers::{run_jobs, Worker, WorldSource};
+use super::workers::{retry_if_the_world_dies, run_jobs, Worker, WorldDeath, WorldSource};
 use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
 use crate::results::move_to_target::{MttJobResult, TargetSummary};
 use crate::results::nodes::NodeSummary;
@@ -114,6 +113,17 @@ impl Plan {
         self.source.max_workers(self.workers)
     }
 
+    /// Runs `job` on `worker`, retried once on a new world if the world
+    /// process dies ([`retry_if_the_world_dies`]).
+    fn retrying<R>(
+        &self,
+        worker: &mut Worker,
+        scene: &str,
+        job: impl FnMut(&mut Worker) -> Result<R, ExperimentError>,
+    ) -> Result<R, ExperimentError> {
+        retry_if_the_world_dies(worker, || self.start(scene), job)
+    }
+
     fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
         let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
@@ -148,9 +158,10 @@ struct Fold {
     name: String,
 }
 
-/// Runs one job's driver to its end on `link`.
+/// Runs one job's driver to its end on `worker`'s world; a world process
+/// that died meanwhile is [`ExperimentError::WorldDied`].
 fn drive<M: Model, T: Task<M>>(
-    link: &mut WorldLink,
+    worker: &mut Worker,
     untrained: &Mutex<M>,
     task: T,
     rate_hz: u32,
@@ -164,7 +175,21 @@ fn drive<M: Model, T: Task<M>>(
         .clone();
     model.start_fold(fold.seed);
     let mut driver = Driver::new(model, task, rate_hz);
-    let timing = link.drive(&mut driver, setup)?;
+    let timing = match worker.link.drive(&mut driver, setup) {
+        Ok(timing) => timing,
+        Err(err) => {
+            return Err(match worker.world_death() {
+                Some(status) => ExperimentError::WorldDied(Box::new(WorldDeath {
+                    job: fold.name,
+                    at: driver.position(),
+                    last_sent: worker.link.last_sent(),
+                    status,
+                    retried: false,
+                })),
+                None => err,
+            })
+        }
+    };
     if let Some(why) = driver.failure() {
         return Err(ExperimentError::Learner {
             job: fold.name,
@@ -238,17 +263,19 @@ pub fn push_jobs<M: Model>(
         plan.workers(),
         || plan.start(scene),
         |job, worker| {
-            let (task, timing, counters) = drive(
-                &mut worker.link,
-                &untrained,
-                PushTask::new(job),
-                rate_hz,
-                plan.job_setup(job.latency_seed),
-                Fold {
-                    seed: job.seed,
-                    name: format!("N_train {} fold {}", job.n_train, job.fold),
-                },
-            )?;
+            let (task, timing, counters) = plan.retrying(worker, scene, |worker| {
+                drive(
+                    worker,
+                    &untrained,
+                    PushTask::new(job),
+                    rate_hz,
+                    plan.job_setup(job.latency_seed),
+                    Fold {
+                        seed: job.seed,
+                        name: format!("N_train {} fold {}", job.n_train, job.fold),
+                    },
+                )
+            })?;
             let result = PushJobResult::from_task(job, task, counters, timing)?;
             done(&result)?;
             Ok(result)
@@ -313,17 +340,19 @@ pub fn constant_feedback<M: Model>(
         1,
         || plan.start(Variant::ConstantFeedback.scene()),
         |&latency_seed, worker| {
-            drive(
-                &mut worker.link,
-                &untrained,
-                FeedbackTask::new(Variant::ConstantFeedback.test_positions()),
-                LOW_RATE_HZ,
-                plan.job_setup(latency_seed),
-                Fold {
-                    seed: driver_seed,
-                    name: "the constant-feedback job".to_owned(),
-                },
-            )
+            plan.retrying(worker, Variant::ConstantFeedback.scene(), |worker| {
+                drive(
+                    worker,
+                    &untrained,
+                    FeedbackTask::new(Variant::ConstantFeedback.test_positions()),
+                    LOW_RATE_HZ,
+                    plan.job_setup(latency_seed),
+                    Fold {
+                        seed: driver_seed,
+                        name: "the constant-feedback job".to_owned(),
+                    },
+                )
+            })
         },
         |_| {},
     )?;
@@ -357,21 +386,23 @@ pub fn move_to_target<M: Model>(
         plan.workers(),
         || plan.start("one_block"),
         |job, worker| {
-            let (task, timing, counters) = drive(
-                &mut worker.link,
-                &untrained,
-                MttTask::new(job),
-                RATE_HZ,
-                plan.job_setup(job.latency_seed),
-                Fold {
-                    seed: job.seed,
-                    name: format!(
-                        "target {} repetition {}",
-                        job.target_index + 1,
-                        job.repetition
-                    ),
-                },
-            )?;
+            let (task, timing, counters) = plan.retrying(worker, "one_block", |worker| {
+                drive(
+                    worker,
+                    &untrained,
+                    MttTask::new(job),
+                    RATE_HZ,
+                    plan.job_setup(job.latency_seed),
+                    Fold {
+                        seed: job.seed,
+                        name: format!(
+                            "target {} repetition {}",
+                            job.target_index + 1,
+                            job.repetition
+                        ),
+                    },
+                )
+            })?;
             MttJobResult::from_task(job, task, counters, timing)
         },
         progress,

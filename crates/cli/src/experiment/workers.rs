@@ -102,6 +102,11 @@ pub struct SimProcess {
     addr: String,
 }
 
+/// How long a world whose connection failed may take to be seen dead: the
+/// kernel closes a dying process's sockets a moment before its exit status
+/// can be collected.
+const DEATH_NOTICE: Duration = Duration::from_secs(1);
+
 impl SimProcess {
     /// Starts `command` (see [`serve_command`]) and waits for the line
     /// `listening on ADDR` on its stdout or stderr.
@@ -182,6 +187,20 @@ impl SimProcess {
     pub fn addr(&self) -> &str {
         &self.addr
     }
+
+    /// The process's exit status if it has ended (or ends within `within`).
+    fn exited(&self, within: Duration) -> Option<std::process::ExitStatus> {
+        let deadline = std::time::Instant::now() + within;
+        loop {
+            match lock(&self.child).try_wait() {
+                Ok(Some(status)) => return Some(status),
+                Ok(None) if std::time::Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                Ok(None) | Err(_) => return None,
+            }
+        }
+    }
 }
 
 impl Drop for SimProcess {
@@ -241,6 +260,80 @@ impl Worker {
                 _process: None,
             }),
         }
+    }
+
+    /// How this worker's world process ended, if it has: after its
+    /// connection failed, to tell a dead world from a refused command. A
+    /// world this program did not start is never reported dead (it cannot
+    /// be restarted either).
+    #[must_use]
+    pub fn world_death(&self) -> Option<String> {
+        let process = self._process.as_ref()?;
+        process
+            .exited(DEATH_NOTICE)
+            .map(|status| status.to_string())
+    }
+}
+
+/// A world process that died during a job (`docs/reliability.md` §2): the
+/// job, where in it the driver was, and the last commands the world got.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct WorldDeath {
+    /// The job, e.g. `N_train 10 fold 3`.
+    pub job: String,
+    /// The run and message, e.g. `test run 4 of 21, message 37 of the run`.
+    pub at: String,
+    /// The last batch sent, e.g. `move(0, 0.5) + advance`.
+    pub last_sent: String,
+    /// The process's exit status, e.g. `signal: 9 (SIGKILL)`.
+    pub status: String,
+    /// Whether this was the job's retry on a new world.
+    pub retried: bool,
+}
+
+impl std::fmt::Display for WorldDeath {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}, {}: the world process died ({}); the last command sent was {}",
+            self.job, self.at, self.status, self.last_sent
+        )?;
+        if self.retried {
+            write!(f, "; it died again when the job was retried on a new world")?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs `job` on `worker`; if its world died ([`ExperimentError::WorldDied`]),
+/// says so once, puts a worker from `restart` in its place and runs the job
+/// again. Jobs are seeded and a fresh world is the same as a used one after
+/// a reset, so the retry's result is the one the job would have had. A
+/// second death ends the job with both in the error's message.
+///
+/// # Errors
+/// The job's error; the restart's; [`ExperimentError::WorldDied`] with
+/// `retried` set if the retry's world died too.
+pub fn retry_if_the_world_dies<W, R>(
+    worker: &mut W,
+    restart: impl FnOnce() -> Result<W, ExperimentError>,
+    mut job: impl FnMut(&mut W) -> Result<R, ExperimentError>,
+) -> Result<R, ExperimentError> {
+    match job(worker) {
+        Err(ExperimentError::WorldDied(death)) => {
+            tracing::warn!("{death}; restarting the world and retrying the job once");
+            *worker = restart()?;
+            job(worker).map_err(|err| match err {
+                ExperimentError::WorldDied(again) => {
+                    ExperimentError::WorldDied(Box::new(WorldDeath {
+                        retried: true,
+                        ..*again
+                    }))
+                }
+                other => other,
+            })
+        }
+        other => other,
     }
 }
 
@@ -417,6 +510,83 @@ mod tests {
         assert_eq!(one, jobs.iter().map(|j| j * j).collect::<Vec<_>>());
         assert_eq!(run_with(2), one);
         assert_eq!(run_with(3), one);
+    }
+
+    fn death(job: &str) -> ExperimentError {
+        ExperimentError::WorldDied(Box::new(WorldDeath {
+            job: job.into(),
+            at: "test run 4 of 21, message 37 of the run".into(),
+            last_sent: "move(0, 0.5) + advance".into(),
+            status: "signal: 9 (SIGKILL)".into(),
+            retried: false,
+        }))
+    }
+
+    /// One death: the job runs again on a restarted worker and its result
+    /// is returned. Two: the error says so, with the second death's place.
+    /// Any other error: no retry.
+    #[test]
+    fn a_job_whose_world_dies_is_retried_once_on_a_new_world() {
+        let mut worker = 1;
+        let mut runs = Vec::new();
+        let out = retry_if_the_world_dies(
+            &mut worker,
+            || Ok(2),
+            |w: &mut u32| {
+                runs.push(*w);
+                if *w == 1 {
+                    Err(death("N_train 1 fold 0"))
+                } else {
+                    Ok("result")
+                }
+            },
+        );
+        assert_eq!(out.unwrap(), "result");
+        assert_eq!((runs, worker), (vec![1, 2], 2));
+
+        let mut worker = 1;
+        let err = retry_if_the_world_dies(
+            &mut worker,
+            || Ok(2),
+            |_| Err::<(), _>(death("N_train 1 fold 0")),
+        )
+        .unwrap_err();
+        let text = err.to_string();
+        assert!(
+            text.starts_with("N_train 1 fold 0, test run 4 of 21, message 37 of the run: the world process died (signal: 9 (SIGKILL)); the last command sent was move(0, 0.5) + advance"),
+            "{text}"
+        );
+        assert!(
+            text.ends_with("it died again when the job was retried on a new world"),
+            "{text}"
+        );
+
+        let mut tries = 0;
+        let err = retry_if_the_world_dies(
+            &mut 1,
+            || Ok(2),
+            |_| {
+                tries += 1;
+                Err::<(), _>(ExperimentError::Incomplete("refused".into()))
+            },
+        )
+        .unwrap_err();
+        assert!(matches!(err, ExperimentError::Incomplete(_)));
+        assert_eq!(tries, 1);
+    }
+
+    #[test]
+    fn a_killed_world_process_is_reported_dead_with_its_signal() {
+        let p = SimProcess::spawn(shell("echo 'listening on 127.0.0.1:1'; exec sleep 30")).unwrap();
+        assert_eq!(p.exited(Duration::ZERO), None);
+        let pid = lock(&p.child).id();
+        let killed = Command::new("kill")
+            .args(["-KILL", &pid.to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = p.exited(Duration::from_secs(30)).expect("dead").to_string();
+        assert!(status.contains("SIGKILL"), "{status}");
     }
 
     #[test]

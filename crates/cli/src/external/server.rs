@@ -302,6 +302,27 @@ impl<R: Read> Requests<R> {
     }
 }
 
+/// Turns a driver away: reads its Start and answers it with an Error
+/// saying `why`, so that the driver reports the reason instead of a bare
+/// closed connection (`docs/learner-protocol.md` §4 shows a learner's Error).
+///
+/// # Errors
+/// The transport failed, or the first request was not a Start.
+pub fn refuse(
+    mut requests: Requests<impl Read>,
+    mut output: impl Write,
+    why: &str,
+) -> Result<(), ServeError> {
+    let (seq, _) = requests.start()?;
+    send(
+        &mut output,
+        seq,
+        Answer::Error(lp::Error {
+            message: why.to_owned(),
+        }),
+    )
+}
+
 /// Serves `untrained` (a fresh clone per fold) to one driver whose Start
 /// (`start_seq`) was read already, until it says bye or closes its end. A
 /// request the model cannot handle is answered with an Error reply and ends

@@ -7,7 +7,7 @@ use std::time::Duration;
 use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
 use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::handshake::derive_accept_key;
-use tokio_tungstenite::tungstenite::protocol::Role;
+use tokio_tungstenite::tungstenite::protocol::{Role, WebSocketConfig};
 use tokio_tungstenite::WebSocketStream;
 
 use super::PAGE;
@@ -21,6 +21,12 @@ const MAX_HEAD: u64 = 16 * 1024;
 
 /// A connection that sends no complete request in this time is dropped.
 const REQUEST_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Largest WebSocket message (and frame) a tab may send. The page sends
+/// only controls (`{"type":"control","action":"unpause"}`, under 50 bytes);
+/// tungstenite's default of 64 MiB would let one tab make the viewer buffer
+/// that much.
+pub const MAX_WS_MESSAGE: usize = 4 * 1024;
 
 /// Why a browser connection ended without a WebSocket.
 #[derive(Debug, thiserror::Error)]
@@ -70,8 +76,11 @@ pub async fn accept(stream: TcpStream) -> Result<Accepted, HttpError> {
             );
             stream.write_all(answer.as_bytes()).await?;
             stream.flush().await?;
+            let limits = WebSocketConfig::default()
+                .max_message_size(Some(MAX_WS_MESSAGE))
+                .max_frame_size(Some(MAX_WS_MESSAGE));
             Ok(Accepted::WebSocket(Box::new(
-                WebSocketStream::from_raw_socket(stream, Role::Server, None).await,
+                WebSocketStream::from_raw_socket(stream, Role::Server, Some(limits)).await,
             )))
         }
         Route::Refuse { status, reason } => {
@@ -81,6 +90,24 @@ pub async fn accept(stream: TcpStream) -> Result<Accepted, HttpError> {
             Ok(Accepted::Served)
         }
     }
+}
+
+/// Answers a connection beyond the viewer's limit of `max` with `503
+/// Service Unavailable`, after reading its request: closing with the request
+/// unread would reset the connection, and the reset may overtake the answer.
+pub async fn turn_away(stream: TcpStream, max: usize) -> Result<(), HttpError> {
+    let mut stream = BufReader::new(stream);
+    tokio::time::timeout(REQUEST_TIMEOUT, read_head(&mut stream))
+        .await
+        .map_err(|_| HttpError::Timeout(REQUEST_TIMEOUT))??;
+    let body = format!("too many connections: the viewer serves at most {max} at once\n");
+    respond(
+        &mut stream,
+        "503 Service Unavailable",
+        "text/plain; charset=utf-8",
+        &body,
+    )
+    .await
 }
 
 /// The request head, up to and including the empty line.

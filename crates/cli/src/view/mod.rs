@@ -20,7 +20,9 @@ use std::time::Duration;
 
 use futures::{SinkExt, StreamExt};
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::{broadcast, mpsc, watch};
+use tokio::sync::{broadcast, mpsc, watch, Semaphore};
+use tokio_tungstenite::tungstenite::protocol::frame::coding::CloseCode;
+use tokio_tungstenite::tungstenite::protocol::CloseFrame;
 use tokio_tungstenite::tungstenite::{Message, Utf8Bytes};
 
 use pushlearn::client::{ClientError, ClientOptions, SimClient};
@@ -48,6 +50,11 @@ const ACCEPT_BACKOFF: Duration = Duration::from_millis(100);
 
 /// Controls waiting to be forwarded to the world.
 const CONTROL_BACKLOG: usize = 16;
+
+/// Browser connections served at once by default (page loads and open tabs
+/// together); one more is answered `503 Service Unavailable`. As many as the
+/// world daemon's clients: a tab costs a task and a socket, nothing more.
+pub const DEFAULT_MAX_CONNECTIONS: usize = 64;
 
 /// Why the viewer cannot start.
 #[derive(Debug, thiserror::Error)]
@@ -90,6 +97,7 @@ impl Hub {
 pub struct Viewer {
     listener: TcpListener,
     addr: SocketAddr,
+    max_connections: usize,
 }
 
 impl Viewer {
@@ -104,7 +112,18 @@ impl Viewer {
         let addr = listener
             .local_addr()
             .map_err(|reason| ViewError::Bind { addr, reason })?;
-        Ok(Self { listener, addr })
+        Ok(Self {
+            listener,
+            addr,
+            max_connections: DEFAULT_MAX_CONNECTIONS,
+        })
+    }
+
+    /// Serves at most `max` browser connections at once (at least one).
+    #[must_use]
+    pub fn with_max_connections(mut self, max: usize) -> Self {
+        self.max_connections = max.clamp(1, Semaphore::MAX_PERMITS);
+        self
     }
 
     /// Where browsers find the page.
@@ -142,12 +161,24 @@ impl Viewer {
             control_rx,
         ));
         tokio::pin!(shutdown);
+        let places = Arc::new(Semaphore::new(self.max_connections));
         loop {
             tokio::select! {
                 accepted = self.listener.accept() => match accepted {
                     Ok((stream, peer)) => {
+                        let Ok(place) = Arc::clone(&places).try_acquire_owned() else {
+                            let max = self.max_connections;
+                            tracing::warn!(%peer, "turning a browser away: {max} connections are open");
+                            tokio::spawn(async move {
+                                if let Err(err) = http::turn_away(stream, max).await {
+                                    tracing::debug!(%peer, %err, "turning a browser away");
+                                }
+                            });
+                            continue;
+                        };
                         let hub = Arc::clone(&hub);
                         tokio::spawn(async move {
+                            let _place = place;
                             if let Err(err) = serve_browser(stream, &hub).await {
                                 tracing::debug!(%peer, %err, "browser connection ended");
                             }
@@ -355,6 +386,14 @@ async fn follow_tab(mut socket: http::Socket, hub: &Hub) {
                         }
                     }
                     continue;
+                }
+                Some(Err(tokio_tungstenite::tungstenite::Error::Capacity(err))) => {
+                    // Said before closing, so that a client learns why.
+                    let _ = socket.close(Some(CloseFrame {
+                        code: CloseCode::Size,
+                        reason: format!("{err}").into(),
+                    })).await;
+                    return;
                 }
                 Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
                 // Pings are answered by the library; nothing else is expected.

@@ -84,8 +84,10 @@ enum CtlCommand {
         /// The recording to write (replaced if it exists).
         file: PathBuf,
         /// Be a proxy for one client connecting to this HOST:PORT (port 0
-        /// picks a free one).
-        #[arg(long, value_name = "HOST:PORT")]
+        /// picks a free one; a bare PORT listens on 127.0.0.1). Later
+        /// clients are refused: the listening socket is closed once the
+        /// first has connected.
+        #[arg(long, value_name = "[HOST:]PORT")]
         listen: Option<String>,
         /// Observer mode: stop after N states.
         #[arg(long, value_name = "N", conflicts_with = "listen")]

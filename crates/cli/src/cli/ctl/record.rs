@@ -95,6 +95,13 @@ fn is_state(frame: &[u8]) -> bool {
 /// A proxy for one client: every frame both ways is recorded, then passed
 /// on. Ends when the world closes (after the client has), or on Ctrl-C.
 async fn proxy(options: &RecordOptions<'_>, listen: &str) -> Result<()> {
+    // A bare port is on the loopback address: the proxy passes on commands
+    // to the world from whoever connects.
+    let listen = match listen.parse::<u16>() {
+        Ok(port) => format!("127.0.0.1:{port}"),
+        Err(_) => listen.to_owned(),
+    };
+    let listen = listen.as_str();
     let listener = TcpListener::bind(listen)
         .await
         .with_context(|| format!("cannot listen on {listen}"))?;

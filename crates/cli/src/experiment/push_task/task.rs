@@ -123,6 +123,15 @@ impl<M: Model> Task<M> for PushTask {
         })
     }
 
+    fn run_name(&self) -> String {
+        if self.train_run < self.n_train {
+            format!("training run {} of {}", self.train_run + 1, self.n_train)
+        } else {
+            let n_test = self.test_positions.len();
+            format!("test run {} of {n_test}", (self.test_run + 1).min(n_test))
+        }
+    }
+
     fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
         let n_test = self.test_positions.len();
         core.step_counter += 1;
