@@ -79,6 +79,7 @@ import os
 import socket
 import socketserver
 import sys
+import threading
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
@@ -768,8 +769,12 @@ class _Session:
         learner: Learner | LearnerFactory,
         reader: framing.Readable,
         writer: framing.Writable,
+        refusal: str | None = None,
     ) -> None:
         self._source = learner
+        # Set when the session must not start (a daemon at its connection
+        # cap): the driver gets this as the Error answering its Start.
+        self._refusal = refusal
         self._learner: Learner | None = None
         self._reader = reader
         self._writer = writer
@@ -929,6 +934,8 @@ class _Session:
         return None
 
     def _start(self, start: Any, seq: int) -> dict[str, Any]:
+        if self._refusal is not None:
+            raise self._fail(seq, self._refusal)
         if self._learner is not None:
             raise self._fail(seq, "ProtocolError: Start was sent twice")
         if start.protocol_version != PROTOCOL_VERSION:
@@ -1046,7 +1053,19 @@ class _Handler(socketserver.StreamRequestHandler):
 
     def handle(self) -> None:
         peer = "{}:{}".format(*self.client_address[:2])
-        status = _serve_on_streams(self.server.factory, self.rfile, self.wfile)
+        if not self.server.slots.acquire(blocking=False):
+            limit = self.server.max_connections
+            _Session(
+                self.server.factory,
+                self.rfile,
+                self.wfile,
+                refusal=f"too many connections: this learner daemon serves at most {limit} at once",
+            ).run()
+            return
+        try:
+            status = _serve_on_streams(self.server.factory, self.rfile, self.wfile)
+        finally:
+            self.server.slots.release()
         if status != 0:
             _log(f"the session with {peer} ended with an error")
 
@@ -1064,8 +1083,16 @@ class LearnerServer(socketserver.ThreadingTCPServer):
     allow_reuse_address = True
 
     def __init__(
-        self, factory: LearnerFactory, host: str = "127.0.0.1", port: int = 0
+        self,
+        factory: LearnerFactory,
+        host: str = "127.0.0.1",
+        port: int = 0,
+        max_connections: int = 64,
     ) -> None:
+        if max_connections < 1:
+            raise ValueError(
+                f"max_connections must be at least 1, got {max_connections}"
+            )
         if isinstance(factory, Learner):
             raise TypeError(
                 "a TCP learner daemon needs a factory (e.g. the Learner class), not a learner "
@@ -1077,6 +1104,9 @@ class LearnerServer(socketserver.ThreadingTCPServer):
             )
         self.factory = factory
         """Makes each connection's learner."""
+        self.max_connections = max_connections
+        """Sessions served at once; one more gets an ``Error`` answering its Start."""
+        self.slots = threading.BoundedSemaphore(max_connections)
         self.address_family = socket.AF_INET6 if ":" in host else socket.AF_INET
         super().__init__((host, port), _Handler)
 
@@ -1093,7 +1123,12 @@ class LearnerServer(socketserver.ThreadingTCPServer):
         return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
-def serve_tcp(factory: LearnerFactory, host: str = "127.0.0.1", port: int = 0) -> None:
+def serve_tcp(
+    factory: LearnerFactory,
+    host: str = "127.0.0.1",
+    port: int = 0,
+    max_connections: int = 64,
+) -> None:
     """Runs a learner daemon on ``host:port`` until interrupted.
 
     Every connection is one driver session with a fresh learner from
@@ -1101,9 +1136,11 @@ def serve_tcp(factory: LearnerFactory, host: str = "127.0.0.1", port: int = 0) -
     learner), in its own thread. Once bound, prints ``listening on
     HOST:PORT`` (the real port when ``port`` is 0) to **stdout** and
     flushes it, as ``pushlearn-sim`` does; logs go to stderr. Binds the
-    loopback address by default: the protocol has no authentication.
+    loopback address by default: the protocol has no authentication. At
+    most ``max_connections`` sessions run at once; one more is answered
+    with an ``Error`` (``too many connections: …``) and closed.
     """
-    with LearnerServer(factory, host, port) as server:
+    with LearnerServer(factory, host, port, max_connections) as server:
         print(f"listening on {server.address_text}", flush=True)
         try:
             server.serve_forever()

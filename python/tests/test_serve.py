@@ -9,6 +9,7 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -652,6 +653,51 @@ def test_a_learner_server_runs_sessions_concurrently() -> None:
         server.shutdown()
         server.server_close()
     assert server.address_text.startswith("127.0.0.1:")
+
+
+def test_a_learner_server_at_its_connection_cap_refuses_one_more_and_serves_the_rest() -> (
+    None
+):
+    server = LearnerServer(Recorder, max_connections=1)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    first = Connection(server.address[1])
+    try:
+        first.call(**start_call())
+        assert first.reply().hello.name == "recorder"
+        extra = Connection(server.address[1])
+        try:
+            extra.call(**start_call())
+            refusal = extra.reply()
+            assert refusal.error.message == (
+                "too many connections: this learner daemon serves at most 1 at once"
+            )
+            assert extra.reply() is None  # and the connection is closed
+        finally:
+            extra.close()
+        # The session already running is served as before.
+        first.call(get_stats=learner_pb2.GetStats())
+        assert first.reply().HasField("stats")
+    finally:
+        first.close()
+    # Its slot is free again once it ended.
+    again = Connection(server.address[1])
+    try:
+        for _ in range(50):
+            again.call(**start_call())
+            reply = again.reply()
+            if reply.HasField("hello"):
+                break
+            again.close()
+            time.sleep(0.02)
+            again = Connection(server.address[1])
+        assert reply.hello.name == "recorder"
+    finally:
+        again.close()
+        server.shutdown()
+        server.server_close()
+    with pytest.raises(ValueError, match="at least 1"):
+        LearnerServer(Recorder, max_connections=0)
 
 
 def test_a_learner_server_needs_a_factory() -> None:
