@@ -208,6 +208,33 @@ async fn sleep_until(due: Option<Instant>) {
     }
 }
 
+#[cfg(feature = "testing")]
+impl Replay {
+    /// The recorded client's own frames played back to one session of this
+    /// replay, in order, as a client repeating the recorded session sends
+    /// them; in realtime, every state then sent unasked. For the fuzz harness
+    /// (`server::untrusted::load_untrusted_recording`).
+    #[must_use]
+    pub fn play_back(&self) -> Served {
+        let mut session = Session::new(self);
+        for message in &self.client {
+            if session.on_message(message).1 {
+                break;
+            }
+        }
+        if !self.lockstep {
+            while session.next_unasked().is_some() {}
+        }
+        session.served
+    }
+
+    /// Whether the recording holds the client's frames.
+    #[must_use]
+    pub fn commands(&self) -> bool {
+        self.commands
+    }
+}
+
 /// One connection's position in the recording.
 struct Session<'a> {
     replay: &'a Replay,

@@ -7,10 +7,12 @@
 
 use std::sync::mpsc::{self, Receiver};
 
-use pushlearn::wire::{decode_stream, pb};
+use pushlearn::recording::{self, Direction, RecordingWriter};
+use pushlearn::wire::{decode_stream, encode_frame, pb, LENGTH_PREFIX_SIZE};
 
 use super::gate::{Gate, Op, ToPhysics};
 use super::{Config, ServerError, Timing};
+use crate::replay::{Replay, Served};
 use crate::scene::Scene;
 use crate::world::{StepError, World};
 
@@ -141,6 +143,81 @@ pub fn load_untrusted_scene(text: &str) -> Result<bool, Fault> {
     Ok(true)
 }
 
+/// Reads `bytes` as a recording (`pushlearn-sim replay FILE`) and, if it is
+/// one, prepares its replay and plays the recorded client back to it.
+/// Returns what that served, or `None` for bytes refused as a recording.
+///
+/// # Errors
+/// A recording read in a way that loses or invents something: a cut file
+/// whose reported cut is not where the bytes end; a recording that, written
+/// out again (`RecordingWriter`) and read back, is not the same (compared as
+/// written, so that NaN equals itself); a replay that finds the recorded
+/// client's own frames differing from the recording, or serves more states
+/// than the recording holds.
+pub fn load_untrusted_recording(bytes: &[u8]) -> Result<Option<Served>, Fault> {
+    let Ok(recording) = recording::parse(bytes, "fuzz") else {
+        return Ok(None);
+    };
+    if let Some(cut) = recording.truncated {
+        if cut.offset + cut.present != bytes.len() {
+            return Err(Fault::Recording(format!(
+                "cut at {} with {} bytes present, but the input has {}",
+                cut.offset,
+                cut.present,
+                bytes.len()
+            )));
+        }
+    }
+    let written = rewrite(&recording)?;
+    let reread = recording::parse(&written, "fuzz rewritten")
+        .map_err(|err| Fault::Recording(format!("a rewritten recording is refused: {err}")))?;
+    if rewrite(&reread)? != written {
+        return Err(Fault::Recording(
+            "a rewritten recording reads back differently".into(),
+        ));
+    }
+    let replay = Replay::new(recording, "fuzz", true);
+    let served = replay.play_back();
+    if replay.commands() && served.differing != 0 {
+        return Err(Fault::Recording(format!(
+            "the recorded client's own frames differ from the recording: {served:?}"
+        )));
+    }
+    if served.states > replay.states() as u64 {
+        return Err(Fault::Recording(format!(
+            "{} states served from a recording of {}",
+            served.states,
+            replay.states()
+        )));
+    }
+    Ok(Some(served))
+}
+
+/// `recording` as `pushlearn ctl record` would write it.
+fn rewrite(recording: &recording::Recording) -> Result<Vec<u8>, Fault> {
+    let fail = |err: &dyn std::fmt::Display| Fault::Recording(format!("cannot rewrite: {err}"));
+    // The recording holds envelopes without their length prefix.
+    let hello = encode_frame(&pb::ServerMessage::from(recording.header.hello.clone()))
+        .map_err(|e| fail(&e))?;
+    let mut writer = RecordingWriter::new(
+        Vec::new(),
+        recording.header.commands,
+        &hello[LENGTH_PREFIX_SIZE..],
+    )
+    .map_err(|e| fail(&e))?;
+    for record in &recording.records {
+        let (direction, frame) = match &record.frame {
+            recording::Frame::World(m) => (Direction::FromWorld, encode_frame(m)),
+            recording::Frame::Client(m) => (Direction::FromClient, encode_frame(m)),
+        };
+        let frame = frame.map_err(|e| fail(&e))?;
+        writer
+            .record(direction, record.at, &frame[LENGTH_PREFIX_SIZE..])
+            .map_err(|e| fail(&e))?;
+    }
+    writer.finish().map_err(|e| fail(&e))
+}
+
 /// What a daemon must never do, whatever a client sends.
 #[derive(Debug, thiserror::Error)]
 pub enum Fault {
@@ -148,6 +225,8 @@ pub enum Fault {
     Step(StepError),
     #[error("a published state has a non-finite value for {0}")]
     NonFinite(String),
+    #[error("a recording was misread: {0}")]
+    Recording(String),
 }
 
 /// The daemon never publishes a non-finite state: the world resets before.
@@ -166,15 +245,16 @@ fn check_finite(snapshot: &crate::world::Snapshot) -> Result<(), Fault> {
     Ok(())
 }
 
-/// The inputs the fuzzers keep for `target` (`fuzz/seeds/TARGET`, and every
-/// fixed crash in `fuzz/regressions/TARGET`), so that the normal test
-/// suites — this crate's and those of the crates other targets test — run
-/// them through the target's function without a nightly toolchain.
+/// The inputs the fuzzers keep for `target` (the minimised corpus
+/// `fuzz/corpus/TARGET`, and every fixed crash in `fuzz/regressions/TARGET`),
+/// so that the normal test suites — this crate's and those of the crates
+/// other targets test — run them through the target's function without a
+/// nightly toolchain.
 #[must_use]
 pub fn kept_fuzz_inputs(target: &str) -> Vec<(std::path::PathBuf, Vec<u8>)> {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
     let mut out = Vec::new();
-    for kind in ["seeds", "regressions"] {
+    for kind in ["corpus", "regressions"] {
         let Ok(entries) = std::fs::read_dir(root.join(kind).join(target)) else {
             continue;
         };
@@ -331,16 +411,96 @@ mod tests {
         assert!(h.world().step_count() > 0);
     }
 
+    /// Each target's kept inputs through its function; a target without
+    /// any fails, so that an emptied folder does not pass.
     #[test]
     fn the_fuzzers_kept_inputs_never_fault() {
-        for (path, bytes) in kept_fuzz_inputs("daemon_bytes") {
+        let kept = |target| {
+            let inputs = kept_fuzz_inputs(target);
+            assert!(
+                inputs.len() >= 5,
+                "fuzz/corpus/{target}: {} inputs",
+                inputs.len()
+            );
+            inputs
+        };
+        for (path, bytes) in kept("daemon_bytes") {
             let handled = harness().handle_untrusted_bytes(&bytes);
             assert!(handled.is_ok(), "{}: {handled:?}", path.display());
         }
-        for (path, bytes) in kept_fuzz_inputs("scene") {
+        for (path, bytes) in kept("scene") {
             let text = String::from_utf8_lossy(&bytes);
             let loaded = load_untrusted_scene(&text);
             assert!(loaded.is_ok(), "{}: {loaded:?}", path.display());
         }
+        let mut replayed = 0;
+        for (path, bytes) in kept("recording") {
+            let loaded = load_untrusted_recording(&bytes);
+            assert!(loaded.is_ok(), "{}: {loaded:?}", path.display());
+            replayed += usize::from(loaded.is_ok_and(|l| l.is_some_and(|s| s.states > 0)));
+        }
+        assert!(replayed > 0, "no kept recording serves a state");
+    }
+
+    /// A lock-step recording with the client's frames: two states, a
+    /// refused command between them.
+    fn recording_bytes() -> Vec<u8> {
+        let hello = pb::ServerMessage::from(pb::Hello {
+            timing_mode: "lockstep".into(),
+            ..Default::default()
+        });
+        let mut writer = RecordingWriter::new(
+            Vec::new(),
+            true,
+            &encode_frame(&hello).unwrap()[LENGTH_PREFIX_SIZE..],
+        )
+        .unwrap();
+        let state = |step, applied_seq| {
+            pb::ServerMessage::from(pb::WorldState {
+                step,
+                applied_seq,
+                ..Default::default()
+            })
+        };
+        let at = std::time::Duration::from_millis(10);
+        let client = [
+            pb::ClientMessage::advance(101),
+            pb::ClientMessage::set_pose(102, "blockC", [0.0; 3], 0.0),
+            pb::ClientMessage::advance(103),
+        ];
+        let world = [
+            state(10, 101),
+            pb::ServerMessage::error(
+                102,
+                pb::error::Kind::InvalidCommand,
+                "set_pose: unknown body 'blockC'",
+            ),
+            state(20, 103),
+        ];
+        for (c, w) in client.iter().zip(&world) {
+            let c = encode_frame(c).unwrap();
+            let w = encode_frame(w).unwrap();
+            writer
+                .record(Direction::FromClient, at, &c[LENGTH_PREFIX_SIZE..])
+                .unwrap();
+            writer
+                .record(Direction::FromWorld, at, &w[LENGTH_PREFIX_SIZE..])
+                .unwrap();
+        }
+        writer.finish().unwrap()
+    }
+
+    #[test]
+    fn a_recording_is_read_rewritten_and_played_back_whole() {
+        let bytes = recording_bytes();
+        let served = load_untrusted_recording(&bytes).unwrap().unwrap();
+        assert_eq!(served.states, 2, "{served:?}");
+        assert_eq!(served.differing, 0, "{served:?}");
+        // Cut anywhere inside the records: every whole record still served.
+        let cut = load_untrusted_recording(&bytes[..bytes.len() - 3])
+            .unwrap()
+            .unwrap();
+        assert_eq!(cut.states, 1, "{cut:?}");
+        assert_eq!(load_untrusted_recording(b"PLRECORX").unwrap(), None);
     }
 }

@@ -8,8 +8,8 @@ use std::time::Duration;
 
 use anyhow::{Context, Result};
 use clap::Args;
-use pushlearn_cli::external::server::{refuse, serve, stdout_file, Identity, Requests, ServeError};
-use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
+use pushlearn_cli::external::server::{refuse, serve_driver, stdout_file, Requests};
+use pushlearn_cli::models::{ModelKind, ModelOptions};
 
 /// Serve a built-in model over the learner protocol, so that any driver
 /// that speaks it (another harness, or `pushlearn experiment --learner`)
@@ -150,40 +150,10 @@ fn refuse_stream(stream: TcpStream, max: usize) -> Result<()> {
 
 /// One driver: its Start fixes the publish rate the model is configured for.
 fn serve_one(args: &ServeLearnerArgs, input: impl std::io::Read, output: impl Write) -> Result<()> {
-    let mut requests = Requests::new(input);
-    let (seq, start) = requests.start()?;
-    let job = Job {
-        identity: Identity {
-            name: args.options.report_name(args.model),
-            version: env!("CARGO_PKG_VERSION").to_owned(),
-            // `learner::features::ActuatorYaw`: the gate model's rule.
-            ignores_actuator_yaw: args.model.family() == ModelKind::Gate,
-        },
-        seq,
-        requests,
+    Ok(serve_driver(
+        args.model,
+        &args.options,
+        Requests::new(input),
         output,
-    };
-    Ok(args
-        .model
-        .dispatch(&args.options, start.publish_rate_hz, job)??)
-}
-
-struct Job<R, W> {
-    identity: Identity,
-    seq: u64,
-    requests: Requests<R>,
-    output: W,
-}
-
-impl<R: std::io::Read, W: Write> WithModel for Job<R, W> {
-    type Output = Result<(), ServeError>;
-    fn run<M: learner::Model + 'static>(self, untrained: M) -> Self::Output {
-        serve(
-            untrained,
-            &self.identity,
-            self.seq,
-            self.requests,
-            self.output,
-        )
-    }
+    )?)
 }

@@ -15,6 +15,7 @@
 
 pub mod server;
 pub mod session;
+pub mod untrusted;
 
 use std::cell::{Cell, RefCell};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -134,35 +135,41 @@ impl Shared {
                 spec.source
             )));
         };
-        if hello.protocol_version != lp::ProtocolVersion::ProtocolVersion as i32 {
-            return Err(LearnerError::Hello(format!(
-                "{} speaks learner protocol version {}, the driver version {}",
-                spec.source,
-                hello.protocol_version,
-                lp::ProtocolVersion::ProtocolVersion as i32
-            )));
-        }
-        if hello.name.trim().is_empty() {
-            return Err(LearnerError::Hello(format!(
-                "{} said hello without a name",
-                spec.source
-            )));
-        }
-        let has = |c: lp::Capability| hello.capabilities.contains(&(c as i32));
-        if !has(lp::Capability::Forward) {
-            return Err(LearnerError::Hello(format!(
-                "learner '{}' ({}) does not announce the FORWARD capability, which every experiment needs",
-                hello.name, spec.source
-            )));
-        }
-        let info = LearnerInfo {
-            name: hello.name,
-            version: hello.version,
-            inverse: has(lp::Capability::Inverse),
-            ignores_actuator_yaw: hello.ignores_actuator_yaw,
-        };
-        Ok((session, info))
+        Ok((session, greeting(hello, &spec.source)?))
     }
+}
+
+/// What a learner's Hello says, checked: the protocol version, a name, and
+/// the FORWARD capability every experiment needs.
+fn greeting(hello: lp::Hello, source: &Source) -> Result<LearnerInfo, LearnerError> {
+    if hello.protocol_version != lp::ProtocolVersion::ProtocolVersion as i32 {
+        return Err(LearnerError::Hello(format!(
+            "{} speaks learner protocol version {}, the driver version {}",
+            source,
+            hello.protocol_version,
+            lp::ProtocolVersion::ProtocolVersion as i32
+        )));
+    }
+    if hello.name.trim().is_empty() {
+        return Err(LearnerError::Hello(format!(
+            "{} said hello without a name",
+            source
+        )));
+    }
+    let has = |c: lp::Capability| hello.capabilities.contains(&(c as i32));
+    if !has(lp::Capability::Forward) {
+        return Err(LearnerError::Hello(format!(
+                "learner '{}' ({}) does not announce the FORWARD capability, which every experiment needs",
+                hello.name, source
+            )));
+    }
+    let info = LearnerInfo {
+        name: hello.name,
+        version: hello.version,
+        inverse: has(lp::Capability::Inverse),
+        ignores_actuator_yaw: hello.ignores_actuator_yaw,
+    };
+    Ok(info)
 }
 
 /// A handle on an external learner; see the module documentation.
@@ -448,6 +455,20 @@ fn predicted_poses(prediction: &lp::Prediction, from: &Poses) -> Result<Poses, S
     Ok(Poses { actuator, blocks })
 }
 
+/// The action an Act reply chose, checked: finite.
+fn chosen_action(reply: &lp::ActionReply) -> Result<Action, String> {
+    let a = reply.action.unwrap_or_default();
+    let action = Action::new(a.vx(), a.vy());
+    if action.is_finite() {
+        Ok(action)
+    } else {
+        Err(format!(
+            "chose a non-finite action ({}, {})",
+            action.vx, action.vy
+        ))
+    }
+}
+
 /// Statistics from the protocol's form, read as the reports' serialised form.
 fn stats_of(stats: lp::Stats) -> Result<ModelStats, String> {
     let maps: std::collections::BTreeMap<String, serde_json::Value> = stats
@@ -594,17 +615,16 @@ impl Model for ExternalModel {
     /// `rng` is not drawn from.
     fn act(&mut self, _rng: &mut dyn rand::Rng) -> Action {
         match self.call(Call::Act(lp::Act {})) {
-            Some(Answer::Action(reply)) => {
-                let a = reply.action.unwrap_or_default();
-                let (vx, vy) = (a.vx(), a.vy());
-                if vx.is_finite() && vy.is_finite() {
+            Some(Answer::Action(reply)) => match chosen_action(&reply) {
+                Ok(action) => {
                     self.has_target = reply.has_target;
-                    Action::new(vx, vy)
-                } else {
-                    self.reject("act", format!("chose a non-finite action ({vx}, {vy})"));
+                    action
+                }
+                Err(what) => {
+                    self.reject("act", what);
                     Action::ZERO
                 }
-            }
+            },
             _ => Action::ZERO,
         }
     }

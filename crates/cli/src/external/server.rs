@@ -22,6 +22,8 @@ use pushlearn::wire::pb::learner::{
 };
 use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
 
+use crate::models::{ModelKind, ModelOptions, WithModel};
+
 /// Why serving ended early.
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
@@ -72,9 +74,19 @@ fn frame_of(state: &lp::State) -> Frame {
     }
 }
 
-fn action_of(a: Option<lp::Action>) -> Action {
+/// The call's action; a non-finite one is refused, since a model would
+/// learn it (the driver sends only finite ones, `docs/learner-protocol.md`).
+fn action_of(a: Option<lp::Action>) -> Result<Action, String> {
     let a = a.unwrap_or_default();
-    Action::new(a.vx(), a.vy())
+    let action = Action::new(a.vx(), a.vy());
+    if action.is_finite() {
+        Ok(action)
+    } else {
+        Err(format!(
+            "the action ({}, {}) is not finite",
+            action.vx, action.vy
+        ))
+    }
 }
 
 impl<M: Model> Served<M> {
@@ -118,13 +130,15 @@ impl<M: Model> Served<M> {
                 None
             }
             Call::Update(update) => {
+                let action = action_of(update.action)?;
                 let world = self.resolve(update.state)?;
-                self.model.update(&world, action_of(update.action));
+                self.model.update(&world, action);
                 None
             }
             Call::Predict(predict) => {
+                let action = action_of(predict.action)?;
                 let world = self.resolve(predict.from)?;
-                let next = self.model.predict(&world, action_of(predict.action));
+                let next = self.model.predict(&world, action);
                 let poses = M::poses(&next);
                 self.prediction = Some(next);
                 let body = |id, s: ObjectState| lp::BodyPose {
@@ -382,4 +396,71 @@ pub fn serve<M: Model>(
         }
     }
     Ok(())
+}
+
+/// Serves one driver with a built-in model, as `pushlearn serve-learner`
+/// does on each connection: reads its Start, builds `kind` with `options`
+/// for the publish rate the Start names and [`serve`]s it. A model that
+/// cannot be built (options it does not take) is refused with an Error reply
+/// to the Start naming why, so that the driver can say it.
+///
+/// # Errors
+/// As [`serve`]; and the Start's refusal.
+pub fn serve_driver(
+    kind: ModelKind,
+    options: &ModelOptions,
+    mut requests: Requests<impl Read>,
+    mut output: impl Write,
+) -> Result<(), ServeError> {
+    let (seq, start) = requests.start()?;
+    let job = Driver {
+        identity: Identity {
+            name: options.report_name(kind),
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+            // `learner::features::ActuatorYaw`: the gate model's rule.
+            ignores_actuator_yaw: kind.family() == ModelKind::Gate,
+        },
+        seq,
+        requests,
+        output: &mut output,
+    };
+    match kind.dispatch(options, start.publish_rate_hz, job) {
+        Ok(served) => served,
+        Err(err) => {
+            let why = format!(
+                "cannot serve the {kind} model at {} Hz: {err}",
+                start.publish_rate_hz
+            );
+            send(
+                &mut output,
+                seq,
+                Answer::Error(lp::Error {
+                    message: why.clone(),
+                }),
+            )?;
+            Err(ServeError::Request { seq, why })
+        }
+    }
+}
+
+/// One driver's model, built by [`ModelKind::dispatch`].
+struct Driver<'o, R, W> {
+    identity: Identity,
+    seq: u64,
+    requests: Requests<R>,
+    output: &'o mut W,
+}
+
+impl<R: Read, W: Write> WithModel for Driver<'_, R, W> {
+    type Output = Result<(), ServeError>;
+
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        serve(
+            untrained,
+            &self.identity,
+            self.seq,
+            self.requests,
+            self.output,
+        )
+    }
 }

@@ -695,7 +695,7 @@ mod tests {
         let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("sweep_file");
         assert!(
             kept.len() >= 3,
-            "fuzz/seeds/sweep_file has {} inputs",
+            "fuzz/corpus/sweep_file has {} inputs",
             kept.len()
         );
         for (path, bytes) in kept {

@@ -4,7 +4,7 @@
 use std::net::IpAddr;
 use std::time::Duration;
 
-use tokio::io::{AsyncBufReadExt, AsyncReadExt, AsyncWriteExt, BufReader};
+use tokio::io::{AsyncBufReadExt, AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt, BufReader};
 use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::handshake::derive_accept_key;
 use tokio_tungstenite::tungstenite::protocol::{Role, WebSocketConfig};
@@ -14,7 +14,7 @@ use super::PAGE;
 
 /// A page's WebSocket. The buffered reader keeps whatever the browser sent
 /// after the request head.
-pub type Socket = WebSocketStream<BufReader<TcpStream>>;
+pub type Socket<S = TcpStream> = WebSocketStream<BufReader<S>>;
 
 /// Longest request head read; the page's own requests are under 1 KiB.
 const MAX_HEAD: u64 = 16 * 1024;
@@ -40,19 +40,18 @@ pub enum HttpError {
 }
 
 /// What became of a connection.
-pub enum Accepted {
+pub enum Accepted<S = TcpStream> {
     /// A response was sent and the connection closed.
     Served,
     /// The page opened its WebSocket (boxed: the stream is large).
-    WebSocket(Box<Socket>),
+    WebSocket(Box<Socket<S>>),
 }
 
-/// Reads one request and answers it: the page, the WebSocket handshake, or
-/// an error status.
-pub async fn accept(stream: TcpStream) -> Result<Accepted, HttpError> {
-    if let Err(err) = stream.set_nodelay(true) {
-        tracing::debug!("cannot set TCP_NODELAY: {err}");
-    }
+/// Reads one request from a browser's connection and answers it: the page,
+/// the WebSocket handshake, or an error status.
+pub async fn accept<S: AsyncRead + AsyncWrite + Unpin>(
+    stream: S,
+) -> Result<Accepted<S>, HttpError> {
     let mut stream = BufReader::new(stream);
     let head = tokio::time::timeout(REQUEST_TIMEOUT, read_head(&mut stream))
         .await
@@ -111,7 +110,7 @@ pub async fn turn_away(stream: TcpStream, max: usize) -> Result<(), HttpError> {
 }
 
 /// The request head, up to and including the empty line.
-async fn read_head(stream: &mut BufReader<TcpStream>) -> Result<Vec<u8>, HttpError> {
+async fn read_head<S: AsyncRead + Unpin>(stream: &mut BufReader<S>) -> Result<Vec<u8>, HttpError> {
     let mut limited = (&mut *stream).take(MAX_HEAD);
     let mut head = Vec::new();
     loop {
@@ -129,8 +128,8 @@ async fn read_head(stream: &mut BufReader<TcpStream>) -> Result<Vec<u8>, HttpErr
     }
 }
 
-async fn respond(
-    stream: &mut BufReader<TcpStream>,
+async fn respond<S: AsyncRead + AsyncWrite + Unpin>(
+    stream: &mut BufReader<S>,
     status: &str,
     content_type: &str,
     body: &str,

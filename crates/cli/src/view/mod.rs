@@ -12,6 +12,7 @@
 
 mod http;
 mod json;
+pub mod untrusted;
 
 use std::future::Future;
 use std::net::SocketAddr;
@@ -306,6 +307,39 @@ async fn pump(
     }
 }
 
+/// What a tab sent, and what the viewer does about it.
+#[derive(Debug, PartialEq)]
+enum FromTab {
+    /// A control to forward to the world.
+    Control(Control),
+    /// A message that is not a control: this error goes back to the tab.
+    Answer(Utf8Bytes),
+    /// The tab broke a limit (a message above [`http::MAX_WS_MESSAGE`]):
+    /// the viewer closes with this frame, so that the tab learns why.
+    Close(CloseFrame),
+    /// The tab closed, or its connection broke.
+    Gone,
+    /// Pings (answered by the library), pongs and binary messages.
+    Nothing,
+}
+
+fn from_tab(incoming: Option<Result<Message, tokio_tungstenite::tungstenite::Error>>) -> FromTab {
+    match incoming {
+        Some(Ok(Message::Text(text))) => match Control::parse(&text) {
+            Ok(control) => FromTab::Control(control),
+            Err(message) => FromTab::Answer(Outgoing::Error { message }.to_json()),
+        },
+        Some(Err(tokio_tungstenite::tungstenite::Error::Capacity(err))) => {
+            FromTab::Close(CloseFrame {
+                code: CloseCode::Size,
+                reason: format!("{err}").into(),
+            })
+        }
+        Some(Ok(Message::Close(_)) | Err(_)) | None => FromTab::Gone,
+        Some(Ok(_)) => FromTab::Nothing,
+    }
+}
+
 impl Control {
     fn payload(self) -> Payload {
         match self {
@@ -318,6 +352,9 @@ impl Control {
 
 /// One browser connection: the page, a WebSocket, or an error response.
 async fn serve_browser(stream: TcpStream, hub: &Hub) -> Result<(), http::HttpError> {
+    if let Err(err) = stream.set_nodelay(true) {
+        tracing::debug!("cannot set TCP_NODELAY: {err}");
+    }
     match http::accept(stream).await? {
         http::Accepted::Served => Ok(()),
         http::Accepted::WebSocket(socket) => {
@@ -370,34 +407,20 @@ async fn follow_tab(mut socket: http::Socket, hub: &Hub) {
                 Err(broadcast::error::RecvError::Lagged(_)) => continue,
                 Err(broadcast::error::RecvError::Closed) => return,
             },
-            incoming = socket.next() => match incoming {
-                Some(Ok(Message::Text(text))) => {
-                    match Control::parse(&text) {
-                        Ok(control) => {
-                            if hub.controls.try_send(control).is_err() {
-                                hub.event(&Outgoing::refused(control, "too many controls waiting; try again".into()));
-                            }
-                        }
-                        Err(message) => {
-                            let reply = Outgoing::Error { message }.to_json();
-                            if socket.send(Message::Text(reply)).await.is_err() {
-                                return;
-                            }
-                        }
+            incoming = socket.next() => match from_tab(incoming) {
+                FromTab::Control(control) => {
+                    if hub.controls.try_send(control).is_err() {
+                        hub.event(&Outgoing::refused(control, "too many controls waiting; try again".into()));
                     }
                     continue;
                 }
-                Some(Err(tokio_tungstenite::tungstenite::Error::Capacity(err))) => {
-                    // Said before closing, so that a client learns why.
-                    let _ = socket.close(Some(CloseFrame {
-                        code: CloseCode::Size,
-                        reason: format!("{err}").into(),
-                    })).await;
+                FromTab::Answer(reply) => reply,
+                FromTab::Close(frame) => {
+                    let _ = socket.close(Some(frame)).await;
                     return;
                 }
-                Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
-                // Pings are answered by the library; nothing else is expected.
-                Some(Ok(_)) => continue,
+                FromTab::Gone => return,
+                FromTab::Nothing => continue,
             },
         };
         if socket.send(Message::Text(outgoing)).await.is_err() {

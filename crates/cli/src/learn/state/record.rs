@@ -264,7 +264,7 @@ mod tests {
         let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("journal");
         assert!(
             kept.len() >= 10,
-            "fuzz/seeds/journal has {} inputs",
+            "fuzz/corpus/journal has {} inputs",
             kept.len()
         );
         for (path, bytes) in kept {
