@@ -229,6 +229,10 @@ pub struct SimClient {
     /// Barriers sent whose answer has not been read yet; their `Error`s are
     /// expected and never shown to callers.
     pending_barriers: BTreeSet<u64>,
+    /// The `publish_seq` of the latest state received.
+    last_publish_seq: Option<u64>,
+    /// See [`SimClient::missed_states`].
+    missed_states: u64,
 }
 
 impl SimClient {
@@ -310,6 +314,8 @@ impl SimClient {
             seqs: SeqCounter::starting_at(options.first_seq),
             timeout: options.timeout,
             pending_barriers: BTreeSet::new(),
+            last_publish_seq: None,
+            missed_states: 0,
         })
     }
 
@@ -327,6 +333,14 @@ impl SimClient {
     /// Changes the limit for each wait; `None` waits forever.
     pub fn set_timeout(&mut self, timeout: Option<Duration>) {
         self.timeout = timeout;
+    }
+
+    /// States the world published after the first this client received
+    /// but never delivered to it: the gaps in `publish_seq`, which the world
+    /// leaves when a client's queue is full (`docs/protocol.md` §7). Every
+    /// state received counts, also those a wait skipped.
+    pub fn missed_states(&self) -> u64 {
+        self.missed_states
     }
 
     /// The seq of the last frame sent (commands and barriers).
@@ -514,7 +528,15 @@ impl SimClient {
                 .await??
                 .ok_or(ClientError::Closed)?;
             match message.payload {
-                Some(payload) => return Ok(payload),
+                Some(payload) => {
+                    if let server_message::Payload::WorldState(state) = &payload {
+                        if let Some(last) = self.last_publish_seq {
+                            self.missed_states += state.publish_seq.saturating_sub(last + 1);
+                        }
+                        self.last_publish_seq = Some(state.publish_seq);
+                    }
+                    return Ok(payload);
+                }
                 None => tracing::debug!("skipping a ServerMessage without a known payload"),
             }
         }

@@ -752,6 +752,7 @@ fn sixty_four_clients_at_100_hz_miss_nothing_and_the_daemons_memory_stays_bounde
     let options = pushlearn_cli::load::LoadOptions {
         clients: 64,
         duration: Duration::from_secs(2),
+        control: true,
         pid: Some(daemon.pid()),
         sample_every: Duration::from_millis(250),
     };
@@ -766,16 +767,103 @@ fn sixty_four_clients_at_100_hz_miss_nothing_and_the_daemons_memory_stays_bounde
         })
         .expect("the load run finishes in time")
         .expect("load run");
-    assert!(report.controller.states > 0, "{report}");
-    assert_eq!(report.controller.missed, 0, "{report}");
+    let controller = report.controller.as_ref().expect("a controlling client");
+    assert!(controller.counts.states > 0, "{report}");
+    assert_eq!(controller.counts.missed, 0, "{report}");
     assert_eq!(report.subscribers_lost, 0, "{report}");
     assert!(report.subscriber_min_states > 0, "{report}");
+    // Every subscriber's intervals are in the one distribution.
+    assert_eq!(
+        report.subscriber_intervals.messages,
+        report.subscribers.states - 63,
+        "{report}"
+    );
     // Bounded: whatever happens, 64 queues of 1024 states (about 0.3 KiB
     // each) are all the daemon may hold on to.
     let rss: Vec<u64> = report.rss_kib.iter().map(|s| s.1).collect();
     assert!(rss.len() >= 2, "{report}");
     let growth = rss.iter().max().unwrap_or(&0) - rss[0];
     assert!(growth < 64 * 1024, "RSS grew by {growth} KiB: {report}");
+}
+
+/// The reduced version of the documented ten-minute soak
+/// (`docs/reliability.md`, "Soak"): `pushlearn ctl soak` for 5 s, a real
+/// learning, acting `pushlearn learn --state` beside 64 subscribers of a
+/// realtime world at 100 states a second, its journal compacted every 100
+/// records.
+#[test]
+fn a_soak_of_a_learner_beside_64_subscribers_misses_nothing_and_keeps_its_journal_bounded() {
+    let daemon = Daemon::start(&["--real-time-rate", "1000", "--max-clients", "80"]);
+    let plots = TempDir::new("soak-plots");
+    let pid = daemon.pid().to_string();
+    let out = crate::process::ctl(
+        daemon.addr,
+        &[
+            "--json",
+            "soak",
+            "--subscribers",
+            "64",
+            "--seconds",
+            "5",
+            "--sample-every",
+            "0.5",
+            "--snapshot-every",
+            "100",
+            "--pid",
+            &pid,
+            "--plots",
+            &plots.file(""),
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "ctl soak failed:\n{}",
+        text(&out.stderr)
+    );
+    let report: pushlearn_cli::soak::SoakReport =
+        serde_json::from_slice(&out.stdout).expect("the soak's JSON report");
+    let learner = &report.learner;
+    // The controlling client, the learner, misses no state and stops
+    // cleanly on SIGTERM with every record it handled on disk.
+    assert!(learner.states >= 400, "{report}");
+    assert_eq!(learner.missed, 0, "{report}");
+    assert_eq!(learner.signal.as_deref(), Some("SIGTERM"), "{report}");
+    assert!(
+        learner.records_on_disk.is_some_and(|n| n >= learner.states),
+        "{report}"
+    );
+    let load = &report.load;
+    assert!(load.controller.is_none(), "{report}");
+    assert_eq!(load.subscribers.missed, 0, "{report}");
+    assert_eq!(load.subscribers_lost, 0, "{report}");
+    assert!(load.subscriber_min_states >= 400, "{report}");
+    assert!((5.0..10.0).contains(&load.seconds), "{report}");
+    assert!((90.0..110.0).contains(&load.publish_rate_wall), "{report}");
+    // Sampled throughout; the journal compacted: never more than two
+    // snapshot intervals (and what queues while a snapshot is written), far
+    // fewer than the records written.
+    assert!(report.samples.len() >= 8, "{report}");
+    assert!(load.rss_kib.len() >= 8, "{report}");
+    assert!(
+        report.journal_max() <= report.journal_bound() + 50,
+        "{report}"
+    );
+    assert!(report.journal_max() < learner.states / 2, "{report}");
+    // Bounded memory: the learner's model grows by a few nodes a second,
+    // far below this; the world's queues hold at most 64 × 1024 states.
+    let growth = |series: Vec<u64>| series.iter().max().unwrap_or(&0) - series[0];
+    let learner_growth = growth(report.samples.iter().map(|s| s.learner_rss_kib).collect());
+    assert!(
+        learner_growth < 16 * 1024,
+        "learner RSS grew by {learner_growth} KiB: {report}"
+    );
+    let world_growth = growth(load.rss_kib.iter().map(|s| s.1).collect());
+    assert!(
+        world_growth < 64 * 1024,
+        "world RSS grew by {world_growth} KiB: {report}"
+    );
+    let png = std::fs::read(plots.0.join("soak.png")).expect("the soak's figure");
+    assert!(png.starts_with(b"\x89PNG"), "soak.png is no PNG");
 }
 
 /// The `pushlearn-sim` children of process `parent` (from `/proc`).

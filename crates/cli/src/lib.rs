@@ -4,6 +4,8 @@
 //! * [`experiment`]: the thesis's experiments over the sockets;
 //! * [`learn`]: the learner daemon;
 //! * [`load`]: a load test of a world daemon (`pushlearn ctl load`);
+//! * [`soak`]: a long run of a learning daemon beside many subscribers
+//!   (`pushlearn ctl soak`);
 //! * [`models`]: the learners by name;
 //! * [`output`]: output paths checked before the work that fills them, and
 //!   files written whole (temporary name, rename);
@@ -34,6 +36,7 @@ pub mod process;
 pub mod report;
 pub mod reproduce;
 pub mod results;
+pub mod soak;
 pub mod spec;
 pub mod sweep;
 pub mod view;

@@ -1,9 +1,10 @@
 //! A load test of a running world daemon (`pushlearn ctl load`): many
-//! subscribers at once plus one controlling client that sends a Move for
-//! every state, as a learner does. Reports what each saw — missed states
-//! (gaps in `publish_seq`), intervals between states against the real-time
-//! budget — and the daemon's resident memory over time
-//! (`docs/reliability.md`, "Load").
+//! subscribers at once plus, optionally, one controlling client that sends a
+//! Move for every state, as a learner does. Reports what each saw — missed
+//! states (gaps in `publish_seq`), intervals between states against the
+//! real-time budget — and the daemon's resident memory over time
+//! (`docs/reliability.md`, "Load"). `pushlearn ctl soak` runs it beside a
+//! real learner.
 
 use std::time::{Duration, Instant};
 
@@ -20,6 +21,10 @@ pub struct LoadOptions {
     /// Connections in all, the controlling one included.
     pub clients: usize,
     pub duration: Duration,
+    /// The first connection sends a Move for every state it receives, as a
+    /// learner does. Without, every connection only reads: something else
+    /// controls the world (`pushlearn ctl soak` runs a real learner).
+    pub control: bool,
     /// The daemon's process id, whose RSS is sampled (`None`: this
     /// process's, for a daemon served in-process).
     pub pid: Option<u32>,
@@ -35,19 +40,29 @@ pub struct ClientCounts {
     pub missed: u64,
 }
 
+/// The controlling client's view.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Controller {
+    pub counts: ClientCounts,
+    /// Intervals between its states, against the 2/f budget.
+    pub intervals: WorkSummary,
+}
+
 /// The outcome.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LoadReport {
     pub clients: usize,
     pub seconds: f64,
-    /// The controlling client (a Move per state).
-    pub controller: ClientCounts,
-    /// Intervals between the controller's states, against the 2/f budget.
-    pub intervals: WorkSummary,
+    /// The controlling client (a Move per state), if there was one.
+    pub controller: Option<Controller>,
     /// Publishes per wall-clock second.
     pub publish_rate_wall: f64,
     /// Over all other clients.
     pub subscribers: ClientCounts,
+    /// Intervals between consecutive states at every subscriber, all in one
+    /// distribution, against the 2/f budget: how evenly the world's states
+    /// reached its readers.
+    pub subscriber_intervals: WorkSummary,
     /// The fewest states any subscriber received.
     pub subscriber_min_states: u64,
     /// Subscribers whose connection ended early.
@@ -74,14 +89,6 @@ pub fn rss_kib(pid: Option<u32>) -> Option<u64> {
         .ok()
 }
 
-fn count(counts: &mut ClientCounts, last: &mut Option<u64>, publish_seq: u64) {
-    counts.states += 1;
-    if let Some(prev) = *last {
-        counts.missed += publish_seq.saturating_sub(prev + 1);
-    }
-    *last = Some(publish_seq);
-}
-
 async fn connect(addr: &str) -> Result<SimClient, ClientError> {
     let options = ClientOptions {
         first_seq: seq_base_from_clock(),
@@ -90,119 +97,207 @@ async fn connect(addr: &str) -> Result<SimClient, ClientError> {
     SimClient::connect_with(addr, options).await
 }
 
-/// A subscriber: reads states until `until`.
-async fn subscribe(mut client: SimClient, until: Instant) -> (ClientCounts, bool) {
-    let mut counts = ClientCounts::default();
-    let mut last = None;
-    loop {
-        let left = until.saturating_duration_since(Instant::now());
-        if left.is_zero() {
-            return (counts, true);
+/// What one client received.
+#[derive(Default)]
+struct Received {
+    states: u64,
+    /// The first and the latest `publish_seq`.
+    seqs: Option<(u64, u64)>,
+    intervals: WorkTimes,
+    previous: Option<Instant>,
+}
+
+impl Received {
+    fn record(&mut self, publish_seq: u64, budget: Duration) {
+        let now = Instant::now();
+        if let Some(previous) = self.previous {
+            self.intervals.record(now - previous, budget);
         }
-        client.set_timeout(Some(left));
-        match client.next_state().await {
-            Ok(state) => count(&mut counts, &mut last, state.publish_seq),
-            Err(ClientError::Timeout { .. }) => return (counts, true),
-            Err(_) => return (counts, false),
+        self.previous = Some(now);
+        self.states += 1;
+        let first = self.seqs.map_or(publish_seq, |(first, _)| first);
+        self.seqs = Some((first, publish_seq));
+    }
+
+    fn counts(&self, client: &SimClient) -> ClientCounts {
+        ClientCounts {
+            states: self.states,
+            missed: client.missed_states(),
         }
     }
 }
 
-/// Connects `options.clients` clients to the realtime world at `addr`; the
-/// first sends a Move for every state it receives (alternating directions
-/// every second so that the actuator stays in its bounds).
+/// A subscriber: reads states until `until`. Returns what it received, its
+/// counts and whether it lasted.
+async fn subscribe(
+    mut client: SimClient,
+    until: Instant,
+    budget: Duration,
+) -> (Received, ClientCounts, bool) {
+    let mut received = Received::default();
+    let lasted = loop {
+        let left = until.saturating_duration_since(Instant::now());
+        if left.is_zero() {
+            break true;
+        }
+        client.set_timeout(Some(left));
+        match client.next_state().await {
+            Ok(state) => received.record(state.publish_seq, budget),
+            Err(ClientError::Timeout { .. }) => break true,
+            Err(_) => break false,
+        }
+    };
+    let counts = received.counts(&client);
+    (received, counts, lasted)
+}
+
+/// Samples `probe` every `every` until `until`; each sample is tagged with
+/// the seconds since `start`.
+pub async fn sample_until<T>(
+    start: Instant,
+    until: Instant,
+    every: Duration,
+    mut probe: impl FnMut() -> Option<T>,
+) -> Vec<(f64, T)> {
+    let mut samples = Vec::new();
+    let mut tick = tokio::time::interval(every);
+    while Instant::now() < until {
+        tick.tick().await;
+        if let Some(sample) = probe() {
+            samples.push((start.elapsed().as_secs_f64(), sample));
+        }
+    }
+    samples
+}
+
+/// Connects `options.clients` clients to the realtime world at `addr`; with
+/// `options.control` the first sends a Move for every state it receives
+/// (alternating directions every second so that the actuator stays in its
+/// bounds), the others only read.
 ///
 /// # Errors
 /// Connecting fails, or the controlling client's connection does.
 pub async fn run_load(addr: &str, options: &LoadOptions) -> Result<LoadReport, ClientError> {
-    let mut controller = connect(addr).await?;
-    let rate = controller.hello().publish_rate;
-    let mut subscribers = Vec::new();
-    for _ in 1..options.clients {
-        subscribers.push(connect(addr).await?);
+    let mut clients = Vec::with_capacity(options.clients);
+    for _ in 0..options.clients {
+        clients.push(connect(addr).await?);
     }
+    let Some(rate) = clients.first().map(|c| c.hello().publish_rate) else {
+        return Err(ClientError::Protocol("a load run needs a client".into()));
+    };
+    let limit = budget(rate);
+    let controller = if options.control {
+        Some(clients.remove(0))
+    } else {
+        None
+    };
     let start = Instant::now();
     let until = start + options.duration;
-    let tasks: Vec<_> = subscribers
+    let tasks: Vec<_> = clients
         .into_iter()
-        .map(|client| tokio::spawn(subscribe(client, until)))
+        .map(|client| tokio::spawn(subscribe(client, until, limit)))
         .collect();
     let pid = options.pid;
-    let sample_every = options.sample_every;
-    let sampler = tokio::spawn(async move {
-        let mut samples = Vec::new();
-        let mut tick = tokio::time::interval(sample_every);
-        while Instant::now() < until {
-            tick.tick().await;
-            if let Some(kib) = rss_kib(pid) {
-                samples.push((start.elapsed().as_secs_f64(), kib));
-            }
-        }
-        samples
-    });
+    let sampler = tokio::spawn(sample_until(
+        start,
+        until,
+        options.sample_every,
+        move || rss_kib(pid),
+    ));
+    let controller = match controller {
+        Some(client) => Some(control(client, until, limit, rate).await?),
+        None => None,
+    };
 
-    let mut counts = ClientCounts::default();
-    let mut last = None;
+    let mut seqs = controller.as_ref().and_then(|(received, _)| received.seqs);
+    let mut report = LoadReport {
+        clients: options.clients,
+        seconds: 0.0,
+        controller: controller.map(|(received, counts)| Controller {
+            counts,
+            intervals: received.intervals.summary(),
+        }),
+        publish_rate_wall: 0.0,
+        subscribers: ClientCounts::default(),
+        subscriber_intervals: WorkSummary::default(),
+        subscriber_min_states: u64::MAX,
+        subscribers_lost: 0,
+        rss_kib: sampler.await.unwrap_or_default(),
+    };
     let mut intervals = WorkTimes::default();
-    let limit = budget(rate);
-    let mut previous: Option<Instant> = None;
-    let mut first_last_seq = (None, 0);
+    let mut subscribers = 0;
+    for task in tasks {
+        let Ok((received, counts, lasted)) = task.await else {
+            report.subscribers_lost += 1;
+            continue;
+        };
+        subscribers += 1;
+        report.subscribers.states += counts.states;
+        report.subscribers.missed += counts.missed;
+        report.subscriber_min_states = report.subscriber_min_states.min(counts.states);
+        report.subscribers_lost += usize::from(!lasted);
+        intervals += received.intervals;
+        if let Some((first, last)) = received.seqs {
+            seqs = Some(seqs.map_or((first, last), |(f, l)| (f.min(first), l.max(last))));
+        }
+    }
+    if subscribers == 0 {
+        report.subscriber_min_states = 0;
+    }
+    // Every client has read until the end.
+    report.seconds = start.elapsed().as_secs_f64();
+    report.subscriber_intervals = intervals.summary();
+    report.publish_rate_wall =
+        seqs.map_or(0.0, |(first, last)| (last - first) as f64 / report.seconds);
+    Ok(report)
+}
+
+/// The controlling client: a Move for every state until `until`, then the
+/// actuator stopped.
+async fn control(
+    mut client: SimClient,
+    until: Instant,
+    limit: Duration,
+    rate: u32,
+) -> Result<(Received, ClientCounts), ClientError> {
+    let mut received = Received::default();
     let per_second = u64::from(rate.max(1));
     loop {
         let left = until.saturating_duration_since(Instant::now());
         if left.is_zero() {
             break;
         }
-        controller.set_timeout(Some(left));
-        let state = match controller.next_state().await {
+        client.set_timeout(Some(left));
+        let state = match client.next_state().await {
             Ok(state) => state,
             Err(ClientError::Timeout { .. }) => break,
             Err(err) => return Err(err),
         };
-        let now = Instant::now();
-        if let Some(previous) = previous {
-            intervals.record(now - previous, limit);
-        }
-        previous = Some(now);
-        count(&mut counts, &mut last, state.publish_seq);
-        first_last_seq.0.get_or_insert(state.publish_seq);
-        first_last_seq.1 = state.publish_seq;
-        let direction = if (counts.states / per_second) % 2 == 0 {
+        received.record(state.publish_seq, limit);
+        let direction = if (received.states / per_second) % 2 == 0 {
             0.1
         } else {
             -0.1
         };
-        controller.send(Payload::move_(0.0, direction)).await?;
+        client.send(Payload::move_(0.0, direction)).await?;
     }
-    let seconds = start.elapsed().as_secs_f64();
-    controller.set_timeout(Some(Duration::from_secs(10)));
-    controller.send(Payload::move_(0.0, 0.0)).await?;
-    controller.sync().await?;
+    client.set_timeout(Some(Duration::from_secs(10)));
+    client.send(Payload::move_(0.0, 0.0)).await?;
+    client.sync().await?;
+    let counts = received.counts(&client);
+    Ok((received, counts))
+}
 
-    let mut report = LoadReport {
-        clients: options.clients,
-        seconds,
-        controller: counts,
-        intervals: intervals.summary(),
-        publish_rate_wall: first_last_seq
-            .0
-            .map_or(0.0, |first| (first_last_seq.1 - first) as f64 / seconds),
-        subscribers: ClientCounts::default(),
-        subscriber_min_states: u64::MAX,
-        subscribers_lost: 0,
-        rss_kib: sampler.await.unwrap_or_default(),
-    };
-    for task in tasks {
-        let (c, finished) = task.await.unwrap_or_default();
-        report.subscribers.states += c.states;
-        report.subscribers.missed += c.missed;
-        report.subscriber_min_states = report.subscriber_min_states.min(c.states);
-        report.subscribers_lost += usize::from(!finished);
-    }
-    if options.clients <= 1 {
-        report.subscriber_min_states = 0;
-    }
-    Ok(report)
+/// `p50 …, p99 …, max … ms, N (x %) over the 2/f budget`.
+fn describe_intervals(intervals: &WorkSummary) -> String {
+    format!(
+        "p50 {:.3} ms, p99 {:.3} ms, max {:.3} ms, {} ({:.4} %) over the 2/f budget",
+        intervals.p50_ms,
+        intervals.p99_ms,
+        intervals.max_ms,
+        intervals.too_slow,
+        100.0 * intervals.too_slow_fraction
+    )
 }
 
 impl std::fmt::Display for LoadReport {
@@ -212,26 +307,25 @@ impl std::fmt::Display for LoadReport {
             "{} clients for {:.1} s; the world published {:.1} states per second",
             self.clients, self.seconds, self.publish_rate_wall
         )?;
+        if let Some(controller) = &self.controller {
+            writeln!(
+                f,
+                "controlling client: {} states, {} missed; intervals: {}",
+                controller.counts.states,
+                controller.counts.missed,
+                describe_intervals(&controller.intervals)
+            )?;
+        }
         writeln!(
             f,
-            "controlling client: {} states, {} missed; intervals: p50 {:.3} ms, p99 {:.3} ms, \
-             max {:.3} ms, {} ({:.4} %) over the 2/f budget",
-            self.controller.states,
-            self.controller.missed,
-            self.intervals.p50_ms,
-            self.intervals.p99_ms,
-            self.intervals.max_ms,
-            self.intervals.too_slow,
-            100.0 * self.intervals.too_slow_fraction
-        )?;
-        writeln!(
-            f,
-            "{} subscribers: {} states, {} missed, at least {} each, {} disconnected early",
-            self.clients.saturating_sub(1),
+            "{} subscribers: {} states, {} missed, at least {} each, {} disconnected early; \
+             intervals: {}",
+            self.clients - usize::from(self.controller.is_some()),
             self.subscribers.states,
             self.subscribers.missed,
             self.subscriber_min_states,
-            self.subscribers_lost
+            self.subscribers_lost,
+            describe_intervals(&self.subscriber_intervals)
         )?;
         match (self.rss_kib.first(), self.rss_kib.iter().map(|s| s.1).max()) {
             (Some(first), Some(max)) => write!(

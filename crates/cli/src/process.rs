@@ -17,3 +17,24 @@ pub fn kill_group(child: &mut Child) {
     let _ = child.kill();
     let _ = child.wait();
 }
+
+/// Sends `child` the signal `name` (as `kill -s` takes it: `TERM`, `INT`)
+/// through the system's `kill`: without `unsafe` there is no `kill(2)` here.
+///
+/// # Errors
+/// `kill` cannot be run or fails (the process has been reaped).
+pub fn signal(child: &Child, name: &str) -> std::io::Result<()> {
+    let status = Command::new("kill")
+        .args(["-s", name, &child.id().to_string()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(std::io::Error::other(format!(
+            "kill -s {name} {} failed ({status})",
+            child.id()
+        )))
+    }
+}

@@ -15,7 +15,7 @@ use pushlearn_cli::learn::state::{
     StateLock, DEFAULT_SNAPSHOT_EVERY,
 };
 use pushlearn_cli::learn::{
-    EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop,
+    EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop, StopReport,
 };
 use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
 
@@ -125,6 +125,13 @@ pub struct LearnArgs {
     #[arg(long, value_name = "FILE")]
     save_model: Option<PathBuf>,
 
+    /// When the daemon stops cleanly, write its summary to FILE as JSON:
+    /// why it stopped, states handled and missed (gaps in the world's
+    /// publish_seq), reconnections, work per state, attempts and, with
+    /// --state, the records on disk.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+
     /// Seed of the planner's exploration.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -231,6 +238,9 @@ fn check_outputs(args: &LearnArgs) -> Result<Option<StateLock>> {
     if let Some(file) = &args.save_model {
         pushlearn_cli::output::check_file(file, "--save-model")?;
     }
+    if let Some(file) = &args.json {
+        pushlearn_cli::output::check_file(file, "--json")?;
+    }
     if let Some(dir) = &args.state {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create the --state directory {}", dir.display()))?;
@@ -297,12 +307,11 @@ impl<'a> WithModel for Daemon<'a> {
             };
             let (Some(dir), Some(lock)) = (&args.state, lock) else {
                 let mut learner = fresh();
-                let signal = attached(client, &mut learner, args).await?;
+                let mut report = attached(client, &mut learner, args).await?;
                 finish(&learner)?;
                 save(&learner, &settings, args)?;
-                if let Some(signal) = signal {
-                    eprintln!("pushlearn learn: {signal}: stopped cleanly");
-                }
+                report.attempts = attempts(&learner);
+                write_report(&report, args)?;
                 return Ok(());
             };
             let (mut durable, opened) =
@@ -315,18 +324,14 @@ impl<'a> WithModel for Daemon<'a> {
                     eprintln!("memory: resumed from {}: {recovery}", dir.display());
                 }
             }
-            let signal = attached(client, &mut durable, args).await?;
+            let mut report = attached(client, &mut durable, args).await?;
             finish(durable.learner())?;
             save(durable.learner(), &settings, args)?;
+            report.attempts = attempts(durable.learner());
             let stored = durable.close()?;
             println!("memory: {stored} records on disk in {}", dir.display());
-            if let Some(signal) = signal {
-                eprintln!(
-                    "pushlearn learn: {signal}: stopped cleanly; journal flushed and final \
-                     snapshot written ({stored} records in {})",
-                    dir.display()
-                );
-            }
+            report.records_on_disk = Some(stored);
+            write_report(&report, args)?;
             Ok(())
         })
     }
@@ -397,13 +402,14 @@ fn stop_signal() -> Result<impl std::future::Future<Output = &'static str>> {
     })
 }
 
-/// Serves until stopped, reconnecting as --reconnect-for allows. Returns the
-/// signal that stopped it, if one did.
+/// Serves until stopped, reconnecting as --reconnect-for allows. Returns how
+/// it ended (for --json; the attempts and the records on disk are the
+/// caller's to add).
 async fn attached(
     client: SimClient,
     learner: &mut impl OnState,
     args: &LearnArgs,
-) -> Result<Option<&'static str>> {
+) -> Result<StopReport> {
     let signal = stop_signal()?;
     let caught = std::cell::Cell::new(None);
     let shutdown = async {
@@ -454,10 +460,54 @@ async fn attached(
             served.states, served.reconnects, served.world_errors
         );
     }
+    if served.missed > 0 {
+        println!(
+            "{} states the world published never reached the learner (it fell behind)",
+            served.missed
+        );
+    }
     if let Some(client) = served.client {
         client.close().await?;
     }
-    Ok(caught.get())
+    Ok(StopReport {
+        stop: served.stop,
+        signal: caught.get().map(str::to_owned),
+        states: served.states,
+        missed: served.missed,
+        reconnects: served.reconnects,
+        world_errors: served.world_errors,
+        work: served.summary,
+        attempts: None,
+        records_on_disk: None,
+    })
+}
+
+/// With a target: the attempts ended, and of them reached.
+fn attempts<M: Model>(learner: &Learner<M>) -> Option<(usize, usize)> {
+    learner
+        .episodes()
+        .map(|episodes| (episodes.ended.len(), episodes.reached()))
+}
+
+/// Says how a clean stop went and writes --json: the last words of a
+/// daemon that ends well.
+fn write_report(report: &StopReport, args: &LearnArgs) -> Result<()> {
+    if let Some(file) = &args.json {
+        let json = serde_json::to_vec_pretty(report)?;
+        pushlearn_cli::output::write_atomically(file, &json)
+            .with_context(|| format!("cannot write --json {}", file.display()))?;
+    }
+    if let Some(signal) = &report.signal {
+        match (report.records_on_disk, &args.state) {
+            (Some(stored), Some(dir)) => eprintln!(
+                "pushlearn learn: {signal}: stopped cleanly; journal flushed and final \
+                 snapshot written ({stored} records in {})",
+                dir.display()
+            ),
+            _ => eprintln!("pushlearn learn: {signal}: stopped cleanly"),
+        }
+    }
+    Ok(())
 }
 
 fn describe_progress(episodes: &Episodes) -> String {

@@ -338,6 +338,15 @@ impl WorkTimes {
     }
 }
 
+/// Several clients' or workers' times as one distribution.
+impl std::ops::AddAssign for WorkTimes {
+    fn add_assign(&mut self, other: Self) {
+        self.work += other.work;
+        self.too_slow += other.too_slow;
+        self.model += other.model;
+    }
+}
+
 impl std::fmt::Display for WorkSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
@@ -385,6 +394,30 @@ pub enum Stop {
     MessageLimit,
     /// Every attempt at the target has ended.
     EpisodesDone,
+}
+
+/// What `pushlearn learn --json FILE` writes when the daemon has stopped
+/// cleanly: for scripts and for `pushlearn ctl soak`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StopReport {
+    pub stop: Stop,
+    /// `SIGTERM` or `SIGINT` when a signal stopped the daemon.
+    pub signal: Option<String>,
+    /// States handled, over all connections.
+    pub states: u64,
+    /// States the world published that never reached the daemon (its queue
+    /// at the world overflowed), over all connections.
+    pub missed: u64,
+    pub reconnects: u64,
+    /// Physics blow-ups the world reported.
+    pub world_errors: u64,
+    /// Work per state since the last (re)connection.
+    pub work: WorkSummary,
+    /// With a target: attempts ended, and of them reached.
+    pub attempts: Option<(usize, usize)>,
+    /// With `--state`: the journal records on disk, every one covered by the
+    /// final snapshot.
+    pub records_on_disk: Option<u64>,
 }
 
 /// Runs `learner` against the world behind `client` until `shutdown`

@@ -69,6 +69,9 @@ pub struct Served {
     pub reconnects: u64,
     /// Physics blow-ups the world reported.
     pub world_errors: u64,
+    /// States the world published that never reached the learner, over all
+    /// connections ([`SimClient::missed_states`]).
+    pub missed: u64,
 }
 
 /// Counts the states handed to the learner, across connections.
@@ -121,6 +124,8 @@ pub async fn serve_resilient(
     };
     let mut reconnects = 0;
     let mut world_errors = 0;
+    // Missed by the connections before the current one.
+    let mut missed_before = 0;
     loop {
         let left = ServeOptions {
             max_messages: options
@@ -139,6 +144,7 @@ pub async fn serve_resilient(
         {
             Ok((stop, summary)) => {
                 return Ok(Served {
+                    missed: missed_before + client.missed_states(),
                     client: Some(client),
                     stop,
                     summary,
@@ -173,10 +179,12 @@ pub async fn serve_resilient(
                             states: counting.states,
                             reconnects,
                             world_errors,
+                            missed: missed_before + client.missed_states(),
                         });
                     }
                 };
                 same_world(&expected, connected.hello())?;
+                missed_before += client.missed_states();
                 client = connected;
                 reconnects += 1;
             }

@@ -8,6 +8,7 @@
 mod output;
 mod record;
 mod script;
+mod soak;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -20,6 +21,7 @@ use pushlearn::wire::pb::{self, client_message::Payload};
 use pushlearn::wire::{clamp_speed, BodyName};
 
 use output::Output;
+use soak::Soak;
 
 /// Send commands to a running world daemon (pushlearn-sim) and watch its states.
 ///
@@ -112,6 +114,49 @@ enum CtlCommand {
         /// Process id of the world daemon, to sample its memory (Linux /proc).
         #[arg(long)]
         pid: Option<u32>,
+    },
+
+    /// Soak a realtime world: a learning, acting `pushlearn learn --state`
+    /// beside SUBSCRIBERS reading connections for SECONDS.
+    ///
+    /// Starts the learner (this program's `learn`, planning towards the
+    /// blue block's pose -0.6,-0.7,0, the world reset after every attempt),
+    /// waits until it journals its first state, then runs the subscribers
+    /// and samples, every --sample-every, the learner's resident memory and
+    /// its state directory (journal records and bytes, snapshots) and, with
+    /// --pid, the world's memory. At the end the learner is stopped with
+    /// SIGTERM and its --json report read. Prints how many states the
+    /// learner handled and missed (gaps in publish_seq), the subscribers'
+    /// states, misses and intervals between states against the 2/f budget,
+    /// the memory and the journal against its bound (2 × --snapshot-every
+    /// records). Start the world with enough clients for all:
+    /// `pushlearn-sim serve --mode realtime --real-time-rate 1000
+    /// --max-clients 80`. docs/reliability.md, "Soak".
+    Soak {
+        /// Reading connections beside the learner.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
+        subscribers: u64,
+        /// How long to run (after the learner's first state).
+        #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
+        seconds: Duration,
+        /// Process id of the world daemon, to sample its memory (Linux /proc).
+        #[arg(long)]
+        pid: Option<u32>,
+        /// Sample the memory and the state directory every SECONDS.
+        #[arg(long, value_name = "SECONDS", default_value = "10", value_parser = parse_seconds)]
+        sample_every: Duration,
+        /// The learner's --snapshot-every: a minute at 100 Hz by default, so
+        /// that ten minutes show ten compactions of the journal.
+        #[arg(long, value_name = "N", default_value_t = 6000, value_parser = clap::value_parser!(u64).range(1..))]
+        snapshot_every: u64,
+        /// The learner's --state directory [default: a new one in a
+        /// temporary directory, removed after a run that ends well].
+        #[arg(long, value_name = "DIR")]
+        state: Option<PathBuf>,
+        /// Draw the memory, the journal and the state directory over time
+        /// as DIR/soak.png and DIR/soak.svg.
+        #[arg(long, value_name = "DIR")]
+        plots: Option<PathBuf>,
     },
 }
 
@@ -313,6 +358,7 @@ async fn execute(args: CtlArgs) -> Result<()> {
             let options = pushlearn_cli::load::LoadOptions {
                 clients: usize::try_from(clients).context("too many clients")?,
                 duration: seconds,
+                control: true,
                 pid,
                 sample_every: Duration::from_secs(1),
             };
@@ -323,6 +369,26 @@ async fn execute(args: CtlArgs) -> Result<()> {
                 println!("{report}");
             }
             return Ok(());
+        }
+        CtlCommand::Soak {
+            subscribers,
+            seconds,
+            pid,
+            sample_every,
+            snapshot_every,
+            state,
+            plots,
+        } => {
+            let soak = Soak {
+                subscribers: usize::try_from(subscribers).context("too many subscribers")?,
+                seconds,
+                pid,
+                sample_every,
+                snapshot_every,
+                state,
+                plots,
+            };
+            return soak.run(&args.sim, args.json).await;
         }
     };
     // Clock-based seqs keep `applied_seq` left over from earlier ctl runs

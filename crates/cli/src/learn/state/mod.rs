@@ -232,6 +232,39 @@ pub fn holds_memory(dir: &Path) -> bool {
         .any(|name| dir.join(name).exists())
 }
 
+/// What a `--state` directory holds, as read while a daemon may be writing
+/// it: a record being appended reads as a torn tail and is not counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OnDisk {
+    /// Whole records in the journal's segments.
+    pub journal_records: u64,
+    pub journal_bytes: u64,
+    /// The newest and the previous snapshot together.
+    pub snapshot_bytes: u64,
+}
+
+/// Reads what `dir` holds ([`OnDisk`]).
+///
+/// # Errors
+/// The directory cannot be listed. (A file that disappears while it is read
+/// — a segment or snapshot replaced by compaction — counts as empty.)
+pub fn on_disk(dir: &Path) -> Result<OnDisk, StateError> {
+    let mut found = OnDisk::default();
+    for (_, path) in segment::segments(dir)? {
+        let Ok(bytes) = std::fs::read(&path) else {
+            continue;
+        };
+        found.journal_bytes += bytes.len() as u64;
+        found.journal_records += read_records(&bytes).records.len() as u64;
+    }
+    found.snapshot_bytes = [SNAPSHOT_FILE, PREVIOUS_SNAPSHOT_FILE]
+        .iter()
+        .filter_map(|name| std::fs::metadata(dir.join(name)).ok())
+        .map(|meta| meta.len())
+        .sum();
+    Ok(found)
+}
+
 /// The settings that made a model: a kept model (`load_model`) must match
 /// in these, whatever the new daemon's policy and seed.
 const MAKING_THE_MODEL: &[&str] = &["model", "publish rate", "model options"];

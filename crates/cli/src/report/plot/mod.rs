@@ -14,7 +14,8 @@
 //!   panels of points with error bars that most figures are made of;
 //! * `curves`, `positions`, `snapshots`: the push-task figures ([`push`]);
 //! * `feedback`, `move_to_target`: those experiments' figures;
-//! * `cost`, `scaling`: the performance figures of `docs/performance.md`.
+//! * `cost`, `scaling`: the performance figures of `docs/performance.md`;
+//! * `soak`: the soak's memory and journal over time (`docs/reliability.md`).
 
 mod ablation;
 mod cost;
@@ -27,6 +28,7 @@ mod positions;
 mod push;
 mod scaling;
 mod snapshots;
+mod soak;
 #[cfg(test)]
 mod test_support;
 
@@ -40,6 +42,7 @@ pub use move_to_target::move_to_target;
 pub use push::push;
 pub use scaling::{aitm_scaling, parse_scaling_csv, ScalingRow};
 pub use snapshots::{footprints, Footprint};
+pub use soak::soak;
 
 /// What can go wrong while writing figures.
 #[derive(Debug, thiserror::Error)]
