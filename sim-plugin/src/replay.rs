@@ -21,7 +21,9 @@ use std::time::Duration;
 
 use pushlearn::recording::{Frame, Recording};
 use pushlearn::wire::pb::{self, client_message::Payload, server_message, sim_control::Action};
-use pushlearn::wire::{validate, InvalidCommand, ServerConnection, TimingMode, WireError};
+use pushlearn::wire::{
+    encode_frame, validate, InvalidCommand, ServerConnection, TimingMode, WireError,
+};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::Semaphore;
 use tokio::time::Instant;
@@ -235,6 +237,21 @@ impl Replay {
     }
 }
 
+/// Whether two client frames carry the same command, whatever their seqs.
+/// Compared as encoded, bit for bit: a recorded `Move(NaN, 0)` (which the
+/// world refused) is the same command when a client sends it again, though
+/// NaN is not equal to itself.
+fn same_command(a: &pb::ClientMessage, b: &pb::ClientMessage) -> bool {
+    let command = |m: &pb::ClientMessage| {
+        encode_frame(&pb::ClientMessage {
+            seq: 0,
+            payload: m.payload.clone(),
+        })
+        .ok()
+    };
+    command(a).is_some_and(|a| Some(a) == command(b))
+}
+
 /// One connection's position in the recording.
 struct Session<'a> {
     replay: &'a Replay,
@@ -272,7 +289,7 @@ impl<'a> Session<'a> {
         // The world refused the recorded frame at this position: so would it
         // this one, if it is the same.
         if let Some(error) = recorded
-            .filter(|r| r.payload == message.payload)
+            .filter(|r| same_command(r, message))
             .and_then(|r| self.replay.answers.get(&r.seq))
         {
             let kind = error.kind();
@@ -367,7 +384,7 @@ impl<'a> Session<'a> {
         let kind = message.payload.as_ref().map_or("barrier", Payload::kind);
         let problem = match recorded {
             None => "comes after the recording's last command",
-            Some(r) if r.payload != message.payload => "differs from the recording's",
+            Some(r) if !same_command(r, message) => "differs from the recording's",
             Some(_) => return,
         };
         self.served.differing += 1;
@@ -501,6 +518,21 @@ mod tests {
             session.served.differing, 2,
             "a barrier where an advance was"
         );
+    }
+
+    /// Found by the `recording` fuzz target: NaN is not equal to itself,
+    /// so a recorded command with a NaN in it was counted as differing when
+    /// the same client sent it again.
+    #[test]
+    fn a_recorded_command_with_a_nan_is_the_same_when_sent_again() {
+        let mut recording = lockstep_recording();
+        recording.records[0].frame = Frame::Client(pb::ClientMessage::move_(100, f64::NAN, 0.5));
+        let replay = Replay::new(recording, "r", false);
+        let mut session = Session::new(&replay);
+        session.on_message(&pb::ClientMessage::move_(1, f64::NAN, 0.5));
+        assert_eq!(session.served.differing, 0);
+        session.on_message(&pb::ClientMessage::move_(2, 0.0, 0.5));
+        assert_eq!(session.served.differing, 1);
     }
 
     #[test]
