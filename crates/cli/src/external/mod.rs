@@ -15,6 +15,7 @@
 
 pub mod server;
 pub mod session;
+#[cfg(any(test, feature = "testing"))]
 pub mod untrusted;
 
 use std::cell::{Cell, RefCell};

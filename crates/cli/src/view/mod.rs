@@ -12,6 +12,7 @@
 
 mod http;
 mod json;
+#[cfg(any(test, feature = "testing"))]
 pub mod untrusted;
 
 use std::future::Future;
