@@ -13,10 +13,8 @@ use crate::scene::{Scene, ShapeSpec, ACTUATOR};
 /// Steps per simulated second; publish rates must divide it.
 const STEPS_PER_SECOND: u32 = 1000;
 
-/// Positions farther than this from the origin are refused: nothing in a
-/// table-top world lives there, and ODE's collision arithmetic is not meant
-/// for such magnitudes.
-pub const MAX_POSITION: f64 = 1000.0;
+/// Positions farther than this from the origin are refused.
+pub use pushlearn::wire::MAX_POSITION;
 
 /// Distinct ghost names kept at once; a client cannot grow the world's
 /// memory without bound.

@@ -33,3 +33,10 @@ pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, Ser
 pub use message::TimingMode;
 pub use speed::clamp_speed;
 pub use validate::{validate, InvalidCommand};
+
+/// No body of a world is farther than this from the origin, in metres, on
+/// any axis: the world refuses a SetPose beyond it (nothing in a table-top
+/// world lives there, and ODE's collision arithmetic is not meant for such
+/// magnitudes), and a learner daemon refuses a state beyond it (a model
+/// trained on a jump to 1e296 m predicts NaN).
+pub const MAX_POSITION: f64 = 1000.0;

@@ -20,7 +20,7 @@ use tokio_util::codec::Decoder;
 use pushlearn::wire::pb::learner::{
     self as lp, reply::Answer, request::Call, state_ref::State, Reply, Request,
 };
-use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
+use pushlearn::wire::{encode_frame, FrameDecoder, WireError, MAX_POSITION};
 
 use crate::models::{ModelKind, ModelOptions, WithModel};
 
@@ -76,6 +76,25 @@ fn frame_of(state: &lp::State) -> Frame {
 
 /// The call's action; a non-finite one is refused, since a model would
 /// learn it (the driver sends only finite ones, `docs/learner-protocol.md`).
+/// Every body of `state` within [`MAX_POSITION`] of the origin, as in any
+/// world: the models take finite but absurd positions (1e296 m) and then
+/// predict NaN.
+fn within_the_world(state: &lp::State) -> Result<(), String> {
+    for body in &state.bodies {
+        let p = body.pose.and_then(|p| p.position).unwrap_or_default();
+        for (axis, value) in [("x", p.x), ("y", p.y), ("z", p.z)] {
+            if value.abs() > MAX_POSITION {
+                return Err(format!(
+                    "body '{}' position.{axis} = {value} is outside any world (at most \
+                     {MAX_POSITION} m from the origin)",
+                    body.name
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn action_of(a: Option<lp::Action>) -> Result<Action, String> {
     let a = a.unwrap_or_default();
     let action = Action::new(a.vx(), a.vy());
@@ -94,6 +113,7 @@ impl<M: Model> Served<M> {
     fn resolve(&mut self, state: Option<lp::StateRef>) -> Result<M::World, String> {
         match state.and_then(|s| s.state) {
             Some(State::Observed(observed)) => {
+                within_the_world(&observed)?;
                 let world = self
                     .model
                     .parse(&frame_of(&observed))

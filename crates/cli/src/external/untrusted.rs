@@ -271,6 +271,36 @@ mod tests {
         );
     }
 
+    /// Found by the `learner_requests` fuzz target: a block at x = −1.9e296
+    /// (finite) in one state, back at 0 in the next, made the gate model
+    /// predict NaN. Such a state is refused.
+    #[test]
+    fn a_state_outside_any_world_is_refused_with_an_error_naming_it() {
+        let mut far = observed(0.0);
+        if let Some(lp::state_ref::State::Observed(state)) = &mut far.state {
+            state.bodies[1].pose = Some(pb::Pose::from_position_yaw([-1.9e296, 0.25, 0.05], 0.0));
+        }
+        let mut bytes = start();
+        bytes.extend(frame(
+            2,
+            Call::Update(lp::Update {
+                state: Some(far),
+                action: Some(lp::Action {
+                    vx: Some(0.0),
+                    vy: Some(0.5),
+                }),
+            }),
+        ));
+        let served = serve_untrusted_requests(ModelKind::Gate, &bytes).unwrap();
+        let ended = served.ended.unwrap();
+        assert!(
+            ended.contains("message 2")
+                && ended.contains("'blockA' position.x")
+                && ended.contains("outside any world"),
+            "{ended}"
+        );
+    }
+
     #[test]
     fn a_model_that_cannot_be_built_is_refused_in_an_error_reply_to_the_start() {
         let options = ModelOptions {
