@@ -27,9 +27,9 @@ pub struct Served {
 
 /// Serves `bytes` as everything one driver sent before closing, with the
 /// built-in model `kind` (default options), and checks what was written:
-/// only whole reply frames, each answering a request that was sent, in the
-/// order sent, none answered twice, and no number in them that is not
-/// finite.
+/// only whole reply frames, in the order of the requests: an answer of the
+/// right kind for each call that asks for one, at most one Error, last, and
+/// no number in them that is not finite.
 ///
 /// # Errors
 /// The property that was broken (a panic is the fuzzer's to catch).
@@ -50,18 +50,39 @@ pub fn serve_untrusted_requests(kind: ModelKind, bytes: &[u8]) -> Result<Served,
     if let Some(error) = error {
         return Err(format!("the replies are not whole frames: {error}"));
     }
-    // Each reply's request, found in order.
-    let mut next = 0;
-    for reply in &replies {
-        let Some(at) = requests[next..].iter().position(|r| r.seq == reply.seq) else {
-            return Err(format!(
-                "a reply for message {} that was not sent (or was answered already)",
-                reply.seq
-            ));
+    // The replies, walked beside the requests in order: each answered call
+    // gets its answer, and an Error (about the request it names) is the
+    // last reply. Seqs need not be unique: a driver chooses them.
+    let mut unread = replies.iter().peekable();
+    for (k, request) in requests.iter().enumerate() {
+        let Some(&reply) = unread.peek() else { break };
+        if reply.seq == request.seq && matches!(reply.answer, Some(Answer::Error(_))) {
+            unread.next();
+            if let Some(after) = unread.next() {
+                return Err(format!(
+                    "a reply after the Error that ended serving: {after:?}"
+                ));
+            }
+            break;
+        }
+        let answered = match request.call {
+            Some(Call::Start(_)) => k == 0,
+            Some(Call::Predict(_) | Call::SetTarget(_) | Call::Act(_) | Call::GetStats(_)) => true,
+            _ => false,
         };
-        next += at + 1;
-        let answered = &requests[next - 1];
-        check_reply(answered, reply)?;
+        if answered {
+            unread.next();
+            if reply.seq != request.seq {
+                return Err(format!(
+                    "message {} was answered with the seq {}",
+                    request.seq, reply.seq
+                ));
+            }
+            check_reply(request, reply)?;
+        }
+    }
+    if let Some(extra) = unread.next() {
+        return Err(format!("a reply no request called for: {extra:?}"));
     }
     Ok(Served {
         requests: requests.len(),
@@ -70,13 +91,12 @@ pub fn serve_untrusted_requests(kind: ModelKind, bytes: &[u8]) -> Result<Served,
     })
 }
 
-/// A reply fits its request: the answer the call asks for (or an Error), with
-/// finite numbers.
+/// An answer fits its request: the kind the call asks for, with finite
+/// numbers.
 fn check_reply(request: &Request, reply: &Reply) -> Result<(), String> {
     let fits = matches!(
         (&request.call, &reply.answer),
-        (_, Some(Answer::Error(_)))
-            | (Some(Call::Start(_)), Some(Answer::Hello(_)))
+        (Some(Call::Start(_)), Some(Answer::Hello(_)))
             | (Some(Call::Predict(_)), Some(Answer::Prediction(_)))
             | (Some(Call::SetTarget(_)), Some(Answer::Target(_)))
             | (Some(Call::Act(_)), Some(Answer::Action(_)))
