@@ -40,3 +40,10 @@ pub use validate::{validate, InvalidCommand};
 /// magnitudes), and a learner daemon refuses a state beyond it (a model
 /// trained on a jump to 1e296 m predicts NaN).
 pub const MAX_POSITION: f64 = 1000.0;
+
+/// No action a learner is asked about is faster than this, in m/s, in
+/// either component: a world drives its actuator at its scene's top speed
+/// (0.5 m/s in the thesis's world) whatever a Move asks, and a learner
+/// daemon refuses an action beyond this (gate+ trained on −7.4e283 m/s
+/// predicts NaN).
+pub const MAX_ACTION_SPEED: f64 = 1000.0;

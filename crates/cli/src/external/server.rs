@@ -20,7 +20,7 @@ use tokio_util::codec::Decoder;
 use pushlearn::wire::pb::learner::{
     self as lp, reply::Answer, request::Call, state_ref::State, Reply, Request,
 };
-use pushlearn::wire::{encode_frame, FrameDecoder, WireError, MAX_POSITION};
+use pushlearn::wire::{encode_frame, FrameDecoder, WireError, MAX_ACTION_SPEED, MAX_POSITION};
 
 use crate::models::{ModelKind, ModelOptions, WithModel};
 
@@ -74,8 +74,6 @@ fn frame_of(state: &lp::State) -> Frame {
     }
 }
 
-/// The call's action; a non-finite one is refused, since a model would
-/// learn it (the driver sends only finite ones, `docs/learner-protocol.md`).
 /// Every body of `state` within [`MAX_POSITION`] of the origin, as in any
 /// world: the models take finite but absurd positions (1e296 m) and then
 /// predict NaN.
@@ -95,17 +93,26 @@ fn within_the_world(state: &lp::State) -> Result<(), String> {
     Ok(())
 }
 
+/// The call's action; a non-finite one, or one faster than
+/// [`MAX_ACTION_SPEED`], is refused, since a model would learn it (the
+/// driver sends only what a world drives, `docs/learner-protocol.md`).
 fn action_of(a: Option<lp::Action>) -> Result<Action, String> {
     let a = a.unwrap_or_default();
     let action = Action::new(a.vx(), a.vy());
-    if action.is_finite() {
-        Ok(action)
-    } else {
-        Err(format!(
+    if !action.is_finite() {
+        return Err(format!(
             "the action ({}, {}) is not finite",
             action.vx, action.vy
-        ))
+        ));
     }
+    if action.vx.abs().max(action.vy.abs()) > MAX_ACTION_SPEED {
+        return Err(format!(
+            "the action ({}, {}) is faster than any world drives (at most {MAX_ACTION_SPEED} \
+             m/s a component)",
+            action.vx, action.vy
+        ));
+    }
+    Ok(action)
 }
 
 impl<M: Model> Served<M> {

@@ -204,6 +204,7 @@ mod tests {
     use pushlearn::wire::encode_frame;
     use pushlearn::wire::pb;
     use pushlearn::wire::pb::learner as lp;
+    use pushlearn::wire::MAX_ACTION_SPEED;
 
     use super::*;
 
@@ -319,6 +320,25 @@ mod tests {
                 && ended.contains("outside any world"),
             "{ended}"
         );
+    }
+
+    /// Found by the `learner_requests` fuzz target: gate+ (which learns
+    /// the actuator's response) trained on an action of −7.4e283 m/s
+    /// predicted NaN. Such an action is refused.
+    #[test]
+    fn an_action_faster_than_any_world_drives_is_refused() {
+        let mut bytes = start();
+        bytes.extend(predict(2, -7.4e283));
+        let served = serve_untrusted_requests(ModelKind::GatePlus, &bytes).unwrap();
+        let ended = served.ended.unwrap();
+        assert!(
+            ended.contains("message 2") && ended.contains("faster"),
+            "{ended}"
+        );
+        let mut bytes = start();
+        bytes.extend(predict(2, -MAX_ACTION_SPEED));
+        let served = serve_untrusted_requests(ModelKind::GatePlus, &bytes).unwrap();
+        assert_eq!(served.ended, None);
     }
 
     #[test]
