@@ -250,6 +250,18 @@ fn stats_message(stats: &learner::ModelStats) -> Result<lp::Stats, String> {
     })
 }
 
+/// Answers message `seq` with an Error saying `why`, which ends serving:
+/// the error to return (the transport's, if the answer cannot be sent).
+fn fail(output: &mut impl Write, seq: u64, why: String) -> ServeError {
+    let answer = Answer::Error(lp::Error {
+        message: why.clone(),
+    });
+    match send(output, seq, answer) {
+        Ok(()) => ServeError::Request { seq, why },
+        Err(err) => err,
+    }
+}
+
 fn send(output: &mut impl Write, seq: u64, answer: Answer) -> Result<(), ServeError> {
     let frame = encode_frame(&Reply {
         seq,
@@ -410,16 +422,7 @@ pub fn serve<M: Model>(
         match result {
             Ok(Some(answer)) => send(&mut output, seq, answer)?,
             Ok(None) => {}
-            Err(why) => {
-                send(
-                    &mut output,
-                    seq,
-                    Answer::Error(lp::Error {
-                        message: why.clone(),
-                    }),
-                )?;
-                return Err(ServeError::Request { seq, why });
-            }
+            Err(why) => return Err(fail(&mut output, seq, why)),
         }
     }
     Ok(())
@@ -458,14 +461,7 @@ pub fn serve_driver(
                 "cannot serve the {kind} model at {} Hz: {err}",
                 start.publish_rate_hz
             );
-            send(
-                &mut output,
-                seq,
-                Answer::Error(lp::Error {
-                    message: why.clone(),
-                }),
-            )?;
-            Err(ServeError::Request { seq, why })
+            Err(fail(&mut output, seq, why))
         }
     }
 }

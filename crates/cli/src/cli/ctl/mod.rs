@@ -132,32 +132,7 @@ enum CtlCommand {
     /// records). Start the world with enough clients for all:
     /// `pushlearn-sim serve --mode realtime --real-time-rate 1000
     /// --max-clients 80`. docs/reliability.md, "Soak".
-    Soak {
-        /// Reading connections beside the learner.
-        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
-        subscribers: u64,
-        /// How long to run (after the learner's first state).
-        #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
-        seconds: Duration,
-        /// Process id of the world daemon, to sample its memory (Linux /proc).
-        #[arg(long)]
-        pid: Option<u32>,
-        /// Sample the memory and the state directory every SECONDS.
-        #[arg(long, value_name = "SECONDS", default_value = "10", value_parser = parse_seconds)]
-        sample_every: Duration,
-        /// The learner's --snapshot-every: a minute at 100 Hz by default, so
-        /// that ten minutes show ten compactions of the journal.
-        #[arg(long, value_name = "N", default_value_t = 6000, value_parser = clap::value_parser!(u64).range(1..))]
-        snapshot_every: u64,
-        /// The learner's --state directory [default: a new one in a
-        /// temporary directory, removed after a run that ends well].
-        #[arg(long, value_name = "DIR")]
-        state: Option<PathBuf>,
-        /// Draw the memory, the journal and the state directory over time
-        /// as DIR/soak.png and DIR/soak.svg.
-        #[arg(long, value_name = "DIR")]
-        plots: Option<PathBuf>,
-    },
+    Soak(Soak),
 }
 
 /// A command for the world; the same set is accepted in `ctl run` scripts.
@@ -370,26 +345,7 @@ async fn execute(args: CtlArgs) -> Result<()> {
             }
             return Ok(());
         }
-        CtlCommand::Soak {
-            subscribers,
-            seconds,
-            pid,
-            sample_every,
-            snapshot_every,
-            state,
-            plots,
-        } => {
-            let soak = Soak {
-                subscribers: usize::try_from(subscribers).context("too many subscribers")?,
-                seconds,
-                pid,
-                sample_every,
-                snapshot_every,
-                state,
-                plots,
-            };
-            return soak.run(&args.sim, args.json).await;
-        }
+        CtlCommand::Soak(soak) => return soak.run(&args.sim, args.json).await,
     };
     // Clock-based seqs keep `applied_seq` left over from earlier ctl runs
     // below this run's seqs (pushlearn::client docs).

@@ -4,17 +4,38 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{Context, Result};
+use clap::Args;
 use pushlearn_cli::soak::{run_soak, SoakOptions};
 
-/// The command's options.
+use super::parse_seconds;
+
+/// The options of `pushlearn ctl soak` (its help is the subcommand's).
+#[derive(Debug, Args)]
 pub struct Soak {
-    pub subscribers: usize,
-    pub seconds: Duration,
-    pub pid: Option<u32>,
-    pub sample_every: Duration,
-    pub snapshot_every: u64,
-    pub state: Option<PathBuf>,
-    pub plots: Option<PathBuf>,
+    /// Reading connections beside the learner.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
+    subscribers: u64,
+    /// How long to run (after the learner's first state).
+    #[arg(long, value_name = "SECONDS", default_value = "600", value_parser = parse_seconds)]
+    seconds: Duration,
+    /// Process id of the world daemon, to sample its memory (Linux /proc).
+    #[arg(long)]
+    pid: Option<u32>,
+    /// Sample the memory and the state directory every SECONDS.
+    #[arg(long, value_name = "SECONDS", default_value = "10", value_parser = parse_seconds)]
+    sample_every: Duration,
+    /// The learner's --snapshot-every: a minute at 100 Hz by default, so
+    /// that ten minutes show ten compactions of the journal.
+    #[arg(long, value_name = "N", default_value_t = 6000, value_parser = clap::value_parser!(u64).range(1..))]
+    snapshot_every: u64,
+    /// The learner's --state directory [default: a new one in a
+    /// temporary directory, removed after a run that ends well].
+    #[arg(long, value_name = "DIR")]
+    state: Option<PathBuf>,
+    /// Draw the memory, the journal and the state directory over time
+    /// as DIR/soak.png and DIR/soak.svg.
+    #[arg(long, value_name = "DIR")]
+    plots: Option<PathBuf>,
 }
 
 impl Soak {
@@ -32,7 +53,7 @@ impl Soak {
         let options = SoakOptions {
             sim: sim.to_owned(),
             world_pid: self.pid,
-            subscribers: self.subscribers,
+            subscribers: usize::try_from(self.subscribers).context("too many subscribers")?,
             duration: self.seconds,
             sample_every: self.sample_every,
             state,
