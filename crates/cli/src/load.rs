@@ -105,6 +105,8 @@ struct Received {
     seqs: Option<(u64, u64)>,
     intervals: WorkTimes,
     previous: Option<Instant>,
+    /// Read off the client when it is done ([`SimClient::missed_states`]).
+    missed: u64,
 }
 
 impl Received {
@@ -119,21 +121,23 @@ impl Received {
         self.seqs = Some((first, publish_seq));
     }
 
-    fn counts(&self, client: &SimClient) -> ClientCounts {
+    /// Done: what `client` missed is read off it.
+    fn done(mut self, client: &SimClient) -> Self {
+        self.missed = client.missed_states();
+        self
+    }
+
+    fn counts(&self) -> ClientCounts {
         ClientCounts {
             states: self.states,
-            missed: client.missed_states(),
+            missed: self.missed,
         }
     }
 }
 
-/// A subscriber: reads states until `until`. Returns what it received, its
-/// counts and whether it lasted.
-async fn subscribe(
-    mut client: SimClient,
-    until: Instant,
-    budget: Duration,
-) -> (Received, ClientCounts, bool) {
+/// A subscriber: reads states until `until`. Returns what it received and
+/// whether it lasted.
+async fn subscribe(mut client: SimClient, until: Instant, budget: Duration) -> (Received, bool) {
     let mut received = Received::default();
     let lasted = loop {
         let left = until.saturating_duration_since(Instant::now());
@@ -147,8 +151,7 @@ async fn subscribe(
             Err(_) => break false,
         }
     };
-    let counts = received.counts(&client);
-    (received, counts, lasted)
+    (received.done(&client), lasted)
 }
 
 /// Samples `probe` every `every` until `until`; each sample is tagged with
@@ -209,12 +212,12 @@ pub async fn run_load(addr: &str, options: &LoadOptions) -> Result<LoadReport, C
         None => None,
     };
 
-    let mut seqs = controller.as_ref().and_then(|(received, _)| received.seqs);
+    let mut seqs = controller.as_ref().and_then(|received| received.seqs);
     let mut report = LoadReport {
         clients: options.clients,
         seconds: 0.0,
-        controller: controller.map(|(received, counts)| Controller {
-            counts,
+        controller: controller.map(|received| Controller {
+            counts: received.counts(),
             intervals: received.intervals.summary(),
         }),
         publish_rate_wall: 0.0,
@@ -227,11 +230,12 @@ pub async fn run_load(addr: &str, options: &LoadOptions) -> Result<LoadReport, C
     let mut intervals = WorkTimes::default();
     let mut subscribers = 0;
     for task in tasks {
-        let Ok((received, counts, lasted)) = task.await else {
+        let Ok((received, lasted)) = task.await else {
             report.subscribers_lost += 1;
             continue;
         };
         subscribers += 1;
+        let counts = received.counts();
         report.subscribers.states += counts.states;
         report.subscribers.missed += counts.missed;
         report.subscriber_min_states = report.subscriber_min_states.min(counts.states);
@@ -259,7 +263,7 @@ async fn control(
     until: Instant,
     limit: Duration,
     rate: u32,
-) -> Result<(Received, ClientCounts), ClientError> {
+) -> Result<Received, ClientError> {
     let mut received = Received::default();
     let per_second = u64::from(rate.max(1));
     loop {
@@ -284,8 +288,7 @@ async fn control(
     client.set_timeout(Some(Duration::from_secs(10)));
     client.send(Payload::move_(0.0, 0.0)).await?;
     client.sync().await?;
-    let counts = received.counts(&client);
-    Ok((received, counts))
+    Ok(received.done(&client))
 }
 
 /// `p50 …, p99 …, max … ms, N (x %) over the 2/f budget`.

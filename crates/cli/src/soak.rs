@@ -133,8 +133,8 @@ impl Learner {
     /// `what`, with the end of the learner's log.
     fn failed(&self, what: &str) -> SoakError {
         let log = std::fs::read_to_string(&self.log).unwrap_or_default();
-        let tail: Vec<&str> = log.lines().rev().take(12).collect();
-        let tail: Vec<&str> = tail.into_iter().rev().collect();
+        let lines: Vec<&str> = log.lines().collect();
+        let tail = &lines[lines.len().saturating_sub(12)..];
         SoakError::Learner(format!(
             "{what}; the end of its log ({}):\n{}",
             self.log.display(),
