@@ -44,6 +44,11 @@ impl Soak {
     /// --state, its state directory live in a temporary directory, removed
     /// when the soak ends well and named when it does not.
     pub async fn run(self, sim: &str, json: bool) -> Result<()> {
+        // A typo in --plots must not cost a ten-minute run.
+        if let Some(dir) = &self.plots {
+            pushlearn_cli::output::check_writable_dir(dir)
+                .with_context(|| format!("cannot write --plots {}", dir.display()))?;
+        }
         let work_dir = std::env::temp_dir().join(format!("pushlearn-soak-{}", std::process::id()));
         std::fs::create_dir_all(&work_dir)
             .with_context(|| format!("cannot create {}", work_dir.display()))?;
