@@ -5,7 +5,10 @@ baselines, ``numpy`` and ``scikit-learn``):
 
 * :class:`Learner`, :func:`serve`, :func:`serve_tcp`: write a learner and
   serve it to the experiment driver over the learner protocol
-  (``proto/learner.proto``; :mod:`pushlearn.learner`);
+  (``proto/learner.proto``; :mod:`pushlearn.learner`, every public name of
+  which is also here). ``pushlearn.serve`` stays the function even after
+  ``import pushlearn.serve``: the module of that name is the command line
+  ``python -m pushlearn.serve`` (``from pushlearn.serve import main``);
 * :class:`SimClient`: a blocking client for the world daemon
   ``pushlearn-sim`` (:mod:`pushlearn.sim`);
 * :mod:`pushlearn.baselines`: k-nearest-neighbour and Gaussian-process
@@ -29,14 +32,26 @@ from typing import TYPE_CHECKING, Any
 
 from .framing import ProtocolError
 from .learner import (
+    ACTUATOR_ID,
+    ACTUATOR_NAME,
+    BLUE_ID,
+    RED_ID,
+    Action,
+    ArgumentParser,
     Body,
     Capability,
     Learner,
+    LearnerFactory,
+    LearnerServer,
     Pose,
     Prediction,
     State,
+    StateLike,
     Target,
     TargetRefused,
+    UsageError,
+    is_skipped,
+    quaternion_to_yaw,
     serve,
     serve_tcp,
 )
@@ -49,22 +64,34 @@ __version__ = "0.1.0"
 """The package's version."""
 
 __all__ = [
+    "ACTUATOR_ID",
+    "ACTUATOR_NAME",
+    "BLUE_ID",
+    "RED_ID",
+    "Action",
     "Aitm",
+    "ArgumentParser",
     "Body",
     "Capability",
     "GateModel",
     "InteractionModel",
     "Learner",
+    "LearnerFactory",
+    "LearnerServer",
     "Pose",
     "Prediction",
     "ProtocolError",
     "SimClient",
     "SimError",
     "State",
+    "StateLike",
     "Target",
     "TargetRefused",
+    "UsageError",
     "WorldHello",
     "__version__",
+    "is_skipped",
+    "quaternion_to_yaw",
     "serve",
     "serve_tcp",
 ]

@@ -19,6 +19,19 @@ SOURCE_CHECKOUT: str
 """The repository checkout the extension was built from (its ``target/release``
 holds the ``pushlearn-sim`` the Gymnasium environments look for last)."""
 
+GOAL_TOLERANCE: float
+"""A block has reached its target when :func:`goal_distance` is below this (0.01)."""
+
+def goal_distance(
+    pose: tuple[float, float, float], target: tuple[float, float, float]
+) -> float:
+    """The norm of ``(Δx, Δy, wrap(Δθ))`` from ``pose`` to ``target``: the one success
+    criterion every task with a goal is judged by (``docs/spec/experiments.md`` §4.4)."""
+
+def check_stats(document: str) -> None:
+    """Raises ValueError, with the experiment driver's reason, unless ``document`` (the
+    JSON of ``{maps, extra, labels}``) is statistics the driver accepts from a learner."""
+
 # One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
 _Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]
 

@@ -471,6 +471,24 @@ class Learner:
 
     Every ``state`` argument is a :class:`State` or one of this learner's own
     :class:`Prediction` objects (see the module documentation).
+
+    **Construction.** The base class has no ``__init__`` of its own and
+    keeps no state in instances: a subclass may define any ``__init__`` and
+    need not call ``super().__init__()`` (it is harmless). :func:`serve`
+    makes the learner before the driver's Start arrives (from the class, a
+    factory, or :meth:`from_args`), so a constructor that fails is reported
+    to the driver as the answer to its Start.
+
+    **Attributes.** :attr:`task`, :attr:`publish_rate_hz` and
+    :attr:`training` exist from the start as class defaults (``""``, 100,
+    true); the default :meth:`start` sets the first two from the driver's
+    Start and the default :meth:`set_training` keeps the third, so an
+    override of either should call the base method.
+
+    **Which calls set the stored state.** :meth:`reset` and :meth:`update`
+    make their ``state`` the learner's stored state; :meth:`predict` never
+    changes it (nor anything learned). :meth:`act` plans from the stored
+    state. ``docs/learner-protocol.md`` is the whole contract.
     """
 
     name: ClassVar[str] = ""
@@ -489,7 +507,7 @@ class Learner:
     ``"move-to-target"``); empty until :meth:`start`."""
     publish_rate_hz: int = 100
     """The world's publish rate from Start, in Hz (100, or 10); one message lasts
-    ``1 / publish_rate_hz`` seconds."""
+    ``1 / publish_rate_hz`` seconds. 100 (the class default) until :meth:`start`."""
     training: bool = True
     """Whether :meth:`update` should learn (kept by the default :meth:`set_training`)."""
 
@@ -582,12 +600,15 @@ class Learner:
         "extra": {name: float}, "labels": {name: str}}``; every part may be
         missing. The default reports nothing.
 
-        The driver reads them as a model's statistics: the map names of the
-        built-in models (``actuator``, ``gate``, ``predictor/ID``, ``acs``,
-        ``ac/ID``) mean their maps and bring those models' rules along, and
-        ``extra`` and ``labels`` exist only in their forms. Any other learner
-        reports its own map names and neither extras nor labels, or the
-        driver refuses the statistics ("not a model's").
+        Report any maps under your own names, any finite numbers in
+        ``extra`` and any text in ``labels``: the reports keep them and the
+        node table shows them. Only the built-in models' map names
+        (``actuator``, ``gate``, ``predictor/ID``, ``acs``, ``ac/K``) are
+        reserved: statistics that use one of them are read as that model's,
+        which must then be complete and consistent (as
+        :class:`pushlearn.GateModel` served from Python sends them), and
+        :func:`serve` checks that with the driver's own code before sending
+        (``docs/learner-protocol.md`` §3, "Statistics").
         """
         return {"maps": {}, "extra": {}, "labels": {}}
 
@@ -701,7 +722,43 @@ def _stats_to_proto(stats: Any) -> Any:
         if not isinstance(label, str):
             raise TypeError(f"stats()['labels'][{name!r}] is {label!r}, expected a str")
         reply.labels[str(name)] = label
+    if any(_is_reserved_map(name) for name in reply.maps):
+        _check_reserved_stats(reply)
     return reply
+
+
+_RESERVED_MAPS = ("actuator", "gate", "acs")
+_RESERVED_PREFIXES = ("predictor/", "ac/")
+
+
+def _is_reserved_map(name: str) -> bool:
+    """Whether ``name`` is one of the built-in models' map names."""
+    return name in _RESERVED_MAPS or name.startswith(_RESERVED_PREFIXES)
+
+
+def _check_reserved_stats(reply: Any) -> None:
+    """Statistics under the built-in models' names, read by the driver's own code.
+
+    Raises ``ValueError`` with the driver's reason when they are not a
+    built-in model's complete statistics; needs the native extension (which
+    a learner that reports a built-in model's maps has).
+    """
+    import json
+
+    from . import native
+
+    document = {
+        "maps": {
+            name: {"update_calls": m.update_calls, "inserts": m.inserts, "nodes": m.nodes}
+            for name, m in reply.maps.items()
+        },
+        "extra": dict(reply.extra),
+        "labels": dict(reply.labels),
+    }
+    try:
+        native().check_stats(json.dumps(document))
+    except ValueError as err:
+        raise ValueError(f"stats() are not the driver's statistics: {err}") from None
 
 
 def _check_prediction(prediction: Any, source: StateLike) -> Any:

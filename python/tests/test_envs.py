@@ -228,6 +228,21 @@ def test_the_one_goal_distance_is_the_batch_distance_bit_for_bit() -> None:
         goal_distances([0.0, 0.0, 0.0], [0.0, 0.0])
 
 
+def test_the_environments_judge_success_as_the_harness_does_bit_for_bit() -> None:
+    native = pushlearn.native()
+    assert native.GOAL_TOLERANCE == REACHED
+    rng = np.random.default_rng(12)
+    for _ in range(2000):
+        pose = rng.uniform([-1, -1, -math.pi], [1, 1, math.pi])
+        target = rng.uniform([-1, -1, -math.pi], [1, 1, math.pi])
+        # Near the target too, where success is decided.
+        if rng.random() < 0.5:
+            pose = target + rng.uniform(-0.01, 0.01, 3)
+        ours = _goal_distances_one(pose.tolist(), target.tolist())[0]
+        theirs = native.goal_distance(tuple(pose.tolist()), tuple(target.tolist()))
+        assert ours == theirs, (pose, target)
+
+
 def test_targets_come_from_the_thesis_or_the_region(make: Callable[..., Any]) -> None:
     thesis = make()
     seen = set()

@@ -425,6 +425,22 @@ def test_invalid_actions_and_stats_are_not_sent(call: Any, message: str) -> None
     assert message in error_of(replies)[1]
 
 
+class BorrowsAReservedName(Recorder):
+    def stats(self) -> Any:
+        return {"maps": {"gate": {"update_calls": 1, "inserts": 1, "nodes": 1}}}
+
+
+def test_statistics_under_a_built_in_models_name_are_checked_as_the_driver_does() -> None:
+    script = Script()
+    script.start()
+    script.add(get_stats=learner_pb2.GetStats())
+    status, replies = run(BorrowsAReservedName(), script)
+    assert status == 1
+    text = error_of(replies)[1]
+    assert 'map "actuator" is missing' in text, text
+    assert "reserved" in text, text
+
+
 def test_serve_refuses_what_is_not_a_learner() -> None:
     with pytest.raises(TypeError, match="Learner subclass, got the class int"):
         from pushlearn import serve

@@ -108,127 +108,116 @@ fn hex_examples(doc: &str) -> Vec<Vec<u8>> {
     examples
 }
 
+/// The frames of `docs/learner-protocol.md` §3, "A whole conversation", in
+/// order: each ```text block after a line that starts with → (the driver's
+/// request, `true`) or ← (the learner's reply, `false`).
+fn conversation(doc: &str) -> Vec<(bool, Vec<u8>)> {
+    let section = doc
+        .split("\n## ")
+        .find(|s| s.starts_with("3. A whole conversation"))
+        .expect("docs/learner-protocol.md has §3, A whole conversation");
+    let mut frames = Vec::new();
+    let mut to_learner = None;
+    let mut block: Option<Vec<u8>> = None;
+    for line in section.lines() {
+        let line = line.trim();
+        match &mut block {
+            None if line == "```text" => block = Some(Vec::new()),
+            None if line.starts_with('→') => to_learner = Some(true),
+            None if line.starts_with('←') => to_learner = Some(false),
+            None => {}
+            Some(bytes) if line == "```" => {
+                let direction = to_learner
+                    .take()
+                    .expect("every frame of the conversation follows a → or ← line");
+                frames.push((direction, std::mem::take(bytes)));
+                block = None;
+            }
+            Some(bytes) => bytes.extend(line.split_whitespace().map(|t| {
+                u8::from_str_radix(t, 16).unwrap_or_else(|_| panic!("not a hex byte: {t}"))
+            })),
+        }
+    }
+    frames
+}
+
 #[test]
 fn learner_protocol_examples_are_real_frames() {
     use prost::Message;
-    use pushlearn::wire::pb::{learner as lp, Pose, Quaternion, Vector3d};
+    use pushlearn::wire::pb::learner as lp;
     let doc = read("docs/learner-protocol.md");
     let examples = hex_examples(&doc);
-    let action = Some(lp::Action {
-        vx: Some(0.0),
-        vy: Some(0.5),
-    });
-    let request = |seq, call| lp::Request {
-        seq,
-        call: Some(call),
-    };
-    let actuator = pushlearn::wire::pb::ModelState {
-        name: "actuator".into(),
-        id: 8,
-        pose: Some(Pose {
-            position: Some(Vector3d::new(0.1, 0.0, 0.03)),
-            orientation: Some(Quaternion {
-                w: 1.0,
-                ..Quaternion::default()
-            }),
-        }),
-        ..Default::default()
-    };
-    let recent = |r: lp::Recent| {
-        Some(lp::StateRef {
-            state: Some(lp::state_ref::State::Recent(r as i32)),
-        })
-    };
-    use lp::request::Call;
-    let requests = [
-        request(
-            1,
-            Call::Start(lp::Start {
-                protocol_version: lp::ProtocolVersion::ProtocolVersion as i32,
-                task: "push-task".into(),
-                publish_rate_hz: 100,
-            }),
-        ),
-        request(2, Call::NewFold(lp::NewFold { seed: 7 })),
-        request(
-            3,
-            Call::Reset(lp::Reset {
-                state: Some(lp::StateRef {
-                    state: Some(lp::state_ref::State::Observed(lp::State {
-                        bodies: vec![actuator],
-                    })),
-                }),
-            }),
-        ),
-        request(
-            4,
-            Call::Update(lp::Update {
-                state: recent(lp::Recent::LastPrediction),
-                action,
-            }),
-        ),
-        request(
-            5,
-            Call::Predict(lp::Predict {
-                from: recent(lp::Recent::LastObserved),
-                action,
-            }),
-        ),
-    ];
-    use lp::reply::Answer;
-    let replies = [
-        lp::Reply {
-            seq: 1,
-            answer: Some(Answer::Hello(lp::Hello {
-                protocol_version: lp::ProtocolVersion::ProtocolVersion as i32,
-                name: "knn".into(),
-                version: "0.1".into(),
-                capabilities: vec![lp::Capability::Forward as i32],
-                ignores_actuator_yaw: false,
-            })),
-        },
-        lp::Reply {
-            seq: 5,
-            answer: Some(Answer::Prediction(lp::Prediction {
-                bodies: vec![lp::BodyPose {
-                    id: 8,
-                    x: Some(0.1),
-                    y: Some(0.005),
-                    theta: Some(0.0),
-                }],
-            })),
-        },
-        lp::Reply {
-            seq: 4,
-            answer: Some(Answer::Error(lp::Error {
-                message: "ValueError: k".into(),
-            })),
-        },
-    ];
-    let frames: Vec<Vec<u8>> = requests
-        .iter()
-        .map(|r| encode_frame(r).expect("encodes").to_vec())
-        .chain(
-            replies
-                .iter()
-                .map(|r| encode_frame(r).expect("encodes").to_vec()),
-        )
-        .collect();
-    for frame in &frames {
-        assert!(
-            examples.contains(frame),
-            "docs/learner-protocol.md lacks the frame\n{}",
-            hex_dump(frame)
-        );
-    }
-    // And nothing else: every example is one of them.
+    assert!(examples.len() > 20, "{} examples", examples.len());
     for example in &examples {
-        assert!(
-            frames.contains(example),
-            "docs/learner-protocol.md has an example the encoder does not make:\n{}",
+        let n = u32::from_be_bytes([example[0], example[1], example[2], example[3]]) as usize;
+        assert_eq!(
+            n,
+            example.len() - 4,
+            "a wrong length in\n{}",
             hex_dump(example)
         );
         let body = &example[4..];
-        assert!(lp::Request::decode(body).is_ok() || lp::Reply::decode(body).is_ok());
+        assert!(
+            lp::Request::decode(body).is_ok() || lp::Reply::decode(body).is_ok(),
+            "not a learner-protocol message:\n{}",
+            hex_dump(example)
+        );
     }
+    // The Error example says what the prose says.
+    let error = lp::Reply {
+        seq: 5,
+        answer: Some(lp::reply::Answer::Error(lp::Error {
+            message: "ValueError: k".into(),
+        })),
+    };
+    let frame = encode_frame(&error).expect("encodes").to_vec();
+    assert!(
+        examples.contains(&frame),
+        "no Error example:\n{}",
+        hex_dump(&frame)
+    );
+}
+
+/// The page's conversation is a valid one: a learner that writes its ←
+/// frames, run through the driver's own push-task fold, receives exactly
+/// its → frames and breaks no rule.
+#[test]
+fn the_learner_protocol_pages_conversation_is_what_the_driver_sends_and_accepts() {
+    use std::time::Duration;
+
+    use pushlearn_cli::external::check::page_example;
+    use pushlearn_cli::external::{LearnerSpec, Source};
+
+    let doc = read("docs/learner-protocol.md");
+    let frames = conversation(&doc);
+    let replies: Vec<u8> = frames
+        .iter()
+        .filter(|(to_learner, _)| !to_learner)
+        .flat_map(|(_, f)| f.clone())
+        .collect();
+    let requests: Vec<u8> = frames
+        .iter()
+        .filter(|(to_learner, _)| *to_learner)
+        .flat_map(|(_, f)| f.clone())
+        .collect();
+    assert!(!replies.is_empty() && !requests.is_empty());
+    let dir = crate::experiment::TempDir::new("page-conversation");
+    std::fs::write(dir.0.join("replies.bin"), &replies).expect("write replies");
+    let received = dir.0.join("received.bin");
+    let spec = LearnerSpec {
+        source: Source::Command(format!(
+            "cat '{}'; cat > '{}'",
+            dir.0.join("replies.bin").display(),
+            received.display()
+        )),
+        timeout: Duration::from_secs(10),
+    };
+    page_example(&spec).expect("the driver accepts the page's replies");
+    let got = std::fs::read(&received).expect("the learner saved what it received");
+    assert!(
+        got == requests,
+        "the driver sent\n{}\nthe page says\n{}",
+        hex_dump(&got),
+        hex_dump(&requests)
+    );
 }

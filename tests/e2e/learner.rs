@@ -289,6 +289,102 @@ fn a_learner_that_answers_the_wrong_kind_or_nan_is_refused() {
     assert_stopped(&dir);
 }
 
+/// `pushlearn learner-check CMD` with a one-second answer limit.
+fn learner_check(learner: &str) -> Output {
+    Command::new(PUSHLEARN)
+        .args(["learner-check", "--timeout", "1", learner])
+        .output()
+        .expect("run pushlearn learner-check")
+}
+
+#[test]
+fn learner_check_catches_each_broken_learner_of_these_tests() {
+    let dir = TempDir::new("learner-check");
+    write_reply(
+        &dir,
+        "stats.bin",
+        Reply {
+            seq: 4,
+            answer: Some(Answer::Stats(lp::Stats::default())),
+        },
+    );
+    let nan = lp::BodyPose {
+        id: 8,
+        x: Some(f64::NAN),
+        y: Some(0.0),
+        theta: Some(0.0),
+    };
+    write_reply(
+        &dir,
+        "nan.bin",
+        Reply {
+            seq: 4,
+            answer: Some(Answer::Prediction(lp::Prediction { bodies: vec![nan] })),
+        },
+    );
+    let d = dir.0.display();
+    for (after, rule) in [
+        ("exit 3".to_owned(), "exit status: 3"),
+        (
+            "exec sleep 60".to_owned(),
+            "no answer to message 4 (predict) within 1s",
+        ),
+        (
+            "echo 'Traceback (most recent call last):'; exec sleep 60".to_owned(),
+            "does it print to stdout?",
+        ),
+        (
+            format!("cat '{d}/stats.bin'; exec sleep 60"),
+            "answered with a stats reply for message 4 (expected a prediction reply",
+        ),
+        (
+            format!("cat '{d}/nan.bin'; exec sleep 60"),
+            "non-finite pose for body 8",
+        ),
+    ] {
+        let started = Instant::now();
+        let output = learner_check(&canned(&dir, &after, FORWARD));
+        let stdout = text(&output.stdout);
+        assert_eq!(output.status.code(), Some(1), "{after}:\n{stdout}");
+        assert!(stdout.contains(rule), "{after}: no {rule:?} in\n{stdout}");
+        assert!(stdout.contains("BROKEN"), "{stdout}");
+        // The hello went well: the learner is named, the first fold broke.
+        assert!(stdout.contains("learner 'canned' 1"), "{stdout}");
+        assert!(started.elapsed() < Duration::from_secs(20), "{after}");
+        assert_stopped(&dir);
+    }
+    // A forward-only learner is told that Move to Target was not checked.
+    let output = learner_check(&canned(&dir, "exec sleep 60", FORWARD));
+    let stdout = text(&output.stdout);
+    assert!(
+        stdout.contains("the learner does not announce INVERSE"),
+        "{stdout}"
+    );
+    // One that never says hello.
+    let output = learner_check("exit 0");
+    let stdout = text(&output.stdout);
+    assert_eq!(output.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("did not say hello"), "{stdout}");
+}
+
+#[test]
+fn learner_check_passes_a_built_in_model_served_over_the_protocol() {
+    let served = format!("{PUSHLEARN} serve-learner --model gate");
+    let output = learner_check(&served);
+    let stdout = text(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}{}",
+        text(&output.stderr)
+    );
+    assert!(
+        !stdout.contains("BROKEN") && !stdout.contains("warning"),
+        "{stdout}"
+    );
+    assert_eq!(stdout.matches("  ok ").count(), 4, "{stdout}");
+}
+
 #[test]
 fn a_forward_only_learner_is_refused_for_move_to_target_before_any_world_starts() {
     let dir = TempDir::new("learner-forward");

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::features::ParseError;
 use crate::model::Model;
-use crate::types::{Action, Frame, Poses};
+use crate::types::{Action, Frame, ObjectState, Poses};
 
 /// The push action of every push-task run, in training and in testing
 /// (`docs/spec/experiments.md` §3): straight towards the block at 0.5 m/s.
@@ -94,6 +94,51 @@ pub fn draft_training_starts() -> [f64; 3] {
 pub fn actuator_left_area(poses: &Poses) -> bool {
     let a = &poses.actuator;
     a.x.hypot(a.y) > RUN_END_DISTANCE
+}
+
+/// How close a block must come to its target for a Move-to-Target run to
+/// count as reached: the thesis's threshold (`docs/spec/planning.md` §1) on
+/// [`goal_distance`], metres and radians together.
+pub const GOAL_TOLERANCE: f64 = 0.01;
+
+/// `|wrap(θ − θ_t)|` with the single wrap of `docs/spec/experiments.md` §7.6:
+/// a difference beyond π is taken the other way round once.
+#[must_use]
+pub fn wrapped_angle_error(theta: f64, target: f64) -> f64 {
+    use std::f64::consts::PI;
+    let mut d = theta - target;
+    if d > PI {
+        d -= 2.0 * PI;
+    } else if d < -PI {
+        d += 2.0 * PI;
+    }
+    d.abs()
+}
+
+/// The norm of a block's `(Δx, Δy, wrap(Δθ))` to its target: the one
+/// success criterion of every task with a goal (Move to Target, `pushlearn
+/// learn --target`, the Gymnasium environments), judged by the harness on
+/// the world's own state, never taken from a learner.
+///
+/// The thesis's models test the same norm on their own records without
+/// wrapping the angle (`docs/spec/planning.md` §6): where the two disagree
+/// (a block at −3.14 rad and a target at π) the world's wrapped difference
+/// is the true one. The sum runs in the order of
+/// [`ObjectState::distance_to`], so that the two agree bit for bit whenever
+/// the angle needs no wrap.
+#[must_use]
+pub fn goal_distance(pose: &ObjectState, target: &ObjectState) -> f64 {
+    let dx = pose.x - target.x;
+    let dy = pose.y - target.y;
+    let dt = wrapped_angle_error(pose.theta, target.theta);
+    (dx * dx + dy * dy + dt * dt).sqrt()
+}
+
+/// Whether a block at `pose` has reached `target` ([`goal_distance`] below
+/// [`GOAL_TOLERANCE`]).
+#[must_use]
+pub fn goal_reached(pose: &ObjectState, target: &ObjectState) -> bool {
+    goal_distance(pose, target) < GOAL_TOLERANCE
 }
 
 /// The per-message learner side of one run (`docs/spec/experiments.md` §2
@@ -419,6 +464,38 @@ mod tests {
                 ],
             })
             .collect()
+    }
+
+    #[test]
+    fn the_orientation_error_wraps_once() {
+        use std::f64::consts::PI;
+        assert!((wrapped_angle_error(-3.1, PI) - (2.0 * PI - 3.1 - PI)).abs() < 1e-12);
+        assert!((wrapped_angle_error(0.5, -2.1) - 2.6).abs() < 1e-12);
+        assert!((wrapped_angle_error(3.0, -3.0) - (2.0 * PI - 6.0)).abs() < 1e-12);
+        // Once only: a difference beyond 3π stays above π.
+        assert!(wrapped_angle_error(10.0, 0.0) > PI);
+    }
+
+    #[test]
+    fn the_goal_needs_position_and_orientation_and_wraps_the_angle() {
+        use std::f64::consts::PI;
+        let target = ObjectState::new(0.6, -0.7, PI);
+        // Within 1 cm and 1 mrad of it, across the ±π seam: reached.
+        let seam = ObjectState::new(0.605, -0.702, -PI + 0.001);
+        assert!(goal_reached(&seam, &target));
+        // The thesis's models' own test does not wrap: 2π away.
+        assert!(seam.distance_to(&target) > 6.0);
+        // Right place, wrong orientation: not reached.
+        let blind = ObjectState::new(0.6, -0.7, PI - 1.4);
+        assert!(!goal_reached(&blind, &target));
+        assert!((goal_distance(&blind, &target) - 1.4).abs() < 1e-12);
+        // The norm is of all three components together.
+        let edge = ObjectState::new(0.6 + 0.006, -0.7 + 0.006, PI - 0.006);
+        assert!(!goal_reached(&edge, &target));
+        // Without a wrap the two norms are the same bits.
+        let a = ObjectState::new(0.123, 0.456, 0.789);
+        let b = ObjectState::new(-0.3, 0.2, -2.1);
+        assert_eq!(goal_distance(&a, &b).to_bits(), a.distance_to(&b).to_bits());
     }
 
     #[test]

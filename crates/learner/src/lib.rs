@@ -44,7 +44,8 @@ pub use gate::{GateConfig, GateModel, GateParams, GateWorld};
 pub use interaction::{InteractionConfig, InteractionModel, InteractionParams, InteractionWorld};
 pub use model::Model;
 pub use stats::{
-    AcStats, GateStats, InteractionStats, LargestAc, MapName, ModelStats, ScriptAc, StatsError,
+    AcStats, GateStats, InteractionStats, LargestAc, MapName, ModelStats, OtherStats, ScriptAc,
+    StatsError,
 };
 pub use types::{
     object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,

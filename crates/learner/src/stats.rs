@@ -110,14 +110,28 @@ impl InteractionStats {
 pub enum ModelStats {
     Gate(GateStats),
     Interaction(InteractionStats),
-    /// A model of neither kind (the test double): its maps by name, none
-    /// of which is a gate or interaction model's.
-    Other(BTreeMap<String, MapStats>),
+    /// A model of neither kind (an external learner, the test double).
+    Other(OtherStats),
+}
+
+/// The statistics of a model that is neither of the thesis's: whatever
+/// maps, numbers and labels it reports, kept and shown as they are. Only
+/// the built-in models' map names (`actuator`, `gate`, `predictor/ID`,
+/// `acs`, `ac/K`) are reserved: statistics that use one of them are read as
+/// that model's, complete and consistent.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OtherStats {
+    /// Its memories' counters, by its own names.
+    pub maps: BTreeMap<String, MapStats>,
+    /// Any further numbers it reports (finite: JSON has no other).
+    pub extra: BTreeMap<String, f64>,
+    /// Any text it reports.
+    pub labels: BTreeMap<String, String>,
 }
 
 impl Default for ModelStats {
     fn default() -> Self {
-        Self::Other(BTreeMap::new())
+        Self::Other(OtherStats::default())
     }
 }
 
@@ -181,7 +195,8 @@ impl ModelStats {
                         .map(|(k, ac)| (MapName::Ac(k), ac.map)),
                 )
                 .collect(),
-            Self::Other(maps) => maps
+            Self::Other(other) => other
+                .maps
                 .iter()
                 .map(|(name, &m)| (MapName::Other(name.clone()), m))
                 .collect(),
@@ -211,20 +226,33 @@ impl ModelStats {
             _ => None,
         }
     }
+
+    #[must_use]
+    pub fn as_other(&self) -> Option<&OtherStats> {
+        match self {
+            Self::Other(o) => Some(o),
+            _ => None,
+        }
+    }
 }
 
 /// Why a serialised `{maps, extra, labels}` is not a model's statistics.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum StatsError {
-    #[error("map {0:?} does not belong with the others")]
+    #[error("map {0:?} does not belong with the others ({RESERVED})")]
     UnexpectedMap(String),
-    #[error("map {0:?} is missing")]
+    #[error("map {0:?} is missing ({RESERVED})")]
     MissingMap(String),
-    #[error("label {key:?} = {value:?} is not valid here")]
+    #[error("label {key:?} = {value:?} is not valid here ({RESERVED})")]
     BadLabel { key: String, value: String },
-    #[error("extra value {0:?} is missing, unknown or does not match the maps")]
+    #[error("extra value {0:?} is missing, unknown or does not match the maps ({RESERVED})")]
     BadExtra(String),
 }
+
+/// What a [`StatsError`] is about: only statistics that use a built-in
+/// model's map names are held to a shape.
+const RESERVED: &str = "the map names actuator, gate, predictor/ID, acs and ac/K are reserved for \
+                        the built-in models' statistics, which must then be complete";
 
 /// The serialised form: the shape `ModelStats` had when it was string-keyed.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -297,7 +325,10 @@ impl From<ModelStats> for Wire {
                 }
                 wire.extra = interaction_extra(i);
             }
-            ModelStats::Other(_) => {}
+            ModelStats::Other(other) => {
+                wire.extra.clone_from(&other.extra);
+                wire.labels.clone_from(&other.labels);
+            }
         }
         wire
     }
@@ -389,13 +420,11 @@ impl TryFrom<Wire> for ModelStats {
             }
             return Ok(Self::Interaction(stats));
         }
-        if let Some(k) = wire.extra.keys().next() {
-            return Err(StatsError::BadExtra(k.clone()));
-        }
-        if let Some((key, value)) = wire.labels.into_iter().next() {
-            return Err(StatsError::BadLabel { key, value });
-        }
-        Ok(Self::Other(wire.maps))
+        Ok(Self::Other(OtherStats {
+            maps: wire.maps,
+            extra: wire.extra,
+            labels: wire.labels,
+        }))
     }
 }
 
@@ -461,7 +490,10 @@ mod tests {
             INTERACTION_JSON
         );
         assert_eq!(serde_json::to_string(&gate()).unwrap(), GATE_JSON);
-        let probe = ModelStats::Other(BTreeMap::from([("probe".to_owned(), ms(3, 1, 4))]));
+        let probe = ModelStats::Other(OtherStats {
+            maps: BTreeMap::from([("probe".to_owned(), ms(3, 1, 4))]),
+            ..OtherStats::default()
+        });
         assert_eq!(
             serde_json::to_string(&probe).unwrap(),
             r#"{"maps":{"probe":{"update_calls":3,"inserts":1,"nodes":4}},"extra":{},"labels":{}}"#
@@ -507,6 +539,33 @@ mod tests {
         for json in bad {
             assert!(serde_json::from_str::<ModelStats>(&json).is_err(), "{json}");
         }
+    }
+
+    #[test]
+    fn a_learner_of_its_own_keeps_its_maps_numbers_and_labels() {
+        let json = concat!(
+            r#"{"maps":{"memory":{"update_calls":9,"inserts":4,"nodes":4}},"#,
+            r#""extra":{"k":4.0,"contact_distance":0.071},"labels":{"kind":"knn"}}"#
+        );
+        let back: ModelStats = serde_json::from_str(json).unwrap();
+        let ModelStats::Other(other) = &back else {
+            panic!("read as a built-in model's: {back:?}");
+        };
+        assert_eq!(other.maps["memory"], ms(9, 4, 4));
+        assert_eq!(other.extra["contact_distance"], 0.071);
+        assert_eq!(other.labels["kind"], "knn");
+        let again: ModelStats =
+            serde_json::from_str(&serde_json::to_string(&back).unwrap()).unwrap();
+        assert_eq!(again, back);
+        // A reserved name makes the statistics a built-in model's, held to
+        // its shape: a lone `gate` map is an incomplete gate model.
+        let borrowed =
+            r#"{"maps":{"gate":{"update_calls":1,"inserts":1,"nodes":1}},"extra":{},"labels":{}}"#;
+        let err = serde_json::from_str::<ModelStats>(borrowed)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("map \"actuator\" is missing"), "{err}");
+        assert!(err.contains("reserved"), "{err}");
     }
 
     #[test]

@@ -122,13 +122,16 @@ impl Model for Probe {
     /// One map, [`Probe::MAP`]: update calls = trained updates, inserts = resets,
     /// nodes = all updates.
     fn stats(&self) -> ModelStats {
-        ModelStats::Other(BTreeMap::from([(
-            Self::MAP.to_owned(),
-            MapStats {
-                update_calls: self.trained_updates,
-                inserts: self.resets,
-                nodes: self.updates as usize,
-            },
-        )]))
+        ModelStats::Other(crate::stats::OtherStats {
+            maps: BTreeMap::from([(
+                Self::MAP.to_owned(),
+                MapStats {
+                    update_calls: self.trained_updates,
+                    inserts: self.resets,
+                    nodes: self.updates as usize,
+                },
+            )]),
+            ..crate::stats::OtherStats::default()
+        })
     }
 }

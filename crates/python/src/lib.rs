@@ -36,6 +36,26 @@ fn stats_to_python<'py>(py: Python<'py>, stats: &ModelStats) -> PyResult<Bound<'
     py.import("json")?.call_method1("loads", (text,))
 }
 
+/// Raises ValueError, with the experiment driver's reason, unless `document`
+/// (the JSON of `{maps, extra, labels}`) is statistics the driver accepts
+/// from a learner: a built-in model's map names only in that model's
+/// complete statistics (`docs/learner-protocol.md` §3, "Statistics").
+#[pyfunction]
+fn check_stats(document: &str) -> PyResult<()> {
+    serde_json::from_str::<ModelStats>(document)
+        .map(|_| ())
+        .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))
+}
+
+/// The norm of a block's `(Δx, Δy, wrap(Δθ))` to its target: the one
+/// success criterion the harness judges every task with a goal by
+/// (`learner::eval::goal_distance`; reached below `GOAL_TOLERANCE`).
+#[pyfunction]
+fn goal_distance(pose: (f64, f64, f64), target: (f64, f64, f64)) -> f64 {
+    let state = |(x, y, theta)| learner::ObjectState::new(x, y, theta);
+    learner::eval::goal_distance(&state(pose), &state(target))
+}
+
 /// The pushlearn models, implemented in Rust: GateModel, InteractionModel
 /// (with their worlds GateWorld and InteractionWorld) and Aitm.
 #[pymodule]
@@ -45,6 +65,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyInteractionModel>()?;
     m.add_class::<models::PyInteractionWorld>()?;
     m.add_class::<aitm::PyAitm>()?;
+    m.add_function(wrap_pyfunction!(check_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
+    m.add("GOAL_TOLERANCE", learner::eval::GOAL_TOLERANCE)?;
     // Where the extension was built: the Gymnasium environments look for the
     // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
     // and `PATH`, so that `pip install .` after `cargo build --release` needs

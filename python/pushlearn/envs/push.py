@@ -49,8 +49,9 @@ MAX_STEPS = 3000
 """Messages before an episode is truncated: the thesis's longest test run."""
 
 REACHED = 0.01
-"""The thesis's reached criterion: the norm of a block's (Δx, Δy, Δθ) to its
-target, metres and radians together, below this."""
+"""The reached criterion: the norm of a block's (Δx, Δy, wrap(Δθ)) to its target,
+metres and radians together, below this; the harness's ``GOAL_TOLERANCE``
+(``docs/spec/experiments.md`` §4.4)."""
 
 THESIS_TARGETS: tuple[tuple[float, float, float], ...] = (
     (0.6, 0.7, -2.1),
@@ -115,7 +116,15 @@ class TargetRegion:
 
 
 def _wrap(angle: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
-    return np.asarray(np.remainder(angle + math.pi, 2.0 * math.pi) - math.pi)
+    # The harness's single wrap (learner::eval::wrapped_angle_error): the
+    # same operations, so the same bits as the Rust criterion.
+    return np.asarray(
+        np.where(
+            angle > math.pi,
+            angle - 2.0 * math.pi,
+            np.where(angle < -math.pi, angle + 2.0 * math.pi, angle),
+        )
+    )
 
 
 def goal_distances(
@@ -124,9 +133,10 @@ def goal_distances(
     """Each block's distance to its target, ``‖(Δx, Δy, wrap(Δθ))‖``, over batches.
 
     Goals have shape ``(..., 3k)`` for k blocks; the result ``(..., k)``.
-    The angle difference is wrapped into [−π, π), so a yaw of π and one of
-    −π are the same pose (the thesis compared raw angles; its four targets
-    lie where that makes no difference).
+    The angle difference is wrapped once (by 2π when beyond ±π), so a yaw of
+    π and one of −π are the same pose: the criterion the benchmark judges
+    every task with a goal by, bit for bit the harness's
+    (``pushlearn._native.goal_distance``, ``docs/spec/experiments.md`` §4.4).
     """
     achieved = np.asarray(achieved_goal, dtype=np.float64)
     desired = np.asarray(desired_goal, dtype=np.float64)
@@ -151,9 +161,11 @@ def _goal_distances_one(
     for i in range(0, len(achieved), 3):
         dx = achieved[i] - desired[i]
         dy = achieved[i + 1] - desired[i + 1]
-        dtheta = (achieved[i + 2] - desired[i + 2] + math.pi) % (
-            2.0 * math.pi
-        ) - math.pi
+        dtheta = achieved[i + 2] - desired[i + 2]
+        if dtheta > math.pi:
+            dtheta -= 2.0 * math.pi
+        elif dtheta < -math.pi:
+            dtheta += 2.0 * math.pi
         distances.append(math.sqrt(dx * dx + dy * dy + dtheta * dtheta))
     return distances
 

@@ -3,6 +3,7 @@
 pub mod ctl;
 pub mod experiment;
 pub mod learn;
+pub mod learner_check;
 pub mod report;
 pub mod reproduce;
 pub mod serve_learner;

@@ -2,12 +2,18 @@
 //!
 //! One job is one (target, repetition): a fresh model, the eight fixed
 //! training runs of §4.1, then one test run in which the model plans every
-//! action towards the target (`docs/spec/planning.md`) while it keeps learning. The
-//! run ends when the model finds the target reached or after the step limit.
+//! action towards the target (`docs/spec/planning.md`) while it keeps learning.
+//!
+//! The harness, not the learner, judges the run: it ends on the first
+//! message on which the world's block meets the goal
+//! ([`learner::eval::goal_reached`]), when the learner clears its target
+//! (it believes it arrived, or gives up), or after the step limit; it counts
+//! as reached only if the world's block meets the goal on the message that
+//! ended it. A learner's word alone never makes a run a success.
 
 use std::collections::BTreeMap;
-use std::f64::consts::PI;
 
+use learner::eval::{goal_reached, wrapped_angle_error};
 use learner::{Action, Model, ModelStats, ObjectState, Target, BLUE_ID, RED_ID};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -58,18 +64,6 @@ fn expected_blocks() -> BTreeMap<u32, ObjectState> {
         (BLUE_ID, TEST_BLOCK_START),
         (RED_ID, ObjectState::new(-0.3, 0.35, 0.0)),
     ])
-}
-
-/// `|wrap(Δθ)|` with the single wrap of §7.6.
-#[must_use]
-pub fn wrapped_angle_error(theta: f64, target: f64) -> f64 {
-    let mut d = theta - target;
-    if d > PI {
-        d -= 2.0 * PI;
-    } else if d < -PI {
-        d += 2.0 * PI;
-    }
-    d.abs()
 }
 
 /// One (target, repetition).
@@ -249,7 +243,8 @@ impl<M: Model> Task<M> for MttTask {
         let steps = core.step_counter - 1;
         let block = M::poses(world).blocks.get(&BLUE_ID).copied();
         let errors = target_errors(block, self.target);
-        let running = model.has_target() && core.step_counter <= self.max_steps;
+        let reached = block.is_some_and(|b| goal_reached(&b, &self.target));
+        let running = !reached && model.has_target() && core.step_counter <= self.max_steps;
         if !running || steps.is_multiple_of(TRACE_EVERY) {
             self.trace.push(steps, errors);
         }
@@ -260,7 +255,7 @@ impl<M: Model> Task<M> for MttTask {
         self.nodes_after_test = Some(model.stats());
         let (pos_err, ori_err) = errors;
         self.run = Some(MttRun {
-            reached: steps < self.max_steps,
+            reached,
             steps,
             pos_err,
             ori_err,
@@ -349,9 +344,10 @@ mod tests {
     }
 
     #[test]
-    fn eight_training_runs_then_a_test_run_that_ends_when_reached() {
+    fn eight_training_runs_then_a_test_run_that_a_learner_ends_but_the_world_judges() {
         let model = Probe {
-            // Reached on the 40th test message: 39 actions were sent before.
+            // Claims the target reached on the 40th test message (39
+            // actions were sent before), with the block never moved.
             reach_after: Some(40),
             ..Probe::default()
         };
@@ -360,8 +356,9 @@ mod tests {
         assert!(d.is_done());
         let (task, model, counters) = d.into_parts();
         let run = task.run.unwrap();
+        // The learner may end the run; only the world makes it a success.
         assert_eq!(run.steps, 39);
-        assert!(run.reached);
+        assert!(!run.reached);
         assert_eq!(model.acts, 40);
         // Training: 8 runs × 149 updates; the test run trains too.
         assert_eq!(
@@ -392,6 +389,59 @@ mod tests {
         assert!(run.trace.ori_err.iter().all(|&e| (e - 2.1).abs() < 1e-12));
     }
 
+    /// A job whose target is `target` instead of one of the thesis's.
+    fn job_for(target: ObjectState, max_steps: u64) -> MttJob {
+        MttJob::all(&[target], 1, max_steps, 3).remove(0)
+    }
+
+    #[test]
+    fn a_lying_learner_is_not_scored_reached() {
+        // Claims success at once: its first Act clears the target.
+        let liar = Probe {
+            reach_after: Some(1),
+            ..Probe::default()
+        };
+        let mut d = Driver::new(liar, MttTask::new(&job(MAX_STEPS)), 100);
+        simulate(&mut d);
+        let run = d.into_parts().0.run.unwrap();
+        assert_eq!(run.steps, 0);
+        assert!(!run.reached);
+        assert!((run.pos_err - (0.6f64).hypot(0.45)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_world_ends_a_run_whose_block_is_at_the_target_whatever_the_learner_says() {
+        // The block rests at the target from the first test message; the
+        // learner never claims anything.
+        let mut d = Driver::new(
+            Probe::default(),
+            MttTask::new(&job_for(TEST_BLOCK_START, MAX_STEPS)),
+            100,
+        );
+        simulate(&mut d);
+        let (task, model, _) = d.into_parts();
+        let run = task.run.unwrap();
+        assert!(run.reached);
+        assert_eq!(run.steps, 0);
+        assert!(model.target.is_some(), "the learner still holds its target");
+    }
+
+    #[test]
+    fn a_block_in_place_but_turned_away_is_not_reached() {
+        // An orientation-blind learner's best: the right place, 1.4 rad off.
+        let target = ObjectState::new(TEST_BLOCK_START.x, TEST_BLOCK_START.y, 1.4);
+        let blind = Probe {
+            reach_after: Some(5),
+            ..Probe::default()
+        };
+        let mut d = Driver::new(blind, MttTask::new(&job_for(target, MAX_STEPS)), 100);
+        simulate(&mut d);
+        let run = d.into_parts().0.run.unwrap();
+        assert!(!run.reached);
+        assert!(run.pos_err < 1e-12);
+        assert!((run.ori_err - 1.4).abs() < 1e-12);
+    }
+
     #[test]
     fn a_run_that_never_arrives_stops_after_the_limit() {
         let mut d = Driver::new(Probe::default(), MttTask::new(&job(25)), 100);
@@ -403,15 +453,6 @@ mod tests {
         assert!(!run.reached);
         assert_eq!(model.acts, 26);
         assert!(model.target.is_some());
-    }
-
-    #[test]
-    fn the_orientation_error_wraps_once() {
-        assert!((wrapped_angle_error(-3.1, PI) - (2.0 * PI - 3.1 - PI)).abs() < 1e-12);
-        assert!((wrapped_angle_error(0.5, -2.1) - 2.6).abs() < 1e-12);
-        assert!((wrapped_angle_error(3.0, -3.0) - (2.0 * PI - 6.0)).abs() < 1e-12);
-        // Once only: a difference beyond 3π stays above π.
-        assert!(wrapped_angle_error(10.0, 0.0) > PI);
     }
 
     #[test]

@@ -13,6 +13,7 @@
 //! sends `NewFold` with the fold's seed. A connection goes back to the idle
 //! list when its fold ends, so there are never more learners than workers.
 
+pub mod check;
 pub mod server;
 pub mod session;
 #[cfg(any(test, feature = "testing"))]

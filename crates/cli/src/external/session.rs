@@ -296,15 +296,31 @@ impl Session {
                 self.unanswered.clear();
                 Ok(Some(answer))
             }
-            Some(answer) => Err(LearnerError::Protocol {
-                seq,
-                call: name,
-                what: format!(
-                    "answered with a {} reply for message {} (expected a {expected} reply for message {seq})",
-                    answer_name(&answer),
-                    reply.seq
-                ),
-            }),
+            Some(answer) => {
+                let one_way = self
+                    .unanswered
+                    .iter()
+                    .find(|(sent, _)| *sent == reply.seq)
+                    .map(|(_, call)| *call);
+                let what = match one_way {
+                    Some(call) => format!(
+                        "answered message {} ({call}) with a {} reply, but {call} is one-way and \
+                         gets no reply (§3); the driver waited for a {expected} reply to message {seq}",
+                        reply.seq,
+                        answer_name(&answer),
+                    ),
+                    None => format!(
+                        "answered with a {} reply for message {} (expected a {expected} reply for message {seq})",
+                        answer_name(&answer),
+                        reply.seq
+                    ),
+                };
+                Err(LearnerError::Protocol {
+                    seq,
+                    call: name,
+                    what,
+                })
+            }
             None => Err(LearnerError::Protocol {
                 seq,
                 call: name,

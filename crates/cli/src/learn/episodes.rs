@@ -1,10 +1,12 @@
 //! Attempts at a target (`pushlearn learn --target … --episodes N`): the
 //! lifelong setting the thesis motivates. An episode is one attempt from
-//! the scene's start: it ends when the model finds the target reached or
-//! after the step limit, as a Move to Target test run does
-//! (`docs/spec/experiments.md` §4.3); then the world is reset and the next
-//! attempt starts with everything learned so far.
+//! the scene's start, judged as a Move to Target test run is: it ends when
+//! the world's block meets the goal ([`learner::eval::goal_reached`]), when
+//! the model clears its target, or after the step limit, and counts as
+//! reached only if the world's block met the goal; then the world is reset
+//! and the next attempt starts with everything learned so far.
 
+use learner::eval::goal_reached;
 use learner::ObjectState;
 use serde::{Deserialize, Serialize};
 
@@ -13,7 +15,7 @@ use crate::experiment::move_to_target::{target_errors, MAX_STEPS};
 /// How one attempt ended.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeResult {
-    /// Whether the model found the target reached within the step limit.
+    /// Whether the world's block met the goal when the attempt ended.
     pub reached: bool,
     /// Actions sent before the state that ended the attempt.
     pub steps: u64,
@@ -69,8 +71,9 @@ impl Episodes {
         }
     }
 
-    /// Counts one handled state with the block at `block`; `has_target`
-    /// is the model's word after acting on it (false: reached).
+    /// Counts one handled state with the world's block at `block`;
+    /// `has_target` is the model's word after acting on it (false: it
+    /// believes it arrived, or gave up).
     pub fn step(
         &mut self,
         block: Option<ObjectState>,
@@ -80,14 +83,15 @@ impl Episodes {
         self.handled += 1;
         let errors = target_errors(block, target);
         self.errors = Some(errors);
+        let reached = block.is_some_and(|b| goal_reached(&b, &target));
         // As a Move to Target test run: the step counter includes this
         // state, the steps taken do not.
-        if has_target && self.handled <= self.max_steps {
+        if !reached && has_target && self.handled <= self.max_steps {
             return Step::Running;
         }
         let steps = self.handled - 1;
         self.ended.push(EpisodeResult {
-            reached: steps < self.max_steps,
+            reached,
             steps,
             pos_err: errors.0,
             ori_err: errors.1,
@@ -126,28 +130,36 @@ mod tests {
     const TARGET: ObjectState = ObjectState::new(0.0, 0.0, 0.0);
 
     #[test]
-    fn an_attempt_ends_when_reached_or_after_the_limit_and_counts_steps_as_move_to_target() {
-        let mut e = Episodes::new(2, 3);
-        let block = Some(ObjectState::new(0.3, 0.4, 0.5));
-        assert_eq!(e.step(block, TARGET, true), Step::Running);
-        assert_eq!(e.step(block, TARGET, false), Step::Ended);
+    fn an_attempt_ends_when_the_model_stops_when_the_world_is_there_or_at_the_limit() {
+        let mut e = Episodes::new(3, 3);
+        let away = Some(ObjectState::new(0.3, 0.4, 0.5));
+        assert_eq!(e.step(away, TARGET, true), Step::Running);
+        // The model stops, claiming the target; the world disagrees.
+        assert_eq!(e.step(away, TARGET, false), Step::Ended);
         assert_eq!(
             e.ended[0],
             EpisodeResult {
-                reached: true,
+                reached: false,
                 steps: 1,
                 pos_err: 0.5,
                 ori_err: 0.5
             }
         );
         assert_eq!(e.current(), 2);
+        // The block arrives (within 1 cm and 1 mrad, across the angle's
+        // seam not at all): the world ends the attempt, the model still going.
+        let there = Some(ObjectState::new(0.005, -0.004, 0.001));
+        assert_eq!(e.step(away, TARGET, true), Step::Running);
+        assert_eq!(e.step(there, TARGET, true), Step::Ended);
+        assert!(e.ended[1].reached);
+        assert_eq!(e.ended[1].steps, 1);
         for _ in 0..3 {
-            assert_eq!(e.step(block, TARGET, true), Step::Running);
+            assert_eq!(e.step(away, TARGET, true), Step::Running);
         }
         // The fourth state of a 3-step attempt ends it, unreached.
-        assert_eq!(e.step(block, TARGET, true), Step::Finished);
-        assert_eq!(e.ended[1].steps, 3);
-        assert!(!e.ended[1].reached);
+        assert_eq!(e.step(away, TARGET, true), Step::Finished);
+        assert_eq!(e.ended[2].steps, 3);
+        assert!(!e.ended[2].reached);
         assert!(e.finished());
         assert_eq!(e.reached(), 1);
     }

@@ -596,7 +596,23 @@ mod tests {
     }
 
     #[test]
-    fn a_target_policy_plans_until_reached() {
+    fn an_attempt_ends_when_the_worlds_block_is_at_the_goal() {
+        // The block rests where the goal is; the probe never claims it.
+        let goal = ObjectState::new(0.0, 0.25, 0.0);
+        let mut l = Learner::new(Probe::default(), Policy::Target(goal), false, 1);
+        let stop = describe(
+            &l.on_state(&frame((0.0, 0.0), &blue_home()), &heights())
+                .unwrap(),
+        );
+        assert_eq!(stop, ["move(0,0)"]);
+        let episodes = l.episodes().unwrap();
+        assert!(episodes.finished());
+        assert_eq!(episodes.reached(), 1);
+        assert_eq!(episodes.ended[0].steps, 0);
+    }
+
+    #[test]
+    fn a_target_policy_plans_until_the_model_stops_and_the_world_judges() {
         let probe = Probe {
             reach_after: Some(3),
             ..Probe::default()
@@ -622,7 +638,8 @@ mod tests {
         assert_eq!(stop, ["move(0,0)"]);
         let episodes = l.episodes().unwrap();
         assert!(episodes.finished());
-        assert_eq!(episodes.reached(), 1);
+        // The probe claims the goal, but the block never moved.
+        assert_eq!(episodes.reached(), 0);
         assert_eq!(episodes.ended[0].steps, 2);
         // The block at (0, 0.25) against the goal (0.6, 0.7, −2.1).
         assert!((episodes.ended[0].pos_err - 0.75).abs() < 1e-12);

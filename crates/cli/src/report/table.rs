@@ -4,6 +4,7 @@
 
 use std::io::{self, Write};
 
+use learner::eval::GOAL_TOLERANCE;
 use learner::{MapName, BLUE_ID};
 
 use super::layout::{field, text, Cell, Column, Kind, Printout, Table};
@@ -289,6 +290,12 @@ fn two_objects(entry: &CurveEntry) -> Table {
 }
 
 fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
+    let built_in = results
+        .iter()
+        .any(|e| e.nodes.map(&MapName::Gate).is_some() || e.nodes.map(&MapName::Acs).is_some());
+    if !built_in {
+        return own_nodes(results);
+    }
     let get = |n: &NodeSummary, name: &MapName, f: fn(&MapSummary) -> learner::eval::MeanStd| {
         n.map(name).map(f)
     };
@@ -392,6 +399,71 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
             t
         }
     }
+}
+
+/// The node table of a learner of its own (an external learner): its maps'
+/// update calls and nodes and its further numbers, by its own names, with
+/// its labels below. The thesis has no values for them.
+fn own_nodes(results: &[CurveEntry]) -> Table {
+    let maps: std::collections::BTreeSet<&String> =
+        results.iter().flat_map(|e| e.nodes.maps.keys()).collect();
+    let extras: std::collections::BTreeSet<&String> =
+        results.iter().flat_map(|e| e.nodes.extra.keys()).collect();
+    let mut columns = vec![n_train_column()];
+    for name in &maps {
+        columns.push(own_count_column(&format!("{name} updates")));
+        columns.push(own_count_column(&format!("{name} nodes")));
+    }
+    for name in &extras {
+        columns.push(own_count_column(name));
+    }
+    let mut t = Table::new(
+        "nodes",
+        "The learner's own statistics when training ended: mean (population std) over folds"
+            .to_owned(),
+        columns,
+    );
+    for e in results {
+        let f = e.folds;
+        let mut row = vec![whole(e.train_runs)];
+        for name in &maps {
+            let map = e.nodes.maps.get(*name);
+            row.push(Cell::Spread {
+                ours: map.map(|m| m.update_calls),
+                folds: f,
+                thesis: None,
+            });
+            row.push(Cell::Spread {
+                ours: map.map(|m| m.nodes),
+                folds: f,
+                thesis: None,
+            });
+        }
+        for name in &extras {
+            row.push(Cell::Spread {
+                ours: e.nodes.extra.get(*name).copied(),
+                folds: f,
+                thesis: None,
+            });
+        }
+        t.rows.push(row);
+    }
+    let mut labels: std::collections::BTreeMap<&String, Vec<&String>> = Default::default();
+    for e in results {
+        for (key, values) in &e.nodes.labels {
+            let seen = labels.entry(key).or_default();
+            for v in values {
+                if !seen.contains(&v) {
+                    seen.push(v);
+                }
+            }
+        }
+    }
+    for (key, values) in labels {
+        let values: Vec<&str> = values.iter().map(|v| v.as_str()).collect();
+        t.footer.push(format!("{key}: {}", values.join(", ")));
+    }
+    t
 }
 
 /// The footer every experiment prints: messages, the 2/f requirement,
@@ -515,8 +587,10 @@ pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout
     let mut t = Table::new(
         "targets",
         format!(
-            "Pos/Ori: mean remaining error of the runs that failed; # steps: mean over all runs \
-             (failures count {}), in brackets over the successful ones; [thesis {source}]",
+            "Reached: the block within {GOAL_TOLERANCE} of the target in (x, y, wrapped θ), \
+             judged from the world; Pos/Ori: mean remaining error of the runs that failed; \
+             # steps: mean over all runs (failures count {}), in brackets over the successful \
+             ones; Final: mean remaining error of every run; [thesis {source}]",
             report.max_steps
         ),
         vec![
@@ -552,6 +626,25 @@ pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout
                     "thesis steps, successful runs",
                 ],
             ),
+            composed(
+                "Final pos / ori",
+                16,
+                &["pos error of all runs [m]", "ori error of all runs [rad]"],
+            ),
+        ],
+    );
+    let mut every = Table::new(
+        "runs",
+        "Every test run: whether the world found the block at the target, the actions \
+         sent, and the block's final distance and angle to the target"
+            .to_owned(),
+        vec![
+            Column::new("Target", 6, true, Kind::Number { decimals: 0 }),
+            Column::new("Run", 4, true, Kind::Number { decimals: 0 }),
+            Column::new("Reached", 8, false, Kind::Text),
+            Column::new("Steps", 6, true, Kind::Number { decimals: 0 }),
+            Column::new("Pos [m]", 9, true, Kind::Number { decimals: 4 }),
+            Column::new("Ori [rad]", 9, true, Kind::Number { decimals: 4 }),
         ],
     );
     for entry in &report.targets {
@@ -619,12 +712,28 @@ pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout
                     thesis(&|r| some(r.steps_reached)),
                 ],
             },
+            Cell::Composed {
+                text: format!("{} / {}", opt(s.pos_err_all, 3), opt(s.ori_err_all, 3)),
+                fields: vec![some(s.pos_err_all), some(s.ori_err_all)],
+            },
         ]);
+    }
+    for (k, entry) in report.targets.iter().enumerate() {
+        for (repetition, run) in entry.runs.iter().enumerate() {
+            every.rows.push(vec![
+                Cell::Number((k + 1) as f64),
+                Cell::Number((repetition + 1) as f64),
+                Cell::Text(if run.reached { "yes" } else { "no" }.to_owned()),
+                Cell::Number(run.steps as f64),
+                Cell::Number(run.pos_err),
+                Cell::Number(run.ori_err),
+            ]);
+        }
     }
     Printout {
         stem: format!("move-to-target-{}", report.setup.model),
         head,
-        tables: vec![t],
+        tables: vec![t, every],
         foot: run_info(&report.run),
     }
 }

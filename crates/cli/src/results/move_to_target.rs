@@ -59,7 +59,8 @@ pub fn sampled_targets(n: usize, seed: u64, block_start: (f64, f64)) -> Vec<Obje
 /// The outcome of one test run (§4.3, §7.6).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MttRun {
-    /// steps < the step limit.
+    /// The world's block met the goal (`learner::eval::goal_reached`) on
+    /// the message that ended the run; never the learner's word.
     pub reached: bool,
     /// `step_counter − 1` on the message that ended the run.
     pub steps: u64,
@@ -110,10 +111,10 @@ pub struct MttJobResult {
     pub timing: Timing,
 }
 
-/// §7.6 columns of one target.
+/// §7.6 columns of one target, and the final error of all its runs.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TargetSummary {
-    /// Runs with steps below the limit.
+    /// Runs that reached the target, as the world judged them.
     pub reached: usize,
     pub runs: usize,
     /// Mean final position error of the runs that failed (`None` if all reached).
@@ -124,6 +125,13 @@ pub struct TargetSummary {
     pub steps: f64,
     /// Mean steps over the runs that reached the target (`None` if none did).
     pub steps_reached: Option<f64>,
+    /// Mean final position error of every run, reached or not (`None` in
+    /// documents written before it was kept).
+    #[serde(default)]
+    pub pos_err_all: Option<f64>,
+    /// Mean final orientation error of every run, reached or not.
+    #[serde(default)]
+    pub ori_err_all: Option<f64>,
 }
 
 impl TargetSummary {
@@ -145,6 +153,8 @@ impl TargetSummary {
             ori_err_failed: mean(&failed.iter().map(|r| r.ori_err).collect::<Vec<_>>()),
             steps: mean(&all).unwrap_or(f64::NAN),
             steps_reached: mean(&reached),
+            pos_err_all: mean(&runs.iter().map(|r| r.pos_err).collect::<Vec<_>>()),
+            ori_err_all: mean(&runs.iter().map(|r| r.ori_err).collect::<Vec<_>>()),
         }
     }
 }
@@ -197,6 +207,8 @@ mod tests {
         assert!((s.ori_err_failed.unwrap() - 0.06).abs() < 1e-12);
         assert_eq!(s.steps, 2250.0);
         assert_eq!(s.steps_reached, Some(1500.0));
+        assert!((s.pos_err_all.unwrap() - 0.3).abs() < 1e-12);
+        assert!((s.ori_err_all.unwrap() - 0.03).abs() < 1e-12);
         let all = TargetSummary::of(&[run(true, 10, 0.0)]);
         assert_eq!(all.pos_err_failed, None);
         assert_eq!(all.steps_reached, Some(10.0));

@@ -61,6 +61,13 @@ pub struct NodeSummary {
     /// Present for models with ACs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub acs: Option<AcSummary>,
+    /// The further numbers a learner of its own reports (an external
+    /// learner's `Stats.extra`), over the folds that report each.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub extra: BTreeMap<String, MeanStd>,
+    /// Its labels: every value a fold gave, in order, without repeats.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub labels: BTreeMap<String, Vec<String>>,
 }
 
 /// # ACs of one fold; 0 for a fold of another model, as for the columns
@@ -138,7 +145,28 @@ impl NodeSummary {
                 },
             }
         });
-        Self { maps, acs }
+        let mut extra: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+        let mut labels: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for other in folds.iter().filter_map(|s| s.as_other()) {
+            for (key, &value) in &other.extra {
+                extra.entry(key.clone()).or_default().push(value);
+            }
+            for (key, value) in &other.labels {
+                let seen = labels.entry(key.clone()).or_default();
+                if !seen.contains(value) {
+                    seen.push(value.clone());
+                }
+            }
+        }
+        Self {
+            maps,
+            acs,
+            extra: extra
+                .into_iter()
+                .map(|(key, values)| (key, MeanStd::of(&values)))
+                .collect(),
+            labels,
+        }
     }
 
     /// Mean ± std of one map's counters, if the map exists.
