@@ -749,7 +749,11 @@ def _check_reserved_stats(reply: Any) -> None:
 
     document = {
         "maps": {
-            name: {"update_calls": m.update_calls, "inserts": m.inserts, "nodes": m.nodes}
+            name: {
+                "update_calls": m.update_calls,
+                "inserts": m.inserts,
+                "nodes": m.nodes,
+            }
             for name, m in reply.maps.items()
         },
         "extra": dict(reply.extra),

@@ -12,7 +12,7 @@ import math
 import sys
 from typing import Any
 
-from pushlearn._proto import learner_pb2 as lp
+from pushlearn._pb import learner_pb2 as lp
 from pushlearn.framing import read_frame, write_frame
 
 MODES = (
@@ -57,12 +57,14 @@ def poses_of(state: Any) -> dict[int, tuple[float, float, float]]:
 def main() -> int:
     mode = sys.argv[1] if len(sys.argv) > 1 else "ok"
     if mode not in MODES:
-        print(f"raw_learner: unknown mode {mode!r}; one of {', '.join(MODES)}", file=sys.stderr)
+        print(
+            f"raw_learner: unknown mode {mode!r}; one of {', '.join(MODES)}",
+            file=sys.stderr,
+        )
         return 2
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
     observed: dict[int, tuple[float, float, float]] = {}
     predicted: dict[int, tuple[float, float, float]] = {}
-    stored: dict[int, tuple[float, float, float]] = {}
 
     def resolve(ref: Any) -> dict[int, tuple[float, float, float]]:
         nonlocal observed
@@ -93,13 +95,13 @@ def main() -> int:
                 ),
             )
         elif call == "new_fold":
-            observed, predicted, stored = {}, {}, {}
+            observed, predicted = {}, {}
             if mode == "answer-one-way":
                 reply(seq, stats=lp.Stats())
         elif call == "reset":
-            stored = resolve(request.reset.state)
+            resolve(request.reset.state)  # predicts no motion: keeps only what it saw
         elif call == "update":
-            stored = resolve(request.update.state)
+            resolve(request.update.state)
         elif call == "predict":
             source = resolve(getattr(request.predict, "from"))
             if mode == "error":
@@ -119,13 +121,23 @@ def main() -> int:
                 pose.x, pose.y, pose.theta = 0.0, 0.0, 0.0
                 bodies.append(pose)
             predicted = {b.id: (b.x, b.y, b.theta) for b in bodies}
-            reply(seq + 1 if mode == "wrong-seq" else seq, prediction=lp.Prediction(bodies=bodies))
+            reply(
+                seq + 1 if mode == "wrong-seq" else seq,
+                prediction=lp.Prediction(bodies=bodies),
+            )
         elif call == "set_target":
             refused = mode == "refuse-target"
-            reply(seq, target=lp.TargetReply(accepted=not refused, refusal="no" if refused else ""))
+            reply(
+                seq,
+                target=lp.TargetReply(
+                    accepted=not refused, refusal="no" if refused else ""
+                ),
+            )
         elif call == "act":
             action = lp.Action()
-            action.vx, action.vy = (math.nan, 0.0) if mode == "nan-action" else (0.1, 0.0)
+            action.vx, action.vy = (
+                (math.nan, 0.0) if mode == "nan-action" else (0.1, 0.0)
+            )
             reply(seq, action=lp.ActionReply(action=action, has_target=True))
         elif call == "get_stats":
             stats = lp.Stats()

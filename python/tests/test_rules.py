@@ -19,11 +19,23 @@ BROKEN = [
     ("no-name", "push-task", "said hello without a name"),
     ("no-forward", "push-task", "does not announce the FORWARD capability"),
     ("answer-one-way", "push-task", "new_fold is one-way and gets no reply"),
-    ("wrong-seq", "push-task", "a prediction reply for message 5 (expected a prediction reply for message 4)"),
+    (
+        "wrong-seq",
+        "push-task",
+        "a prediction reply for message 5 (expected a prediction reply for message 4)",
+    ),
     ("miss-block", "push-task", "predicted no pose for block 15"),
-    ("extra-body", "push-task", "predicted body 99, which the state it predicted from does not have"),
+    (
+        "extra-body",
+        "push-task",
+        "predicted body 99, which the state it predicted from does not have",
+    ),
     ("twice", "push-task", "predicted body 8 twice"),
-    ("error", "push-task", "the learner failed on message 4 (predict): ValueError: raw"),
+    (
+        "error",
+        "push-task",
+        "the learner failed on message 4 (predict): ValueError: raw",
+    ),
     ("reserved-stats", "push-task", 'map "actuator" is missing'),
     ("refuse-target", "move-to-target", "refused the target: no"),
     ("nan-action", "move-to-target", "chose a non-finite action"),
@@ -51,10 +63,19 @@ def experiment_args(task: str, mode: str, sim_bin: Path, out: Path) -> list[str]
     common += ["--json", str(out)]
     if task == "push-task":
         return ["experiment", "push-task", "--train-runs", "1", "--folds", "1", *common]
-    return ["experiment", "move-to-target", "--target=-0.6,-0.7,0", "--repetitions", "1", *common]
+    return [
+        "experiment",
+        "move-to-target",
+        "--target=-0.6,-0.7,0",
+        "--repetitions",
+        "1",
+        *common,
+    ]
 
 
-@pytest.mark.parametrize(("mode", "task", "message"), BROKEN, ids=[b[0] for b in BROKEN])
+@pytest.mark.parametrize(
+    ("mode", "task", "message"), BROKEN, ids=[b[0] for b in BROKEN]
+)
 def test_the_driver_names_the_rule_a_learner_breaks(
     driver_bin: Path, sim_bin: Path, tmp_path: Path, mode: str, task: str, message: str
 ) -> None:
@@ -66,7 +87,9 @@ def test_the_driver_names_the_rule_a_learner_breaks(
     assert not out.exists(), "a report was written although the learner broke a rule"
 
 
-@pytest.mark.parametrize(("mode", "task", "message"), BROKEN, ids=[b[0] for b in BROKEN])
+@pytest.mark.parametrize(
+    ("mode", "task", "message"), BROKEN, ids=[b[0] for b in BROKEN]
+)
 def test_learner_check_names_the_rule_a_learner_breaks(
     driver_bin: Path, mode: str, task: str, message: str
 ) -> None:

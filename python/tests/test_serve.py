@@ -430,7 +430,9 @@ class BorrowsAReservedName(Recorder):
         return {"maps": {"gate": {"update_calls": 1, "inserts": 1, "nodes": 1}}}
 
 
-def test_statistics_under_a_built_in_models_name_are_checked_as_the_driver_does() -> None:
+def test_statistics_under_a_built_in_models_name_are_checked_as_the_driver_does() -> (
+    None
+):
     script = Script()
     script.start()
     script.add(get_stats=learner_pb2.GetStats())
