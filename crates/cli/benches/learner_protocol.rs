@@ -11,7 +11,8 @@ use std::time::Duration;
 
 use criterion::Criterion;
 use learner::features::{parse_frame, ActuatorYaw, ParseError};
-use learner::{Action, Frame, Model, ModelStats, Observation, Poses, Target, TargetError};
+use learner::{Action, Frame, Model, ModelStats, Poses, Target, TargetError};
+use pushlearn_cli::external::check::scripted_state;
 use pushlearn_cli::external::server::{serve, Identity, Requests};
 use pushlearn_cli::external::{ExternalModel, LearnerSpec, Source};
 use serde::{Deserialize, Serialize};
@@ -79,18 +80,7 @@ fn serve_still(input: impl std::io::Read, output: impl std::io::Write) {
 
 /// A world message as the world sends it: the actuator and the blue block.
 fn frame(y: f64) -> Frame {
-    let body = |name: &str, id, x, y, z| Observation {
-        name: name.into(),
-        id,
-        position: [x, y, z],
-        orientation: [0.0, 0.0, 0.0, 1.0],
-    };
-    Frame {
-        objects: vec![
-            body("actuator", 8, 0.0, y, 0.03),
-            body("blockA", 15, 0.0, 0.25, 0.05),
-        ],
-    }
+    scripted_state((0.0, y), (0.0, 0.25))
 }
 
 /// One training message: parse, update, predict.
