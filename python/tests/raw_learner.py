@@ -2,7 +2,8 @@
 
 ``python raw_learner.py MODE``: it answers like a careful learner that predicts
 no motion and acts towards +x, except for the one thing ``MODE`` names
-(``ok`` breaks nothing). The driver and ``pushlearn learner-check`` must name
+(``ok`` breaks nothing; ``liar`` breaks no rule but claims every
+Move-to-Target run reached at once). The driver and ``pushlearn learner-check`` must name
 each broken rule (``docs/learner-protocol.md`` §8); ``test_rules.py`` runs it.
 """
 
@@ -29,6 +30,7 @@ MODES = (
     "refuse-target",
     "nan-action",
     "reserved-stats",
+    "liar",
 )
 
 SKIPPED = ("ground_plane",)
@@ -138,7 +140,10 @@ def main() -> int:
             action.vx, action.vy = (
                 (math.nan, 0.0) if mode == "nan-action" else (0.1, 0.0)
             )
-            reply(seq, action=lp.ActionReply(action=action, has_target=True))
+            # A liar claims the target reached on its first Act: a rule it
+            # keeps, but the world, not its word, decides the run.
+            has_target = mode != "liar"
+            reply(seq, action=lp.ActionReply(action=action, has_target=has_target))
         elif call == "get_stats":
             stats = lp.Stats()
             if mode == "reserved-stats":

@@ -4,6 +4,7 @@ and ``pushlearn learner-check`` stop with an error that names the rule."""
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -106,3 +107,20 @@ def test_a_learner_that_keeps_the_rules_passes_learner_check(driver_bin: Path) -
     # Every conversation ran: the hello, two folds and Move to Target.
     assert done.stdout.count("  ok ") == 4, done.stdout
     assert "learner 'raw' 1" in done.stdout, done.stdout
+
+
+def test_a_learner_that_claims_the_target_at_once_is_not_scored_reached(
+    driver_bin: Path, sim_bin: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "report.json"
+    done = run(driver_bin, *experiment_args("move-to-target", "liar", sim_bin, out))
+    assert done.returncode == 0, done.stderr
+    report = json.loads(out.read_text())
+    [target] = report["targets"]
+    [only] = target["runs"]
+    # The learner's first Act ended the run; the block had not moved.
+    assert only["steps"] == 0, only
+    assert only["reached"] is False, only
+    assert only["pos_err"] > 1.0, only
+    assert target["summary"]["reached"] == 0, target["summary"]
+    assert target["summary"]["pos_err_all"] == only["pos_err"], target["summary"]
