@@ -75,10 +75,13 @@ pub fn run(args: LearnerCheckArgs) -> Result<()> {
     };
     let found = check(&spec, args.rate);
     print!("{}", render(&spec, &found));
+    // Counted by check, not by rule: one broken rule can fail several checks.
     match found.broken() {
         0 => Ok(()),
-        1 => bail!("the learner broke 1 rule of the learner protocol"),
-        n => bail!("the learner broke {n} rules of the learner protocol"),
+        n => bail!(
+            "the learner failed {n} of the {} checks of the learner protocol",
+            found.findings.len()
+        ),
     }
 }
 
