@@ -120,7 +120,9 @@ class FakeModel:
     def stats(self) -> dict[str, Any]:
         updates = sum(1 for entry in self.log if entry[0] == "update" and entry[4])
         return {
-            "maps": {"gate": {"update_calls": updates, "inserts": 0, "nodes": 0}},
+            # A map of its own name: the built-in names are reserved for the
+            # built-in models' complete statistics (docs/learner-protocol.md §7).
+            "maps": {"stand-in": {"update_calls": updates, "inserts": 0, "nodes": 0}},
             "extra": {},
             "labels": {},
         }
@@ -132,7 +134,12 @@ class FakeInteractionModel(FakeModel):
 
 def module() -> types.ModuleType:
     """A module object standing in for ``pushlearn._native``."""
+    # The statistics rule is the driver's own code, not a model's: the real one
+    # checks what the stand-in models report.
+    from pushlearn import _native as real
+
     fake = types.ModuleType("pushlearn._native")
+    fake.check_stats = real.check_stats  # type: ignore[attr-defined]
     fake.GateModel = FakeModel  # type: ignore[attr-defined]
     fake.InteractionModel = FakeInteractionModel  # type: ignore[attr-defined]
     fake.Aitm = object  # type: ignore[attr-defined]

@@ -116,7 +116,7 @@ def test_each_observation_is_parsed_once_and_predictions_are_passed_back() -> No
     assert [p.bodies[0].y for p in predictions[-3:]] == pytest.approx(
         [0.005, 0.010, 0.015]
     )
-    assert replies[-1].stats.maps["gate"].update_calls == 2
+    assert replies[-1].stats.maps["stand-in"].update_calls == 2
 
 
 def test_a_fold_is_a_seeded_copy_of_the_template() -> None:

@@ -681,10 +681,15 @@ def stub_constants() -> set[str]:
     }
 
 
+def stub_functions() -> set[str]:
+    tree = ast.parse(STUB.read_text(encoding="utf-8"))
+    return {node.name for node in tree.body if isinstance(node, ast.FunctionDef)}
+
+
 def test_the_stub_matches_the_module() -> None:
     stub = stub_classes()
     exported = {name for name in dir(_native) if not name.startswith("_")}
-    assert set(stub) | stub_constants() == exported
+    assert set(stub) | stub_constants() | stub_functions() == exported
     assert pathlib.Path(
         _native.SOURCE_CHECKOUT, "crates", "python", "Cargo.toml"
     ).is_file()
