@@ -28,6 +28,25 @@ def goal_distance(
     """The norm of ``(Δx, Δy, wrap(Δθ))`` from ``pose`` to ``target``: the one success
     criterion every task with a goal is judged by (``docs/spec/experiments.md`` §4.4)."""
 
+ACTUATOR_ID: int
+"""The actuator's body id (8)."""
+ACTUATOR_NAME: str
+"""The actuator's body name (``actuator``)."""
+BLUE_ID: int
+"""The blue block's id (15, ``blockA``)."""
+RED_ID: int
+"""The red block's id (27, ``blockB``)."""
+
+def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
+    """The yaw of the quaternion ``(x, y, z, w)`` as the learners read it (Rust
+    ``pushlearn_core::orientation::yaw``), unrounded."""
+
+def yaw_to_quaternion(theta: float) -> tuple[float, float, float, float]:
+    """The quaternion ``(x, y, z, w)`` of a rotation by ``theta`` about z."""
+
+def is_skipped(name: str) -> bool:
+    """Whether the learners skip a body of this name (the ground, walls, ghosts)."""
+
 def check_stats(document: str) -> None:
     """Raises ValueError, with the experiment driver's reason, unless ``document`` (the
     JSON of ``{maps, extra, labels}``) is statistics the driver accepts from a learner."""

@@ -710,3 +710,28 @@ def test_every_class_and_method_is_documented() -> None:
         for m, member in vars(cls).items():
             if not m.startswith("_"):
                 assert member.__doc__, (name, m)
+
+
+def test_the_sdks_vocabulary_is_the_extensions() -> None:
+    """The pure-Python SDK repeats the ids, the skip rule and the yaw so that it
+    works without the extension; the extension's come from the Rust vocabulary
+    (crates/core), and the two must agree bit for bit."""
+    from pushlearn import learner
+
+    assert (learner.ACTUATOR_ID, learner.ACTUATOR_NAME) == (
+        _native.ACTUATOR_ID,
+        _native.ACTUATOR_NAME,
+    )
+    assert (learner.BLUE_ID, learner.RED_ID) == (_native.BLUE_ID, _native.RED_ID)
+    for name in ["actuator", "blockA", "ground_plane", "north_wall", "blockAShadow", "shadow"]:
+        assert learner.is_skipped(name) == _native.is_skipped(name), name
+    quaternions = [
+        (0.0, 0.0, 0.0, 0.0),
+        (0.0, 0.0, 1e-300, 1e-300),
+        (1e300, -1e300, 1e300, 1e300),
+        *(_native.yaw_to_quaternion(t / 7.0) for t in range(-30, 31)),
+        (0.1, -0.2, 0.3, 0.9),
+    ]
+    for q in quaternions:
+        ours, theirs = learner.quaternion_to_yaw(*q), _native.quaternion_to_yaw(*q)
+        assert ours == theirs or (math.isnan(ours) and math.isnan(theirs)), q

@@ -6,19 +6,23 @@
 use std::path::{Path, PathBuf};
 
 use pushlearn::wire::{BodyName, GHOST_MARKER};
+use pushlearn_core::body::{
+    ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME, GROUND_NAME,
+    RED_ID, RED_NAME,
+};
 use serde::{Deserialize, Serialize};
 
 /// Ids the learners key their tables by (`docs/spec/features.md`): these names must
 /// carry exactly these ids, and no other body may use them.
 pub const KNOWN_IDS: [(&str, u32); 4] = [
-    ("actuator", 8),
-    ("blockA", 15),
-    ("blockB", 27),
-    ("cylinder", 33),
+    (ACTUATOR_NAME, ACTUATOR_ID),
+    (BLUE_NAME, BLUE_ID),
+    (RED_NAME, RED_ID),
+    (CYLINDER_NAME, CYLINDER_ID),
 ];
 
 /// Name of the body the actuator commands drive.
-pub const ACTUATOR: &str = "actuator";
+pub const ACTUATOR: &str = ACTUATOR_NAME;
 
 const BUILTINS: [(&str, &str); 3] = [
     ("one_block", include_str!("../scenes/one_block.toml")),
@@ -395,14 +399,12 @@ impl Scene {
 
     fn validate_body(&self, i: usize, b: &BodySpec) -> Result<(), SceneError> {
         let field = |f: &str| format!("body[{i}].{f}");
-        if b.name.is_empty()
-            || b.name == "ground_plane"
-            || BodyName::parse(&b.name).ghost().is_some()
+        if b.name.is_empty() || b.name == GROUND_NAME || BodyName::parse(&b.name).ghost().is_some()
         {
             return Err(invalid(
                 field("name"),
                 format!(
-                    "`{}` is reserved (empty, `ground_plane` or containing `{GHOST_MARKER}`)",
+                    "`{}` is reserved (empty, `{GROUND_NAME}` or containing `{GHOST_MARKER}`)",
                     b.name
                 ),
             ));

@@ -7,7 +7,7 @@ use crate::scene::{Scene, ACTUATOR};
 use crate::world::{ActuatorMode, Command, CommandError, StepError, World, WorldError};
 
 /// The body whose motion the sweep reports (the blue block).
-pub const BLUE_BLOCK: &str = "blockA";
+pub const BLUE_BLOCK: &str = pushlearn_core::BLUE_NAME;
 
 /// What to run; [`SweepOptions::default`] is the thesis's Push Task test.
 #[derive(Debug, Clone, PartialEq)]

@@ -4,6 +4,8 @@ use ode::{
     BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
 };
 use pushlearn::wire::orientation::normalise;
+use pushlearn_core::orientation::unit_yaw;
+use pushlearn_core::GROUND_NAME;
 use serde::{Deserialize, Serialize};
 
 use pushlearn::wire::{clamp_speed, BodyName, Ghost};
@@ -112,14 +114,11 @@ pub struct BodyState {
 impl BodyState {
     /// Rotation about +z in (−π, π], from the orientation quaternion.
     ///
-    /// Not the wire's [`orientation::yaw`](pushlearn::wire::orientation::yaw):
-    /// that one normalises first and uses another, equal only up to
-    /// rounding, form of the formula; this one is the calibration sweep's
-    /// (`docs/results.md` §2), whose published numbers it
-    /// must keep reproducing bit for bit.
+    /// Not the learners' [`orientation::yaw`](pushlearn_core::orientation::yaw)
+    /// but the calibration sweep's [`unit_yaw`] (`docs/results.md` §2), whose
+    /// published numbers it must keep reproducing bit for bit.
     pub fn yaw(&self) -> f64 {
-        let [x, y, z, w] = self.orientation;
-        (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+        unit_yaw(self.orientation)
     }
 }
 
@@ -327,7 +326,7 @@ impl World {
     }
 
     /// Whether the collider reported the bodies named `a` and `b` touching
-    /// in the last step (`ground_plane` names the ground).
+    /// in the last step ([`GROUND_NAME`] names the ground).
     pub fn touched_last_step(&self, a: &str, b: &str) -> bool {
         let (Some(ta), Some(tb)) = (self.tag_of(a), self.tag_of(b)) else {
             return false;
@@ -337,7 +336,7 @@ impl World {
     }
 
     fn tag_of(&self, name: &str) -> Option<u32> {
-        if name == "ground_plane" {
+        if name == GROUND_NAME {
             return Some(0);
         }
         self.scene.body_index(name).map(|i| i as u32 + 1)

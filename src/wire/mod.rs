@@ -13,12 +13,14 @@
 //! * [`message`]: constructors such as [`pb::ClientMessage::move_`];
 //! * [`orientation`]: a planar yaw as the wire's quaternion, and back;
 //! * [`BodyName`]: a body's or a ghost's name, parsed;
+//! * [`observation`]: a published body as a learner sees it;
 //! * [`speed`]: the actuator's speed limit, as the world applies it.
 
 pub mod body_name;
 pub mod codec;
 pub mod connection;
 pub mod message;
+pub mod observation;
 pub mod orientation;
 pub mod pb;
 pub mod speed;
@@ -31,19 +33,10 @@ pub use codec::{
 };
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
+pub use observation::frame;
 pub use speed::clamp_speed;
 pub use validate::{validate, InvalidCommand};
 
-/// No body of a world is farther than this from the origin, in metres, on
-/// any axis: the world refuses a SetPose beyond it (nothing in a table-top
-/// world lives there, and ODE's collision arithmetic is not meant for such
-/// magnitudes), and a learner daemon refuses a state beyond it (a model
-/// trained on a jump to 1e296 m predicts NaN).
-pub const MAX_POSITION: f64 = 1000.0;
-
-/// No action a learner is asked about is faster than this, in m/s, in
-/// either component: a world drives its actuator at its scene's top speed
-/// (0.5 m/s in the thesis's world) whatever a Move asks, and a learner
-/// daemon refuses an action beyond this (gate+ trained on −7.4e283 m/s
-/// predicts NaN).
-pub const MAX_ACTION_SPEED: f64 = 1000.0;
+// The limits are the vocabulary's: the world and the learner daemon refuse
+// beyond the same numbers.
+pub use pushlearn_core::{MAX_ACTION_SPEED, MAX_POSITION};

@@ -1,43 +1,22 @@
-//! The one conversion from the wire's `WorldState` to the learner's [`Frame`]
-//! (`docs/spec/protocol.md` §4): every body in message order, with its name, id,
-//! position and orientation quaternion in the order (x, y, z, w), which is
-//! the schema's order as well as the learner's.
+//! The learner's view of the world's `WorldState` (`docs/spec/protocol.md` §4),
+//! and the start heights of its Hello.
 //!
-//! Skipping (`ground_plane`, `*wall*`, `*Shadow`) and rounding are the
-//! models' parsing (`docs/spec/features.md` §1), so this conversion keeps everything.
+//! The conversion of each body is the wire's [`pushlearn::wire::frame`], the
+//! one that `pushlearn serve-learner` uses as well, so that the in-process
+//! driver and the learner protocol refuse the same states.
 
 use std::collections::BTreeMap;
 
-use learner::{Frame, Observation};
+use learner::Frame;
 
 use pushlearn::wire::pb;
 
-/// The learner's view of one world state.
-///
-/// A body published without a position or orientation gets NaN there
-/// instead of a made-up pose: the models' parsing then refuses the frame with
-/// an error naming the body if (and only if) it is a body the learner uses.
+/// The learner's view of one world state: every body in message order, a
+/// body published without a pose given NaN (refused by the models' parsing
+/// if, and only if, it is a body the learner uses).
 #[must_use]
 pub fn frame_from_state(state: &pb::WorldState) -> Frame {
-    Frame {
-        objects: state.models().iter().map(observation).collect(),
-    }
-}
-
-fn observation(model: &pb::ModelState) -> Observation {
-    let pose = model.pose.as_ref();
-    let position = pose
-        .and_then(|p| p.position.as_ref())
-        .map_or([f64::NAN; 3], |v| [v.x, v.y, v.z]);
-    let orientation = pose
-        .and_then(|p| p.orientation.as_ref())
-        .map_or([f64::NAN; 4], |q| [q.x, q.y, q.z, q.w]);
-    Observation {
-        name: model.name.clone(),
-        id: model.id,
-        position,
-        orientation,
-    }
+    pushlearn::wire::frame(state.models())
 }
 
 /// The z to give a SetPose of each body (or of its ghost): the z of its start

@@ -11,37 +11,16 @@ use nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// Id of the actuator sphere (`docs/spec/README.md` §4, `docs/spec/world.md` §3).
-pub const ACTUATOR_ID: u32 = 8;
-/// Id of the blue block, `blockA` (0.5 × 0.1 m).
-pub const BLUE_ID: u32 = 15;
-/// Id of the red block, `blockB` (0.3 × 0.3 m), only in the two-object scene.
-pub const RED_ID: u32 = 27;
-
-/// Id of the cylinder, only in the new-object scene (`objects`).
-pub const CYLINDER_ID: u32 = 33;
-
-/// Model name of the actuator; `docs/spec/protocol.md` §4 identifies it by this exact name.
-pub const ACTUATOR_NAME: &str = "actuator";
-/// Model name of the blue block (id 15).
-pub const BLUE_NAME: &str = "blockA";
-/// Model name of the red block (id 27).
-pub const RED_NAME: &str = "blockB";
-/// Model name of the cylinder (id 33).
-pub const CYLINDER_NAME: &str = "cylinder";
-
-/// The world's model name for an object id (`docs/spec/experiments.md` §2: SetPose
-/// commands address bodies by name).
-#[must_use]
-pub fn object_name(id: u32) -> Option<&'static str> {
-    match id {
-        ACTUATOR_ID => Some(ACTUATOR_NAME),
-        BLUE_ID => Some(BLUE_NAME),
-        RED_ID => Some(RED_NAME),
-        CYLINDER_ID => Some(CYLINDER_NAME),
-        _ => None,
-    }
-}
+// The bodies' ids and names are the vocabulary's, shared with the wire, the
+// world and the Python extension; re-exported where the learner's users find
+// them.
+pub use pushlearn_core::body::{
+    object_name, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME,
+    RED_ID, RED_NAME,
+};
+// What a driver hands a model: converted from a published body in one place
+// (`pushlearn_core::Observation::published`).
+pub use pushlearn_core::{Frame, Observation};
 
 /// A primitive action: the actuator's planar velocity in m/s, global frame.
 /// It stays in force until replaced (`docs/spec/README.md` §4).
@@ -134,26 +113,6 @@ impl ObjectState {
     pub fn is_finite(&self) -> bool {
         self.x.is_finite() && self.y.is_finite() && self.theta.is_finite()
     }
-}
-
-/// One body of a world-state message, as the daemon hands it to the learner
-/// (the protobuf `ModelState` minus what no learner reads: velocities, scale,
-/// type, `is_static`; `docs/spec/protocol.md` §4).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Observation {
-    pub name: String,
-    pub id: u32,
-    /// World-frame position (x, y, z) in metres; z is not used by the learner.
-    pub position: [f64; 3],
-    /// Orientation quaternion in the order (x, y, z, w), as in the wire schema.
-    pub orientation: [f64; 4],
-}
-
-/// The raw content of one world-state message: every body it lists, in
-/// message order, unfiltered (models parse it with `features::parse_frame`).
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Frame {
-    pub objects: Vec<Observation>,
 }
 
 /// Model-agnostic object states of a world state, real or predicted: what the

@@ -56,6 +56,28 @@ fn goal_distance(pose: (f64, f64, f64), target: (f64, f64, f64)) -> f64 {
     learner::eval::goal_distance(&state(pose), &state(target))
 }
 
+/// The yaw of the quaternion `(x, y, z, w)` as the learners read it
+/// (`pushlearn_core::orientation::yaw`): the SDK's pure-Python
+/// `quaternion_to_yaw` is tested against this one bit for bit.
+#[pyfunction]
+fn quaternion_to_yaw(x: f64, y: f64, z: f64, w: f64) -> f64 {
+    pushlearn_core::orientation::yaw([x, y, z, w])
+}
+
+/// The quaternion `(x, y, z, w)` of a rotation by `theta` about z
+/// (`pushlearn_core::orientation::from_yaw`).
+#[pyfunction]
+fn yaw_to_quaternion(theta: f64) -> (f64, f64, f64, f64) {
+    let [x, y, z, w] = pushlearn_core::orientation::from_yaw(theta);
+    (x, y, z, w)
+}
+
+/// Whether the learners skip a body of this name (`pushlearn_core::is_skipped`).
+#[pyfunction]
+fn is_skipped(name: &str) -> bool {
+    pushlearn_core::is_skipped(name)
+}
+
 /// The pushlearn models, implemented in Rust: GateModel, InteractionModel
 /// (with their worlds GateWorld and InteractionWorld) and Aitm.
 #[pymodule]
@@ -68,6 +90,15 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
     m.add("GOAL_TOLERANCE", learner::eval::GOAL_TOLERANCE)?;
+    // The vocabulary the pure-Python SDK (`pushlearn.learner`) repeats so
+    // that it works without the extension; its tests compare the two.
+    m.add_function(wrap_pyfunction!(quaternion_to_yaw, m)?)?;
+    m.add_function(wrap_pyfunction!(yaw_to_quaternion, m)?)?;
+    m.add_function(wrap_pyfunction!(is_skipped, m)?)?;
+    m.add("ACTUATOR_ID", pushlearn_core::ACTUATOR_ID)?;
+    m.add("ACTUATOR_NAME", pushlearn_core::ACTUATOR_NAME)?;
+    m.add("BLUE_ID", pushlearn_core::BLUE_ID)?;
+    m.add("RED_ID", pushlearn_core::RED_ID)?;
     // Where the extension was built: the Gymnasium environments look for the
     // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
     // and `PATH`, so that `pip install .` after `cargo build --release` needs

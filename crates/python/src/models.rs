@@ -18,7 +18,7 @@ use crate::options::{self, GateOptions, InteractionOptions};
 /// blocks in ascending id order.
 fn pose_rows<'py>(py: Python<'py>, poses: &Poses) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let mut flat = Vec::with_capacity(4 * (1 + poses.blocks.len()));
-    let actuator = (learner::ACTUATOR_ID, poses.actuator);
+    let actuator = (pushlearn_core::ACTUATOR_ID, poses.actuator);
     for (id, s) in std::iter::once(actuator).chain(poses.blocks.iter().map(|(&i, &s)| (i, s))) {
         flat.extend_from_slice(&[f64::from(id), s.x, s.y, s.theta]);
     }

@@ -12,7 +12,7 @@
 use std::io::{Read, Write};
 
 use bytes::BytesMut;
-use learner::{Action, Frame, Model, ObjectState, Observation, Target};
+use learner::{Action, Model, ObjectState, Target};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tokio_util::codec::Decoder;
@@ -52,26 +52,6 @@ struct Served<M: Model> {
     rng: ChaCha8Rng,
     observed: Option<M::World>,
     prediction: Option<M::World>,
-}
-
-fn frame_of(state: &lp::State) -> Frame {
-    Frame {
-        objects: state
-            .bodies
-            .iter()
-            .map(|b| {
-                let pose = b.pose.unwrap_or_default();
-                let p = pose.position.unwrap_or_default();
-                let q = pose.orientation.unwrap_or_default();
-                Observation {
-                    name: b.name.clone(),
-                    id: b.id,
-                    position: [p.x, p.y, p.z],
-                    orientation: [q.x, q.y, q.z, q.w],
-                }
-            })
-            .collect(),
-    }
 }
 
 /// Every body of `state` within [`MAX_POSITION`] of the origin, as in any
@@ -123,7 +103,9 @@ impl<M: Model> Served<M> {
                 within_the_world(&observed)?;
                 let world = self
                     .model
-                    .parse(&frame_of(&observed))
+                    // The in-process driver's conversion: a body without a pose
+                    // is refused, never read as one at the origin.
+                    .parse(&pushlearn::wire::frame(&observed.bodies))
                     .map_err(|e| format!("the state cannot be parsed: {e}"))?;
                 self.observed = Some(world.clone());
                 Ok(world)

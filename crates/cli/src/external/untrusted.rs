@@ -322,6 +322,58 @@ mod tests {
         );
     }
 
+    /// A body the learner uses, published without a pose (or half of one),
+    /// is refused naming it, with the in-process driver's own parse error:
+    /// `pushlearn serve-learner` once read a missing pose as zeros and
+    /// trained on a made-up body at the origin.
+    #[test]
+    fn a_state_with_a_missing_pose_is_refused_naming_the_body_as_in_process() {
+        let half = pb::Pose {
+            position: Some(pb::Vector3d::new(0.0, -0.3, 0.05)),
+            orientation: None,
+        };
+        for (name, pose) in [("actuator", None), ("blockA", None), ("blockA", Some(half))] {
+            let mut missing = observed(0.0);
+            let Some(lp::state_ref::State::Observed(state)) = &mut missing.state else {
+                unreachable!("observed() sends a state")
+            };
+            let body = state.bodies.iter_mut().find(|b| b.name == name).unwrap();
+            body.pose = pose;
+            let in_process = learner::features::parse_frame(
+                &crate::frame::frame_from_state(&pb::WorldState {
+                    model_v: Some(pb::ModelStateV {
+                        models: state.bodies.clone(),
+                    }),
+                    ..pb::WorldState::default()
+                }),
+                learner::features::ActuatorYaw::ForceZero,
+            )
+            .unwrap_err()
+            .to_string();
+            assert!(in_process.contains(&format!("{name:?}")), "{in_process}");
+
+            let mut bytes = start();
+            bytes.extend(frame(
+                2,
+                Call::Update(lp::Update {
+                    state: Some(missing),
+                    action: Some(lp::Action {
+                        vx: Some(0.0),
+                        vy: Some(0.5),
+                    }),
+                }),
+            ));
+            for kind in [ModelKind::Gate, ModelKind::Interaction] {
+                let served = serve_untrusted_requests(kind, &bytes).unwrap();
+                let ended = served.ended.unwrap_or_default();
+                assert!(
+                    ended.contains("message 2") && ended.ends_with(&in_process),
+                    "{kind} {name} {pose:?}: {ended}"
+                );
+            }
+        }
+    }
+
     /// Found by the `learner_requests` fuzz target: gate+ (which learns
     /// the actuator's response) trained on an action of −7.4e283 m/s
     /// predicted NaN. Such an action is refused.

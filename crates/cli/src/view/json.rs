@@ -177,7 +177,7 @@ impl Outgoing {
         let bodies = state
             .models()
             .iter()
-            .filter(|model| model.name != "ground_plane")
+            .filter(|model| model.name != pushlearn_core::GROUND_NAME)
             .map(|model| {
                 let (kind, of) = classify(&model.name);
                 let (x, y, yaw) = planar(model);

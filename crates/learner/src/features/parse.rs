@@ -57,42 +57,10 @@ pub enum ActuatorYaw {
     Keep,
 }
 
-/// Models the learner ignores (`docs/spec/protocol.md` §4): `ground_plane`, anything whose
-/// name contains `wall` or `Shadow`.
-#[must_use]
-pub fn is_skipped(name: &str) -> bool {
-    name == "ground_plane" || name.contains("wall") || name.contains("Shadow")
-}
-
-/// Yaw of an orientation quaternion `[x, y, z, w]`, unrounded
-/// (`docs/spec/features.md` §1 step 2): normalised first, 0 for the zero quaternion.
-/// Non-finite components give NaN (`parse_frame` rejects them before).
-#[must_use]
-pub fn quaternion_to_yaw(q: [f64; 4]) -> f64 {
-    let [mut x, mut y, mut z, mut w] = q;
-    let largest = x.abs().max(y.abs()).max(z.abs()).max(w.abs());
-    if largest == 0.0 {
-        return 0.0;
-    }
-    let mut norm = (x * x + y * y + z * z + w * w).sqrt();
-    if !norm.is_normal() {
-        // The squares overflowed or underflowed although the quaternion is not
-        // zero; pre-scaling changes the path only for such inputs, never for
-        // the unit quaternions the world sends.
-        (x, y, z, w) = (x / largest, y / largest, z / largest, w / largest);
-        norm = (x * x + y * y + z * z + w * w).sqrt();
-    }
-    (x, y, z, w) = (x / norm, y / norm, z / norm, w / norm);
-    (2.0 * (x * y + w * z)).atan2(w * w + x * x - y * y - z * z)
-}
-
-/// The pose quaternion `[x, y, z, w] = [0, 0, sin(θ/2), cos(θ/2)]` for a yaw
-/// (`docs/spec/features.md` §1, used by SetPose commands).
-#[must_use]
-pub fn yaw_to_quaternion(theta: f64) -> [f64; 4] {
-    let half = theta / 2.0;
-    [0.0, 0.0, half.sin(), half.cos()]
-}
+// The skip rule and the yaw are the vocabulary's, so that the wire, the world
+// and the Python extension read the same bodies and yaws as the models.
+pub use pushlearn_core::body::is_skipped;
+pub use pushlearn_core::orientation::{from_yaw as yaw_to_quaternion, yaw as quaternion_to_yaw};
 
 fn finite(name: &str, field: &'static str, value: f64) -> Result<f64, ParseError> {
     if value.is_finite() {

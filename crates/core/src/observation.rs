@@ -1,0 +1,88 @@
+//! A published body as a learner sees it: the one conversion every driver of
+//! a learner uses, in process or over the learner protocol, so that both
+//! refuse the same states.
+
+use serde::{Deserialize, Serialize};
+
+/// One body of a world-state message, as the daemon hands it to the learner
+/// (the protobuf `ModelState` minus what no learner reads: velocities, scale,
+/// type, `is_static`; `docs/spec/protocol.md` §4).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    pub name: String,
+    pub id: u32,
+    /// World-frame position (x, y, z) in metres; z is not used by the learner.
+    pub position: [f64; 3],
+    /// Orientation quaternion in the order (x, y, z, w), as in the wire schema.
+    pub orientation: [f64; 4],
+}
+
+/// The raw content of one world-state message: every body it lists, in
+/// message order, unfiltered (models parse it with `features::parse_frame`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Frame {
+    pub objects: Vec<Observation>,
+}
+
+impl Observation {
+    /// A body as published: `position` and `orientation` are `None` where the
+    /// message left them out.
+    ///
+    /// What is missing becomes NaN rather than a made-up pose (zeros would be
+    /// a valid pose at the origin): the learner's parsing then refuses the
+    /// frame with an error naming the body if, and only if, it is a body the
+    /// learner uses, while a ghost or a wall without a pose stays harmless.
+    #[must_use]
+    pub fn published(
+        name: impl Into<String>,
+        id: u32,
+        position: Option<[f64; 3]>,
+        orientation: Option<[f64; 4]>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            id,
+            position: position.unwrap_or([f64::NAN; 3]),
+            orientation: orientation.unwrap_or([f64::NAN; 4]),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_published_pose_is_kept_as_sent() {
+        let obs = Observation::published(
+            "blockA",
+            15,
+            Some([0.1, 0.2, 0.05]),
+            Some([0.0, 0.0, 0.6, 0.8]),
+        );
+        assert_eq!(
+            obs,
+            Observation {
+                name: "blockA".into(),
+                id: 15,
+                position: [0.1, 0.2, 0.05],
+                orientation: [0.0, 0.0, 0.6, 0.8],
+            }
+        );
+    }
+
+    #[test]
+    fn what_was_not_published_is_nan_never_zero() {
+        let obs = Observation::published("actuator", 8, None, None);
+        assert!(obs.position.iter().all(|c| c.is_nan()));
+        assert!(obs.orientation.iter().all(|c| c.is_nan()));
+
+        let obs = Observation::published("actuator", 8, Some([0.0; 3]), None);
+        assert_eq!(obs.position, [0.0; 3]);
+        assert!(obs.orientation.iter().all(|c| c.is_nan()));
+
+        let obs = Observation::published("actuator", 8, None, Some([0.0, 0.0, 0.0, 1.0]));
+        assert!(obs.position.iter().all(|c| c.is_nan()));
+        assert_eq!(obs.orientation, [0.0, 0.0, 0.0, 1.0]);
+    }
+}
