@@ -723,7 +723,14 @@ def test_the_sdks_vocabulary_is_the_extensions() -> None:
         _native.ACTUATOR_NAME,
     )
     assert (learner.BLUE_ID, learner.RED_ID) == (_native.BLUE_ID, _native.RED_ID)
-    for name in ["actuator", "blockA", "ground_plane", "north_wall", "blockAShadow", "shadow"]:
+    for name in [
+        "actuator",
+        "blockA",
+        "ground_plane",
+        "north_wall",
+        "blockAShadow",
+        "shadow",
+    ]:
         assert learner.is_skipped(name) == _native.is_skipped(name), name
     quaternions = [
         (0.0, 0.0, 0.0, 0.0),
