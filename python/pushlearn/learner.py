@@ -608,7 +608,7 @@ class Learner:
         which must then be complete and consistent (as
         :class:`pushlearn.GateModel` served from Python sends them), and
         :func:`serve` checks that with the driver's own code before sending
-        (``docs/learner-protocol.md`` §3, "Statistics").
+        (``docs/learner-protocol.md`` §7, "Statistics").
         """
         return {"maps": {}, "extra": {}, "labels": {}}
 

@@ -14,6 +14,7 @@
 //! predictions are not judged for accuracy, only for the protocol.
 
 use learner::eval::RunStepper;
+use learner::features::ACTUATOR_SHAPE;
 use learner::{Action, Frame, Model, ObjectState, Observation, Target, BLUE_ID, BLUE_NAME};
 use learner::{ACTUATOR_ID, ACTUATOR_NAME};
 use rand::SeedableRng;
@@ -99,7 +100,7 @@ pub fn scripted_state(actuator: (f64, f64), block: (f64, f64)) -> Frame {
 pub fn scripted_push(x0: f64, messages: usize, publish_rate_hz: u32) -> Vec<Frame> {
     let per_message = PUSH.vy / f64::from(publish_rate_hz.max(1));
     // The blue block's half width plus the actuator's radius: where they touch.
-    let contact = 0.05 + 0.025;
+    let contact = 0.05 + ACTUATOR_SHAPE.radius;
     (0..messages)
         .map(|k| {
             let y = per_message * k as f64;
@@ -117,7 +118,10 @@ pub fn scripted_push(x0: f64, messages: usize, publish_rate_hz: u32) -> Vec<Fram
 fn train(model: &mut ExternalModel, frames: &[Frame]) -> Option<String> {
     let mut stepper = RunStepper::new();
     for frame in frames {
-        let world = parse(model, frame)?;
+        let world = match parse(model, frame) {
+            Ok(world) => world,
+            Err(failure) => return Some(failure),
+        };
         stepper.train(model, &world, PUSH);
         if let Some(failure) = model.failure() {
             return Some(failure);
@@ -131,9 +135,7 @@ fn test(model: &mut ExternalModel, frames: &[Frame]) -> Result<Vec<ObjectState>,
     let mut stepper = RunStepper::new();
     let mut predicted = Vec::new();
     for frame in frames {
-        let Some(world) = parse(model, frame) else {
-            return Err("the driver could not parse its own scripted state".into());
-        };
+        let world = parse(model, frame)?;
         stepper.test(model, &world, PUSH);
         if let Some(failure) = model.failure() {
             return Err(failure);
@@ -147,8 +149,12 @@ fn test(model: &mut ExternalModel, frames: &[Frame]) -> Result<Vec<ObjectState>,
     Ok(predicted)
 }
 
-fn parse(model: &ExternalModel, frame: &Frame) -> Option<super::ExternalWorld> {
-    model.parse(frame).ok()
+/// A scripted state as the driver parses it; it fails only if the script
+/// itself is wrong, which every run must report rather than skip.
+fn parse(model: &ExternalModel, frame: &Frame) -> Result<super::ExternalWorld, String> {
+    model
+        .parse(frame)
+        .map_err(|e| format!("the driver could not parse its own scripted state: {e}"))
 }
 
 /// One fold as the push task runs it: NewFold, a training run (Reset and
@@ -318,7 +324,7 @@ fn move_to_target(spec: &LearnerSpec, publish_rate_hz: u32) -> Result<Vec<String
     // Not drawn from: an external learner explores with its own generator.
     let mut rng = ChaCha8Rng::seed_from_u64(FOLD_SEED);
     for frame in scripted_push(0.0, TARGET_MESSAGES, publish_rate_hz) {
-        let world = parse(&model, &frame).ok_or("the driver could not parse its own state")?;
+        let world = parse(&model, &frame)?;
         match last {
             Some(action) => model.update(&world, action),
             None => model.reset_objects(&world),
