@@ -13,6 +13,8 @@
 //!   and figures;
 //! * [`results`]: what the experiments measured, as plain data: filled by
 //!   [`experiment`], rendered by [`report`];
+//! * [`scene`]: the thesis's set-up the experiments, their documents and
+//!   figures and the learner daemon share (rates, start poses, objects);
 //! * [`spec`]: an experiment as data, run into its report document;
 //! * [`sweep`]: a grid of push-task configurations as data, planned into
 //!   fold jobs with stable ids, their outputs, and the Slurm array script
@@ -36,6 +38,7 @@ pub mod process;
 pub mod report;
 pub mod reproduce;
 pub mod results;
+pub mod scene;
 pub mod soak;
 pub mod spec;
 pub mod sweep;

@@ -134,41 +134,6 @@ impl std::fmt::Display for ModelKind {
     }
 }
 
-/// The learner an experiment runs: a built-in model, in-process, or an
-/// external one over the learner protocol (`crate::external`).
-#[derive(Clone, Debug, PartialEq)]
-pub enum LearnerChoice {
-    Builtin(ModelKind),
-    External(crate::external::LearnerSpec),
-}
-
-/// The choice as `pushlearn experiment` flags: `--model gate`,
-/// `--learner 'CMD'` or `--learner-connect ADDR`.
-impl std::fmt::Display for LearnerChoice {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        use crate::external::Source;
-        match self {
-            LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
-            LearnerChoice::External(spec) => {
-                match &spec.source {
-                    Source::Command(command) => write!(f, "--learner '{command}'")?,
-                    Source::Connect(addr) => write!(f, "--learner-connect {addr}")?,
-                }
-                if spec.timeout != crate::external::DEFAULT_TIMEOUT {
-                    write!(f, " --learner-timeout {}", spec.timeout.as_secs_f64())?;
-                }
-                Ok(())
-            }
-        }
-    }
-}
-
-impl From<ModelKind> for LearnerChoice {
-    fn from(kind: ModelKind) -> Self {
-        LearnerChoice::Builtin(kind)
-    }
-}
-
 /// Something to do with an untrained model of either kind: the one generic
 /// entry point that [`ModelKind::dispatch`] instantiates for each learner.
 pub trait WithModel {
@@ -473,7 +438,7 @@ impl ModelOptions {
     }
 
     fn number_at(&self, publish_rate_hz: u32) -> u32 {
-        let low = publish_rate_hz == crate::experiment::LOW_RATE_HZ;
+        let low = publish_rate_hz == crate::scene::LOW_RATE_HZ;
         self.config_number() | if low { learner::flags::LOWFREQ } else { 0 }
     }
 }

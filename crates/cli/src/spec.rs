@@ -5,12 +5,12 @@
 
 use learner::{Model, ObjectState};
 
-use crate::experiment::push_task::objects::{self, Transfer};
 use crate::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use crate::experiment::run::{self, Plan};
-use crate::experiment::{ExperimentError, LOW_RATE_HZ, RATE_HZ};
+use crate::experiment::ExperimentError;
+use crate::external::LearnerChoice;
 use crate::external::{ExternalModel, LearnerError};
-use crate::models::{LearnerChoice, ModelKind, ModelOptions, ModelOptionsError, WithModel};
+use crate::models::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
 use crate::report::draft::{self, DraftReport, DraftRowResult};
 use crate::report::layout::Printout;
 use crate::report::plot::{self, PlotError};
@@ -19,6 +19,8 @@ use crate::results::push_task::PushJobResult;
 use crate::results::run_info::RunInfo;
 use crate::results::LearnerRecord;
 use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
+use crate::scene::{self, Transfer};
+use crate::scene::{LOW_RATE_HZ, RATE_HZ};
 
 /// One experiment of `docs/spec/experiments.md`, fully configured.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,7 +87,7 @@ impl Spec {
         match self {
             Spec::PushTask {
                 transfer: Some(_), ..
-            } => objects::SCENE,
+            } => scene::SCENE,
             Spec::PushTask { variant, .. } => variant.scene(),
             Spec::ConstantFeedback { .. } => Variant::ConstantFeedback.scene(),
             Spec::MoveToTarget { .. } => "one_block",

@@ -14,7 +14,11 @@ use std::fmt;
 use serde::{Deserialize, Serialize};
 
 use crate::aitm::MapStats;
-use crate::gate::HARD_CODED_LABEL;
+
+/// Value of the stats labels for a hard-coded part of the gate model
+/// (`docs/spec/gate-model.md` §5): part of the statistics' serialised form,
+/// so it lives here and the model uses it.
+pub const HARD_CODED_LABEL: &str = "hard-coded";
 
 /// The gate model's maps (`docs/spec/gate-model.md` §7).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

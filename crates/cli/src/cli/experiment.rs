@@ -9,15 +9,17 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::ObjectState;
 use pushlearn_cli::experiment::move_to_target::{sampled_targets, MAX_STEPS};
-use pushlearn_cli::experiment::push_task::objects::{Object, Transfer};
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::replay::RunCache;
 use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
-use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS, RATE_HZ};
+use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
+use pushlearn_cli::external::LearnerChoice;
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
-use pushlearn_cli::models::{LearnerChoice, ModelKind, ModelOptions};
+use pushlearn_cli::models::{ModelKind, ModelOptions};
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
+use pushlearn_cli::scene::RATE_HZ;
+use pushlearn_cli::scene::{Object, Transfer};
 use pushlearn_cli::spec::Spec;
 
 /// Run one of the thesis's experiments and print its table beside the

@@ -210,10 +210,10 @@ pub fn run(args: LearnArgs) -> Result<()> {
         let client =
             SimClient::connect_with(args.sim.as_str(), ClientOptions::clock_seqs()).await?;
         let rate = client.hello().publish_rate;
-        if args.options.low_frequency() && rate != pushlearn_cli::experiment::LOW_RATE_HZ {
+        if args.options.low_frequency() && rate != pushlearn_cli::scene::LOW_RATE_HZ {
             anyhow::bail!(
                 "LOWFREQ (bit 2, --flag low-freq) needs a world publishing at {} Hz; this one publishes at {rate} Hz (set it with `pushlearn ctl` or start pushlearn-sim at that rate)",
-                pushlearn_cli::experiment::LOW_RATE_HZ
+                pushlearn_cli::scene::LOW_RATE_HZ
             );
         }
         let policy = match (args.action, args.target) {

@@ -335,7 +335,7 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
             .context("drawing the figure of \"Beyond the thesis\"")?;
     }
     if let Some(summary) = results.sweep(manifest::ABLATION) {
-        pushlearn_cli::report::plot::ablation(summary, &scratch, ABLATION_FIGURE)
+        pushlearn_cli::sweep::figure::ablation(summary, &scratch, ABLATION_FIGURE)
             .context("drawing the ablation's figure")?;
     }
     if let Ok((conditions, rows)) = page::object_reports(results) {

@@ -7,8 +7,9 @@
 use learner::eval::{RunErrors, PUSH_ACTION};
 use learner::{Action, Model};
 
-use super::driver::{push_task_blocks, Core, Task};
+use super::driver::{Core, Task};
 use crate::results::constant_feedback::FeedbackRun;
+use crate::scene::push_task_blocks;
 
 /// Name used for seeds and reports.
 pub const EXPERIMENT: &str = "push-task/constant-feedback";

@@ -15,16 +15,12 @@ use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID
 
 use super::push_task::objects::View;
 use crate::results::run_info::Counters;
+use crate::scene::{ACTUATOR_Z, BLOCK_Z};
 use pushlearn::wire::pb::client_message::Payload;
 
 /// `docs/spec/experiments.md` §2: a start pose farther than this (norm over x, y, θ,
 /// unwrapped) from the expected one is corrected.
 pub const START_TOLERANCE: f64 = 0.01;
-
-/// z of a SetPose for the actuator and for blocks (`docs/spec/protocol.md` §6).
-pub const ACTUATOR_Z: f64 = 0.03;
-/// See [`ACTUATOR_Z`].
-pub const BLOCK_Z: f64 = 0.05;
 
 /// The driver variables of `docs/spec/experiments.md` §2 and the run primitives of
 /// §2.1; the tasks change them only through these methods and fields.
@@ -311,19 +307,6 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     }
 }
 
-/// The actuator's start y of every push-task run (its x is the run's x0).
-pub const PUSH_TASK_START_Y: f64 = 0.0;
-
-/// Expected start poses of the blocks in push-task runs (`docs/spec/experiments.md`
-/// §2.1; the red block's entry only matters in the two-object scene).
-#[must_use]
-pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {
-    BTreeMap::from([
-        (learner::BLUE_ID, ObjectState::new(0.0, 0.25, 0.0)),
-        (learner::RED_ID, ObjectState::new(-0.6, 0.35, 0.0)),
-    ])
-}
-
 #[cfg(test)]
 pub(crate) mod test_support {
     //! A scripted world for driver tests: frames built from poses, the
@@ -390,6 +373,7 @@ pub(crate) mod test_support {
 mod tests {
     use super::test_support::{blue_home, describe, frame};
     use super::*;
+    use crate::scene::push_task_blocks;
     use learner::testing::Probe;
 
     /// A task that starts one run at x = 0.1 and records what reaches it.

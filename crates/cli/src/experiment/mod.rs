@@ -38,12 +38,6 @@ pub const LATENCY_MAX_STEPS: u32 = 2;
 /// kept as the robustness setting `docs/results.md` reports beside the default.
 pub const LATENCY_MAX_STEPS_HARSH: u32 = 5;
 
-/// The thesis's model update rate (`docs/spec/experiments.md` §6).
-pub const RATE_HZ: u32 = 100;
-
-/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4, configuration 2).
-pub const LOW_RATE_HZ: u32 = 10;
-
 /// How the world is timed (`docs/spec/world.md` §8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "kebab-case")]

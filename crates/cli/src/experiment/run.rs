@@ -13,12 +13,13 @@ use super::push_task::protocol::{Protocol, PushJob, Variant};
 use super::push_task::task::PushTask;
 use super::replay::{CacheCounts, RunCache};
 use super::workers::{retry_if_the_world_dies, run_jobs, Worker, WorldDeath, WorldSource};
-use super::{ExperimentError, Mode, LOW_RATE_HZ, RATE_HZ};
+use super::{ExperimentError, Mode};
 use crate::results::move_to_target::{MttJobResult, TargetSummary};
 use crate::results::nodes::NodeSummary;
 use crate::results::push_task::{summarise, PushJobResult};
 use crate::results::run_info::{Counters, RunInfo, Timing};
 use crate::results::{FeedbackReport, MttReport, PushReport, Setup, TargetEntry};
+use crate::scene::{LOW_RATE_HZ, RATE_HZ};
 use pushlearn::wire::pb::client_message::Payload;
 
 /// When an experiment began, for [`Plan::run_info`].

@@ -27,6 +27,7 @@ use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError};
 use serde::{Deserialize, Serialize};
 
+use crate::models::ModelKind;
 use pushlearn::wire::pb;
 use pushlearn::wire::pb::learner::{self as lp, reply::Answer, request::Call};
 use session::Session;
@@ -41,6 +42,40 @@ pub struct LearnerSpec {
     pub source: Source,
     /// Per answered message; also for the hello.
     pub timeout: Duration,
+}
+
+/// The learner an experiment runs: a built-in model, in-process, or an
+/// external one over the learner protocol (this module).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LearnerChoice {
+    Builtin(ModelKind),
+    External(LearnerSpec),
+}
+
+/// The choice as `pushlearn experiment` flags: `--model gate`,
+/// `--learner 'CMD'` or `--learner-connect ADDR`.
+impl std::fmt::Display for LearnerChoice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
+            LearnerChoice::External(spec) => {
+                match &spec.source {
+                    Source::Command(command) => write!(f, "--learner '{command}'")?,
+                    Source::Connect(addr) => write!(f, "--learner-connect {addr}")?,
+                }
+                if spec.timeout != DEFAULT_TIMEOUT {
+                    write!(f, " --learner-timeout {}", spec.timeout.as_secs_f64())?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl From<ModelKind> for LearnerChoice {
+    fn from(kind: ModelKind) -> Self {
+        LearnerChoice::Builtin(kind)
+    }
 }
 
 /// Why an external learner could not be used.

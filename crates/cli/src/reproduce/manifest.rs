@@ -7,11 +7,12 @@ use std::fmt::Write as _;
 use learner::interaction::SelectorKind;
 
 use crate::experiment::move_to_target::{sampled_targets, MAX_STEPS};
-use crate::experiment::push_task::objects::{Object, Transfer};
 use crate::experiment::push_task::protocol::Variant;
 use crate::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
-use crate::models::{Improvement, LearnerChoice, ModelKind, ModelOptions};
+use crate::external::LearnerChoice;
+use crate::models::{Improvement, ModelKind, ModelOptions};
 use crate::results::move_to_target::{REPETITIONS, TARGETS};
+use crate::scene::{Object, Transfer};
 use crate::spec::Spec;
 
 /// The seeds whose spread `docs/results.md` shows beside seed 1 for the

@@ -70,7 +70,7 @@ impl Setup {
     }
 }
 
-use crate::experiment::push_task::objects::Transfer;
+use crate::scene::Transfer;
 
 /// `pushlearn experiment push-task` (all variants but constant feedback).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

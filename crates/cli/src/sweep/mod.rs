@@ -17,6 +17,7 @@
 //! in, nor the machine, nor which other jobs share a process changes it: the
 //! merged reports of any way of running a plan are the same bytes.
 
+pub mod figure;
 pub mod output;
 pub mod slurm;
 pub mod summary;

@@ -39,9 +39,6 @@ const ACTION_DIM: usize = 2;
 /// Label of a gate sample whose block changed (`docs/spec/gate-model.md` §1).
 const CHANGED: i64 = 1;
 
-/// Value of the stats labels for a hard-coded part (`docs/spec/gate-model.md` §5).
-pub const HARD_CODED_LABEL: &str = "hard-coded";
-
 /// Longest block-predictor input: φ and the three velocities of USE_DYNS.
 const MAX_PREDICTOR_INPUT: usize = RELATIVE_FEATURES_DIM + 3;
 

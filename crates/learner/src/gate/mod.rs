@@ -22,9 +22,9 @@ mod tests;
 pub use crate::planning::{
     APPROACH_SPEED, CIRCLE_FAR, CIRCLE_NEAR, CIRCLE_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
+pub use crate::stats::HARD_CODED_LABEL;
 pub use algorithm::{
-    GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, HARD_CODED_LABEL,
-    UNROUNDED_EPS_CHANGE,
+    GateModel, Predictor, EPS_CHANGE, HARD_CODED_ACTUATOR_STEP, UNROUNDED_EPS_CHANGE,
 };
 pub use errors::GateError;
 pub use hyperparams::{

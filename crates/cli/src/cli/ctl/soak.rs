@@ -77,7 +77,7 @@ impl Soak {
             format!("the soak failed (its files are in {})", work_dir.display())
         })?;
         if let Some(dir) = &self.plots {
-            for path in pushlearn_cli::report::plot::soak(&report, dir)? {
+            for path in pushlearn_cli::soak::figure::soak(&report, dir)? {
                 eprintln!("wrote {}", path.display());
             }
         }

@@ -12,10 +12,10 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::objects::{self, Transfer};
-use crate::experiment::{seed, LOW_RATE_HZ, RATE_HZ};
+use crate::experiment::seed;
 use crate::results::constant_feedback;
 use crate::results::push_task::EXPERIMENT;
+use crate::scene::{self, Transfer, LOW_RATE_HZ, RATE_HZ};
 
 /// The thesis's learning-curve N_train values (`docs/spec/experiments.md` §3.1).
 pub const DEFAULT_TRAIN_RUNS: [usize; 7] = [1, 2, 3, 5, 10, 20, 30];
@@ -125,7 +125,7 @@ impl Protocol {
     #[must_use]
     pub fn scene(&self) -> &'static str {
         if self.transfer.is_some() {
-            objects::SCENE
+            scene::SCENE
         } else {
             self.variant.scene()
         }

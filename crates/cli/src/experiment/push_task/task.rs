@@ -8,12 +8,13 @@ use learner::{Model, ModelStats, ObjectState, Poses};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
-use super::objects::{Object, Transfer, View};
+use super::objects::View;
 use super::protocol::PushJob;
-use crate::experiment::driver::{push_task_blocks, Core, Task, BLOCK_Z, PUSH_TASK_START_Y};
+use crate::experiment::driver::{Core, Task};
 use crate::experiment::ExperimentError;
 use crate::results::push_task::{EndPoses, PushJobResult, SelectionCount};
 use crate::results::run_info::{Counters, Timing};
+use crate::scene::{push_task_blocks, Object, Transfer, BLOCK_Z, PUSH_TASK_START_Y};
 
 /// The §3 handler for one job.
 #[derive(Debug)]

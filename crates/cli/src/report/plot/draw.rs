@@ -33,9 +33,9 @@ fn font() -> Result<(), PlotError> {
 
 /// Drawing errors are reported as text: plotters' error types are generic
 /// over the backend.
-pub(super) type Drawn = Result<(), String>;
+pub(crate) type Drawn = Result<(), String>;
 
-pub(super) trait OrText<T> {
+pub(crate) trait OrText<T> {
     fn or_text(self) -> Result<T, String>;
 }
 
@@ -46,7 +46,7 @@ impl<T, E: std::fmt::Display> OrText<T> for Result<T, E> {
 }
 
 /// One figure, drawable on any backend.
-pub(super) trait Figure {
+pub(crate) trait Figure {
     fn size(&self) -> (u32, u32);
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Drawn;
 }
@@ -54,7 +54,7 @@ pub(super) trait Figure {
 /// Writes `figure` as `dir/stem.png` and `dir/stem.svg`, each whole: drawn
 /// under a temporary name (the PNG encoder picks its format by the
 /// extension, so it stays `.png`) or in memory, then renamed into place.
-pub(super) fn write(
+pub(crate) fn write(
     figure: &impl Figure,
     dir: &Path,
     stem: &str,
@@ -93,7 +93,7 @@ pub(super) fn write(
     Ok(())
 }
 
-pub(super) fn prepare(dir: &Path) -> Result<(), PlotError> {
+pub(crate) fn prepare(dir: &Path) -> Result<(), PlotError> {
     font()?;
     std::fs::create_dir_all(dir).map_err(|source| PlotError::Dir {
         path: dir.to_path_buf(),
@@ -129,7 +129,7 @@ fn title_lines(title: &str, fits: impl Fn(&str) -> bool) -> Vec<String> {
 /// Draws `title` across the top of `root` and returns the area below it.
 /// A title wider than the canvas is drawn smaller, and then on two lines,
 /// so that it is never clipped.
-pub(super) fn titled<DB: DrawingBackend>(
+pub(crate) fn titled<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
 ) -> Result<DrawingArea<DB, Shift>, String> {
@@ -153,18 +153,18 @@ pub(super) fn titled<DB: DrawingBackend>(
 
 const OURS: RGBColor = RGBColor(31, 119, 180);
 const THESIS: RGBColor = RGBColor(214, 95, 14);
-pub(super) const EXTRA: RGBColor = RGBColor(44, 160, 44);
+pub(crate) const EXTRA: RGBColor = RGBColor(44, 160, 44);
 const ACTUATOR: RGBColor = RGBColor(60, 60, 60);
 const BLUE_BLOCK: RGBColor = RGBColor(40, 90, 220);
 const RED_BLOCK: RGBColor = RGBColor(220, 50, 40);
-pub(super) const TARGET: RGBColor = RGBColor(0, 0, 0);
+pub(crate) const TARGET: RGBColor = RGBColor(0, 0, 0);
 /// Opacity of predicted bodies in the snapshots.
-pub(super) const TRANSLUCENT: f64 = 0.3;
+pub(crate) const TRANSLUCENT: f64 = 0.3;
 
 /// A distinct colour for the k-th line of a family.
 /// A position tick in metres, to 0.1 m: the ticks of a range around 0
 /// land on −0.0 as often as on 0.0, and "-0.0" is noise.
-pub(super) fn metres_tick(v: &f64) -> String {
+pub(crate) fn metres_tick(v: &f64) -> String {
     let text = format!("{v:.1}");
     match text.strip_prefix('-') {
         Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_owned(),
@@ -172,7 +172,7 @@ pub(super) fn metres_tick(v: &f64) -> String {
     }
 }
 
-pub(super) fn palette(k: usize) -> RGBColor {
+pub(crate) fn palette(k: usize) -> RGBColor {
     const COLOURS: [RGBColor; 10] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
@@ -188,7 +188,7 @@ pub(super) fn palette(k: usize) -> RGBColor {
     COLOURS[k % COLOURS.len()]
 }
 
-pub(super) fn body_colour(id: u32) -> RGBColor {
+pub(crate) fn body_colour(id: u32) -> RGBColor {
     match id {
         ACTUATOR_ID => ACTUATOR,
         RED_ID => RED_BLOCK,
@@ -213,7 +213,7 @@ fn value_range(tops: impl IntoIterator<Item = f64>) -> Range<f64> {
 }
 
 /// `lo…hi` widened by `pad` on both sides (and to a minimal width).
-pub(super) fn padded(lo: f64, hi: f64, pad: f64) -> Range<f64> {
+pub(crate) fn padded(lo: f64, hi: f64, pad: f64) -> Range<f64> {
     if lo.is_finite() && hi.is_finite() && lo <= hi {
         (lo - pad)..(hi + pad).max(lo + pad)
     } else {
@@ -224,17 +224,17 @@ pub(super) fn padded(lo: f64, hi: f64, pad: f64) -> Range<f64> {
 // ----------------------------------------------------------- error panels
 
 /// One series of a panel: points with optional error bars.
-pub(super) struct Series {
-    pub(super) label: String,
-    pub(super) colour: RGBColor,
+pub(crate) struct Series {
+    pub(crate) label: String,
+    pub(crate) colour: RGBColor,
     /// (x, mean, std); std 0 draws no bar.
-    pub(super) points: Vec<(f64, f64, f64)>,
-    pub(super) bars: bool,
+    pub(crate) points: Vec<(f64, f64, f64)>,
+    pub(crate) bars: bool,
 }
 
 /// One series per `(label, points)`, in the palette's colours, with bars:
 /// the several-learners figures' way of drawing their series.
-pub(super) fn coloured(
+pub(crate) fn coloured(
     series: impl IntoIterator<Item = (String, Vec<(f64, f64, f64)>)>,
 ) -> Vec<Series> {
     series
@@ -256,7 +256,7 @@ impl Series {
 }
 
 /// Points of `ours`, and of the thesis's values where it has them.
-pub(super) fn ours(label: &str, points: Vec<(f64, MeanStd)>) -> Series {
+pub(crate) fn ours(label: &str, points: Vec<(f64, MeanStd)>) -> Series {
     Series {
         label: label.to_owned(),
         colour: OURS,
@@ -268,7 +268,7 @@ pub(super) fn ours(label: &str, points: Vec<(f64, MeanStd)>) -> Series {
     }
 }
 
-pub(super) fn thesis(points: Vec<(f64, Ms)>) -> Option<Series> {
+pub(crate) fn thesis(points: Vec<(f64, Ms)>) -> Option<Series> {
     (!points.is_empty()).then(|| Series {
         label: "thesis".to_owned(),
         colour: THESIS,
@@ -277,16 +277,16 @@ pub(super) fn thesis(points: Vec<(f64, Ms)>) -> Option<Series> {
     })
 }
 
-pub(super) struct Panel {
-    pub(super) title: String,
-    pub(super) x_desc: String,
-    pub(super) y_desc: String,
-    pub(super) x_range: Range<f64>,
+pub(crate) struct Panel {
+    pub(crate) title: String,
+    pub(crate) x_desc: String,
+    pub(crate) y_desc: String,
+    pub(crate) x_range: Range<f64>,
     /// Drawn at x + offset·k for the k-th series, so bars do not overlap.
-    pub(super) offset: f64,
+    pub(crate) offset: f64,
     /// x is a count (training runs, messages, steps): labels without decimals.
-    pub(super) counts: bool,
-    pub(super) series: Vec<Series>,
+    pub(crate) counts: bool,
+    pub(crate) series: Vec<Series>,
 }
 
 impl Panel {
@@ -343,11 +343,11 @@ impl Panel {
 }
 
 /// Panels side by side (`columns` per row).
-pub(super) struct Grid {
-    pub(super) title: String,
-    pub(super) columns: usize,
-    pub(super) panel_size: (u32, u32),
-    pub(super) panels: Vec<Panel>,
+pub(crate) struct Grid {
+    pub(crate) title: String,
+    pub(crate) columns: usize,
+    pub(crate) panel_size: (u32, u32),
+    pub(crate) panels: Vec<Panel>,
 }
 
 impl Figure for Grid {

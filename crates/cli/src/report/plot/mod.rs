@@ -10,17 +10,17 @@
 //! DejaVu Sans font embedded in the binary (`assets/fonts/`), so no system
 //! font library is needed.
 //!
-//! * `draw`: the font, writing PNG and SVG, colours, axis ranges, and the
-//!   panels of points with error bars that most figures are made of;
+//! * [`draw`]: the font, writing PNG and SVG, colours, axis ranges, and the
+//!   panels of points with error bars that most figures are made of; the
+//!   tools' own figures use it too (the soak's, `crate::soak::figure`, and
+//!   the ablation sweep's, `crate::sweep::figure`), beside what they draw;
 //! * `curves`, `positions`, `snapshots`: the push-task figures ([`push`]);
 //! * `feedback`, `move_to_target`: those experiments' figures;
-//! * `cost`, `scaling`: the performance figures of `docs/performance.md`;
-//! * `soak`: the soak's memory and journal over time (`docs/reliability.md`).
+//! * `cost`, `scaling`: the performance figures of `docs/performance.md`.
 
-mod ablation;
 mod cost;
 mod curves;
-mod draw;
+pub(crate) mod draw;
 mod feedback;
 mod learners;
 mod move_to_target;
@@ -28,13 +28,11 @@ mod positions;
 mod push;
 mod scaling;
 mod snapshots;
-mod soak;
 #[cfg(test)]
 mod test_support;
 
 use std::path::PathBuf;
 
-pub use ablation::ablation;
 pub use cost::{cost_csv, cost_growth, CostPoint};
 pub use feedback::feedback;
 pub use learners::{by_condition, learners};
@@ -42,7 +40,6 @@ pub use move_to_target::move_to_target;
 pub use push::push;
 pub use scaling::{aitm_scaling, parse_scaling_csv, ScalingRow};
 pub use snapshots::{footprints, Footprint};
-pub use soak::soak;
 
 /// What can go wrong while writing figures.
 #[derive(Debug, thiserror::Error)]

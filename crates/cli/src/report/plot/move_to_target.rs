@@ -7,10 +7,10 @@ use learner::{ObjectState, BLUE_ID};
 use super::draw::{palette, prepare, write, Grid, Panel, Series, TARGET};
 use super::snapshots::{footprints, outline, Body, LegendEntry, Look, Snapshot, SnapshotGrid};
 use super::PlotError;
-use crate::experiment::RATE_HZ;
 use crate::models::ModelKind;
 use crate::report::plural;
 use crate::results::MttReport;
+use crate::scene::RATE_HZ;
 
 /// The figures of a Move-to-Target report: the block's errors to the target
 /// over the steps, one line per run and a row per target; and the final

@@ -12,11 +12,11 @@ use serde::Deserialize;
 
 use super::draw::{body_colour, metres_tick, titled, Drawn, Figure, OrText, TRANSLUCENT};
 use super::PlotError;
-use crate::experiment::driver::{push_task_blocks, PUSH_TASK_START_Y};
 use crate::models::ModelKind;
 use crate::report::plural;
 use crate::results::push_task::{CurveEntry, EndPoses};
 use crate::results::PushReport;
+use crate::scene::{push_task_blocks, PUSH_TASK_START_Y};
 
 /// The bodies' footprints in the world's scenes (`sim-plugin/scenes/`).
 #[derive(Clone, Debug, PartialEq)]

@@ -4,14 +4,14 @@
 
 use std::path::{Path, PathBuf};
 
-use super::draw::{palette, prepare, write, Grid, Panel, Series};
-use super::PlotError;
-use crate::soak::SoakReport;
+use super::{Sample, SoakReport};
+use crate::report::plot::draw::{palette, prepare, write, Grid, Panel, Series};
+use crate::report::plot::PlotError;
 
 /// Draws `soak.png` and `soak.svg` into `dir`.
 ///
 /// # Errors
-/// As [`push`](super::push).
+/// As [`push`](crate::report::plot::push).
 pub fn soak(report: &SoakReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
     // Minutes for a long run, seconds for a short one.
@@ -31,7 +31,7 @@ pub fn soak(report: &SoakReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> 
             .collect(),
         bars: false,
     };
-    let learner = |get: fn(&crate::soak::Sample) -> f64| -> Vec<(f64, f64)> {
+    let learner = |get: fn(&Sample) -> f64| -> Vec<(f64, f64)> {
         report.samples.iter().map(|s| (s.seconds, get(s))).collect()
     };
     let panel = |title: &str, y_desc: &str, series: Vec<Series>| Panel {

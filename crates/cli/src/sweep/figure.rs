@@ -4,10 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::draw::{coloured, prepare, write, Grid, Panel};
-use super::PlotError;
+use super::summary::{change_label, Metric, Summary};
+use crate::report::plot::draw::{coloured, prepare, write, Grid, Panel};
+use crate::report::plot::PlotError;
 use crate::report::plural;
-use crate::sweep::summary::{change_label, Metric, Summary};
 
 /// How many times the defaults' largest error a configuration may reach
 /// and still be drawn: a diverging one (η = 0.2 reaches kilometres) would

@@ -6,6 +6,9 @@
 //! run beside it ([`crate::load`]); at the end it stops the learner with
 //! SIGTERM, as an operator would, and reads its `--json` report: how many
 //! states it handled and how many it missed (`docs/reliability.md`, "Soak").
+//! Its figure is [`figure`].
+
+pub mod figure;
 
 use std::fs::File;
 use std::path::{Path, PathBuf};
