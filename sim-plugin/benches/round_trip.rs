@@ -8,7 +8,7 @@
 //!   a `SimClient` over 127.0.0.1: 150 round trips of state → Advance → next
 //!   state, each through the client's socket, the server's tasks and the
 //!   physics thread;
-//! * `in_process`: the same world stepped directly (`sweep::run`).
+//! * `in_process`: the same world stepped directly (`calibration::run`).
 //!
 //! Criterion's throughput is in runs, so "elem/s" is runs of 150 messages
 //! per second; time / 150 is the cost of one message.
@@ -43,8 +43,8 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::{self, client_message::Payload};
+use sim_plugin::calibration::{run, start_commands};
 use sim_plugin::server::{state_message, Config, Server, ServerHandle, Timing};
-use sim_plugin::sweep::{run, start_commands};
 use sim_plugin::{Scene, SweepOptions, World};
 use tokio::net::TcpListener;
 

@@ -9,7 +9,7 @@
 //! header for the command).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use sim_plugin::sweep::run;
+use sim_plugin::calibration::run;
 use sim_plugin::{Scene, SweepOptions, World};
 
 const STEPS_PER_RUN: u64 = 1500;

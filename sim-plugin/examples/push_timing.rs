@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use sim_plugin::sweep::{run, BLUE_BLOCK};
+use sim_plugin::calibration::{run, BLUE_BLOCK};
 use sim_plugin::{Scene, SweepOptions, World};
 
 const RUNS: u32 = 200;

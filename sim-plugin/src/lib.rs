@@ -4,21 +4,21 @@
 //!   scenes);
 //! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
 //!   per-step actuator drive, commands, ghosts and publishing;
-//! * [`sweep`](mod@sweep): the calibration sweep of `docs/spec/world.md` §10;
+//! * [`calibration`]: the calibration sweep of `docs/spec/world.md` §10;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
 //! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
 //!   (`docs/protocol.md`);
 //! * [`replay`]: a recorded session served as if it were the world.
 
+pub mod calibration;
 pub mod push_run;
 pub mod replay;
 pub mod scene;
 pub mod server;
-pub mod sweep;
 pub mod world;
 
+pub use calibration::{sweep, SweepOptions, SweepRow};
 pub use scene::Scene;
-pub use sweep::{sweep, SweepOptions, SweepRow};
 pub use world::{
     check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World,
     WorldError,

@@ -3,8 +3,8 @@
 //! learner sees in one run, for the trace-driven learner tests and
 //! benchmarks.
 
+use crate::calibration::SweepError;
 use crate::scene::ACTUATOR;
-use crate::sweep::SweepError;
 use crate::world::{ActuatorMode, Command, Snapshot, World};
 
 fn next_message(world: &mut World) -> Result<Snapshot, SweepError> {

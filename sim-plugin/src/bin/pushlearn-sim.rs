@@ -179,7 +179,7 @@ struct SweepArgs {
     /// The body pushed [default: the blue block, `blockA`]; another body takes the blue
     /// block's start for every run and the blue block its place (e.g. `--scene objects
     /// --body cylinder`, docs/world.md "New objects").
-    #[arg(long, value_name = "NAME", default_value = sim_plugin::sweep::BLUE_BLOCK)]
+    #[arg(long, value_name = "NAME", default_value = sim_plugin::calibration::BLUE_BLOCK)]
     body: String,
 }
 

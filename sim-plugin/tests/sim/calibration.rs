@@ -7,7 +7,7 @@
 
 use std::sync::OnceLock;
 
-use sim_plugin::sweep::{run, BLUE_BLOCK};
+use sim_plugin::calibration::{run, BLUE_BLOCK};
 use sim_plugin::{sweep, Command, Scene, SpaceKind, SweepOptions, SweepRow, World};
 
 /// The 21-start sweep on the default scene, computed once per test binary.
@@ -160,8 +160,8 @@ fn identical_runs_are_bit_identical() {
     assert_eq!(first, second);
     // A world reused after other runs gives the same as a fresh one.
     let mut used = World::new(&scene).expect("world builds");
-    sim_plugin::sweep::sweep_world(&mut used, &SweepOptions::default()).expect("sweep runs");
-    let reused = sim_plugin::sweep::sweep_world(&mut used, &options).expect("sweep runs");
+    sim_plugin::calibration::sweep_world(&mut used, &SweepOptions::default()).expect("sweep runs");
+    let reused = sim_plugin::calibration::sweep_world(&mut used, &options).expect("sweep runs");
     assert_eq!(first, reused);
 }
 

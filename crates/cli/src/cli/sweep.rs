@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
-use pushlearn_cli::experiment::replay::RunCache;
+use pushlearn_cli::experiment::run_cache::RunCache;
 use pushlearn_cli::experiment::workers::find_sim_binary;
 use pushlearn_cli::experiment::ExperimentError;
 use pushlearn_cli::output::write_atomically;

@@ -18,7 +18,7 @@ use learner::Model;
 use serde::{Deserialize, Serialize};
 
 use super::driver::{Driver, Task};
-use super::replay::{Cursor, Next, Path, ReplayError, RunCache};
+use super::run_cache::{Cursor, Next, Path, RunCache, RunCacheError};
 use super::ExperimentError;
 use crate::frame::frame_from_state;
 use crate::latency::budget;
@@ -62,7 +62,7 @@ pub struct WorldLink {
     client: SimClient,
     pacing: Pacing,
     /// Set when recorded runs are reused (lock-step only; see
-    /// [`super::replay`]), with the batch the last driver left unsent.
+    /// [`super::run_cache`]), with the batch the last driver left unsent.
     replay: Option<(Cursor, Vec<Payload>)>,
     /// The last batch written to the world, for the message when the world
     /// dies.
@@ -98,7 +98,7 @@ impl WorldLink {
     }
 
     /// Serves states from `cache` where it has them and records the others
-    /// there (see [`super::replay`]); `latency` tells whether the world
+    /// there (see [`super::run_cache`]); `latency` tells whether the world
     /// emulates command latency (its Hello does not say). Only for a
     /// lock-step world: in realtime the stream depends on more than the
     /// commands, so nothing is reused there.
@@ -385,7 +385,7 @@ async fn resync_world(
         let state = send_and_advance(client, cursor, batch, sent).await?;
         cursor.resimulated();
         if frame_from_state(&state) != *expected {
-            return Err(ReplayError::Diverged { step }.into());
+            return Err(RunCacheError::Diverged { step }.into());
         }
     }
     Ok(())

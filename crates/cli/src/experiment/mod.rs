@@ -7,7 +7,8 @@
 //!   realtime;
 //! * [`workers`]: one world process per worker, jobs spread over workers
 //!   and gathered back in job order;
-//! * [`replay`]: recorded runs reused in the lock-step modes;
+//! * [`run_cache`]: recorded runs reused in the lock-step modes (the run
+//!   cache; not the world's playback of a recording);
 //! * [`run`]: whole experiments, from jobs to report documents;
 //! * [`seed`]: per-job seeds (§5).
 //!
@@ -18,8 +19,8 @@ pub mod driver;
 pub mod link;
 pub mod move_to_target;
 pub mod push_task;
-pub mod replay;
 pub mod run;
+pub mod run_cache;
 pub mod seed;
 pub mod workers;
 
@@ -72,7 +73,7 @@ impl Mode {
         }
     }
 
-    /// Whether recorded runs can be reused (a [`replay::RunCache`]): in
+    /// Whether recorded runs can be reused (a [`run_cache::RunCache`]): in
     /// lock-step a world's states are a function of the commands, in
     /// realtime they are not.
     #[must_use]
@@ -153,7 +154,7 @@ pub enum ExperimentError {
     Target(#[from] learner::TargetError),
     /// Reusing recorded runs failed (`replay`).
     #[error(transparent)]
-    Replay(#[from] replay::ReplayError),
+    RunCache(#[from] run_cache::RunCacheError),
     /// An external learner stopped answering (`crate::external`).
     #[error("{job}: {why}")]
     Learner { job: String, why: String },

@@ -11,7 +11,7 @@ use super::driver::{Driver, Task};
 use super::move_to_target::{MttJob, MttTask};
 use super::push_task::protocol::{Protocol, PushJob, Variant};
 use super::push_task::task::PushTask;
-use super::replay::{CacheCounts, RunCache};
+use super::run_cache::{CacheCounts, RunCache};
 use super::workers::{retry_if_the_world_dies, run_jobs, Worker, WorldDeath, WorldSource};
 use super::{ExperimentError, Mode};
 use crate::results::move_to_target::{MttJobResult, TargetSummary};
@@ -50,7 +50,7 @@ pub struct Plan {
     /// maximum. Only used
     /// where [`Mode::reuses_runs`], where
     /// a world's states are a function of the commands since a reset or
-    /// latency seed (see [`super::replay`]); ignored in the other modes.
+    /// latency seed (see [`super::run_cache`]); ignored in the other modes.
     pub runs: Option<Arc<RunCache>>,
 }
 

@@ -23,8 +23,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use crate::experiment::replay::RunCache;
 use crate::experiment::run::Plan;
+use crate::experiment::run_cache::RunCache;
 use crate::experiment::workers::WorldSource;
 use crate::experiment::Mode;
 use crate::results::run_info::RunTiming;

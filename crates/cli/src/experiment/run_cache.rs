@@ -35,7 +35,7 @@
 //! its world to that point (the root batch and the branch's batches are sent
 //! again, and every frame the world produces on the way must equal the stored
 //! one bit for bit, else the experiment stops with
-//! [`ReplayError::Diverged`]), and from there simulates and records.
+//! [`RunCacheError::Diverged`]), and from there simulates and records.
 //!
 //! In the push task the actuator's action during a run does not depend on
 //! the model, so a run is determined by its start (and, with latency
@@ -57,7 +57,7 @@ use pushlearn::wire::pb::sim_control::Action;
 
 /// Why replaying stopped.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ReplayError {
+pub enum RunCacheError {
     /// A world produced a different frame for the same commands since a
     /// root (a reset; with latency emulation a latency seed and a reset)
     /// than the one recorded: the world is not deterministic, and the
@@ -108,7 +108,7 @@ impl Tree {
 
     /// Adds a frame, or checks it against the one another worker recorded
     /// for the same edge meanwhile; the node, and whether it is new.
-    fn insert(&mut self, edge: Edge, frame: Arc<Frame>) -> Result<(usize, bool), ReplayError> {
+    fn insert(&mut self, edge: Edge, frame: Arc<Frame>) -> Result<(usize, bool), RunCacheError> {
         let existing = match &edge {
             Edge::Root { rate, batch } => self.root(*rate, batch),
             Edge::Child { parent, batch } => self.child(*parent, batch),
@@ -117,7 +117,7 @@ impl Tree {
             return if *self.nodes[n].frame == *frame {
                 Ok((n, false))
             } else {
-                Err(ReplayError::Diverged {
+                Err(RunCacheError::Diverged {
                     step: self.depth(n),
                 })
             };
@@ -484,7 +484,7 @@ impl Cursor {
 
     /// The frame the real world produced for the batch of the last
     /// [`Next::Simulate`]; recorded if the stream is inside the tree.
-    pub(crate) fn simulated(&mut self, frame: Frame) -> Result<Arc<Frame>, ReplayError> {
+    pub(crate) fn simulated(&mut self, frame: Frame) -> Result<Arc<Frame>, RunCacheError> {
         self.cache.simulated.fetch_add(1, Ordering::Relaxed);
         let frame = Arc::new(frame);
         match self.recording.take() {
@@ -682,7 +682,7 @@ mod tests {
         a.simulated(frame(0.0)).expect("first record");
         assert_eq!(
             b.simulated(frame(0.001)),
-            Err(ReplayError::Diverged { step: 0 })
+            Err(RunCacheError::Diverged { step: 0 })
         );
     }
 
@@ -813,7 +813,7 @@ mod tests {
         a.simulated(frame(0.2)).expect("first record");
         assert_eq!(
             c.simulated(frame(0.25)),
-            Err(ReplayError::Diverged { step: 2 })
+            Err(RunCacheError::Diverged { step: 2 })
         );
     }
 
