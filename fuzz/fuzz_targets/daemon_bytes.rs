@@ -1,12 +1,12 @@
 //! One client's bytes, as the world daemon decodes, checks and applies them
-//! (`sim_plugin::server::untrusted`): no input may crash it, stop its
+//! (`sim_plugin::untrusted`): no input may crash it, stop its
 //! physics, or make it publish a non-finite state.
 #![no_main]
 
 use std::cell::RefCell;
 
 use libfuzzer_sys::fuzz_target;
-use sim_plugin::server::untrusted::Harness;
+use sim_plugin::untrusted::Harness;
 use sim_plugin::Scene;
 
 thread_local! {

@@ -3,7 +3,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use sim_plugin::server::untrusted::load_untrusted_scene;
+use sim_plugin::untrusted::load_untrusted_scene;
 
 fuzz_target!(|bytes: &[u8]| {
     if let Ok(text) = std::str::from_utf8(bytes) {

@@ -8,13 +8,18 @@
 //! * [`push_run`]: push-task runs as the experiment driver records them.
 //! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
 //!   (`docs/protocol.md`);
-//! * [`replay`]: a recorded session served as if it were the world.
+//! * [`replay`]: a recorded session served as if it were the world;
+//! * `untrusted` (feature `testing`): the daemon's, the scene parser's and
+//!   the recording loader's handling of untrusted bytes without sockets, for
+//!   the fuzzers and the tests that replay their inputs.
 
 pub mod calibration;
 pub mod push_run;
 pub mod replay;
 pub mod scene;
 pub mod server;
+#[cfg(feature = "testing")]
+pub mod untrusted;
 pub mod world;
 
 pub use calibration::{sweep, SweepOptions, SweepRow};

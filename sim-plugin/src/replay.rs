@@ -215,7 +215,7 @@ impl Replay {
     /// The recorded client's own frames played back to one session of this
     /// replay, in order, as a client repeating the recorded session sends
     /// them; in realtime, every state then sent unasked. For the fuzz harness
-    /// (`server::untrusted::load_untrusted_recording`).
+    /// (`untrusted::load_untrusted_recording`).
     #[must_use]
     pub fn play_back(&self) -> Served {
         let mut session = Session::new(self);

@@ -459,8 +459,8 @@ impl Scene {
             within(
                 &field(f),
                 v,
-                -crate::world::MAX_POSITION,
-                crate::world::MAX_POSITION,
+                -pushlearn_core::MAX_POSITION,
+                pushlearn_core::MAX_POSITION,
             )?;
         }
         finite(&field("start.yaw"), b.start.yaw)?;

@@ -1,4 +1,6 @@
-//! Generational slots: the backing store of the handle types.
+//! Generational slots, the backing store of the handle types, and the
+//! handles themselves: bodies and geoms name each other (a body lists its
+//! geoms, a geom its body), so their handles live below both.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -15,6 +17,15 @@ pub(crate) struct RawHandle {
     pub(crate) index: u32,
     pub(crate) generation: u32,
 }
+
+/// Names one body of one [`World`](crate::World). Copyable; refused once the
+/// body is removed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BodyHandle(pub(crate) RawHandle);
+
+/// Names one geom of one [`World`](crate::World).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct GeomHandle(pub(crate) RawHandle);
 
 struct Slot<T> {
     generation: u32,

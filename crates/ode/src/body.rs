@@ -4,15 +4,9 @@ use std::marker::PhantomData;
 
 use ode_sys::dBodyID;
 
-use crate::arena::RawHandle;
+use crate::arena::GeomHandle;
 use crate::check::{check_finite3, check_positive, quat_from_ode, quat_to_ode};
-use crate::geom::GeomHandle;
 use crate::OdeError;
-
-/// Names one body of one [`World`](crate::World). Copyable; refused once the
-/// body is removed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct BodyHandle(pub(crate) RawHandle);
 
 pub(crate) struct BodyEntry {
     pub(crate) raw: dBodyID,

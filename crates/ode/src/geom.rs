@@ -2,14 +2,9 @@
 
 use ode_sys::dGeomID;
 
-use crate::arena::RawHandle;
-use crate::body::BodyHandle;
+use crate::arena::BodyHandle;
 use crate::check::{check_finite, check_positive, unit_direction};
 use crate::OdeError;
-
-/// Names one geom of one [`World`](crate::World).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct GeomHandle(pub(crate) RawHandle);
 
 pub(crate) struct GeomEntry {
     pub(crate) raw: dGeomID,

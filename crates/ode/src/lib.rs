@@ -32,10 +32,11 @@ mod init;
 mod params;
 mod world;
 
-pub use body::{Body, BodyBuilder, BodyHandle, BodyMut};
+pub use arena::{BodyHandle, GeomHandle};
+pub use body::{Body, BodyBuilder, BodyMut};
 pub use contact::{ContactMode, ContactPair, ContactPoint, GeomInfo, Surface, SurfaceParams};
 pub use error::OdeError;
-pub use geom::{GeomBuilder, GeomHandle, Shape};
+pub use geom::{GeomBuilder, Shape};
 pub use init::rand_set_seed;
 pub use params::{AutoDisable, StepParams};
 pub use world::{SpaceKind, StepReport, World};

@@ -28,11 +28,11 @@ use crate::scene::Scene;
 use crate::world::{Command, CommandError, MAX_GHOSTS};
 
 /// Identifies a connection for answers the physics thread sends it.
-pub(super) type ClientId = u64;
+pub(crate) type ClientId = u64;
 
 /// A command that passed every check, on its way to the physics thread.
 #[derive(Debug)]
-pub(super) struct Accepted {
+pub(crate) struct Accepted {
     pub client: ClientId,
     pub seq: u64,
     pub op: Op,
@@ -40,7 +40,7 @@ pub(super) struct Accepted {
 
 /// What an accepted `ClientMessage` asks of the world.
 #[derive(Debug)]
-pub(super) enum Op {
+pub(crate) enum Op {
     /// Commands of the world, applied together at one step boundary (a
     /// `set_pose` may name several bodies).
     World(Vec<Command>),
@@ -65,7 +65,7 @@ impl Op {
 
 /// What the physics thread receives.
 #[derive(Debug)]
-pub(super) enum ToPhysics {
+pub(crate) enum ToPhysics {
     Command(Accepted),
     Stop,
     /// Test fault injection ([`super::ServerHandle::provoke_blow_up`]);
@@ -76,7 +76,7 @@ pub(super) enum ToPhysics {
 
 /// Why a command was not accepted. The text is what the `Error` carries.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub(super) enum Refusal {
+pub(crate) enum Refusal {
     /// The wire's checks, including the world-dependent ones it words.
     #[error(transparent)]
     Invalid(#[from] InvalidCommand),
@@ -124,7 +124,7 @@ struct Mirror {
 
 /// The arrival checks and the channel to the physics thread.
 #[derive(Debug)]
-pub(super) struct Gate {
+pub(crate) struct Gate {
     scene: Scene,
     timing: Timing,
     /// Current publish rate, for the Hello of new connections.

@@ -23,11 +23,9 @@
 
 pub(crate) mod connection;
 mod convert;
-mod gate;
+pub(crate) mod gate;
 mod outbox;
 mod physics;
-#[cfg(feature = "testing")]
-pub mod untrusted;
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicU64, Ordering};

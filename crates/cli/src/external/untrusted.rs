@@ -447,14 +447,14 @@ mod tests {
     /// must have some: an emptied folder fails instead of passing.
     #[test]
     fn the_fuzzers_kept_learner_protocol_inputs_keep_their_properties() {
-        let requests = sim_plugin::server::untrusted::kept_fuzz_inputs("learner_requests");
+        let requests = sim_plugin::untrusted::kept_fuzz_inputs("learner_requests");
         assert!(requests.len() >= 5, "{} kept inputs", requests.len());
         for (path, bytes) in requests {
             let (kind, rest) = model_for_input(&bytes);
             let served = serve_untrusted_requests(kind, rest);
             assert!(served.is_ok(), "{}: {served:?}", path.display());
         }
-        let replies = sim_plugin::server::untrusted::kept_fuzz_inputs("learner_replies");
+        let replies = sim_plugin::untrusted::kept_fuzz_inputs("learner_replies");
         assert!(replies.len() >= 5, "{} kept inputs", replies.len());
         for (path, bytes) in replies {
             let read = read_untrusted_replies(&bytes);

@@ -695,7 +695,7 @@ mod tests {
 
     #[test]
     fn the_fuzzers_kept_sweep_files_are_planned_or_refused() {
-        let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("sweep_file");
+        let kept = sim_plugin::untrusted::kept_fuzz_inputs("sweep_file");
         assert!(
             kept.len() >= 3,
             "fuzz/corpus/sweep_file has {} inputs",

@@ -195,7 +195,7 @@ mod tests {
     /// must not be empty.
     #[test]
     fn the_fuzzers_kept_browser_inputs_keep_their_property() {
-        let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("viewer");
+        let kept = sim_plugin::untrusted::kept_fuzz_inputs("viewer");
         assert!(kept.len() >= 5, "{} kept inputs", kept.len());
         for (path, bytes) in kept {
             let seen = serve_untrusted_bytes(&bytes);

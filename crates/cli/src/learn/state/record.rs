@@ -261,7 +261,7 @@ mod tests {
     /// is found exactly where the good records end.
     #[test]
     fn the_fuzzers_kept_journals_are_read_up_to_their_damage() {
-        let kept = sim_plugin::server::untrusted::kept_fuzz_inputs("journal");
+        let kept = sim_plugin::untrusted::kept_fuzz_inputs("journal");
         assert!(
             kept.len() >= 10,
             "fuzz/corpus/journal has {} inputs",

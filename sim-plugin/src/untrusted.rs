@@ -10,10 +10,10 @@ use std::sync::mpsc::{self, Receiver};
 use pushlearn::recording::{self, Direction, RecordingWriter};
 use pushlearn::wire::{decode_stream, encode_frame, pb, LENGTH_PREFIX_SIZE};
 
-use super::gate::{Gate, Op, ToPhysics};
-use super::{Config, ServerError, Timing};
 use crate::replay::{Replay, Served};
 use crate::scene::Scene;
+use crate::server::gate::{Gate, Op, ToPhysics};
+use crate::server::{Config, ServerError, Timing};
 use crate::world::{StepError, World};
 
 /// Steps run per accepted Advance (at most; a live daemon runs to the next
@@ -356,7 +356,7 @@ mod tests {
             which in any::<prop::sample::Index>(),
             value in prop_oneof![any::<f64>().prop_map(|v| format!("{v:?}")), "[-0-9.e+]{1,8}", Just("nan".to_owned()), Just("1e308".to_owned())],
         ) {
-            let text = include_str!("../../scenes/one_block.toml");
+            let text = include_str!("../scenes/one_block.toml");
             let numbers: Vec<(usize, usize)> = number_spans(text);
             let (start, end) = numbers[which.index(numbers.len())];
             let edited = format!("{}{}{}", &text[..start], value, &text[end..]);
@@ -384,7 +384,7 @@ mod tests {
 
     #[test]
     fn the_unedited_scene_simulates() {
-        assert!(load_untrusted_scene(include_str!("../../scenes/one_block.toml")).unwrap());
+        assert!(load_untrusted_scene(include_str!("../scenes/one_block.toml")).unwrap());
         assert!(!load_untrusted_scene("name = 3").unwrap());
     }
 
