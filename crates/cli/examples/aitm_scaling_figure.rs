@@ -1,7 +1,7 @@
 //! Draws the AITM-alone scaling figure of docs/performance.md §2 from the
 //! table the `aitm_scaling` benchmark writes:
 //!
-//!   cargo bench -p learner --bench aitm_scaling
+//!   cargo bench -p memories --bench aitm_scaling
 //!   cargo run --release -p pushlearn-cli --example aitm_scaling_figure
 //!
 //! µs per query (along a run, near at random, far) and per update through
@@ -29,7 +29,7 @@ fn main() -> anyhow::Result<()> {
     let args = Args::parse();
     let text = std::fs::read_to_string(&args.csv).with_context(|| {
         format!(
-            "cannot read {} (run `cargo bench -p learner --bench aitm_scaling` first)",
+            "cannot read {} (run `cargo bench -p memories --bench aitm_scaling` first)",
             args.csv.display()
         )
     })?;

@@ -18,7 +18,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("ode-sys", &[]),
     ("ode", &["ode-sys"]),
     ("pushlearn", &["pushlearn-core"]),
-    ("learner", &["pushlearn-core"]),
+    ("memories", &[]),
+    ("learner", &["memories", "pushlearn-core"]),
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
     ("pushlearn-python", &["learner", "pushlearn-core"]),
     (

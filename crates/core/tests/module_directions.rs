@@ -67,33 +67,30 @@ const CRATES: &[(&str, Table)] = &[
             ("client", &["duration", "wire"]),
         ],
     ),
-    // The models: the memories at the bottom, the models on them, the
-    // evaluation and the test double above.
+    // The memory-based learners.
+    (
+        "crates/memories/src",
+        &[("aitm", &[]), ("tree", &[]), ("aim", &["aitm"])],
+    ),
+    // The models (on the memories, which are a crate of their own), the
+    // evaluation and the test double above them.
     (
         "crates/learner/src",
         &[
             ("types", &[]),
             ("flags", &[]),
-            ("tree", &[]),
-            ("aitm", &[]),
-            ("aim", &["aitm"]),
             ("features", &["types"]),
             ("keypoints", &["features", "types"]),
             ("planning", &["types"]),
-            ("stats", &["aitm"]),
+            ("stats", &[]),
             ("model", &["features", "stats", "types"]),
             (
                 "gate",
-                &[
-                    "aim", "aitm", "features", "flags", "model", "planning", "stats", "types",
-                ],
+                &["features", "flags", "model", "planning", "stats", "types"],
             ),
             (
                 "interaction",
-                &[
-                    "aim", "aitm", "features", "flags", "model", "planning", "stats", "tree",
-                    "types",
-                ],
+                &["features", "flags", "model", "planning", "stats", "types"],
             ),
             ("eval", &["features", "keypoints", "model", "types"]),
             ("testing", &["features", "model", "stats", "types"]),

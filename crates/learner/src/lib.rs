@@ -5,9 +5,10 @@
 //! * [`types`]: what the daemon and the experiment driver exchange with a
 //!   model (frames, object states, actions, poses, targets);
 //! * [`features`]: parsing and every feature computation of `docs/spec/features.md`;
-//! * [`aitm`]: the Adapted Instantaneous Topological Map (`docs/spec/aitm.md`), the
-//!   one memory-based regressor/classifier of both learners;
-//! * [`aim`]: the Averaging Inverse Model (`docs/spec/inverse-model.md`);
+//! * [`aitm`], [`aim`], [`tree`]: the memory-based learners the models are
+//!   built from (the Adapted Instantaneous Topological Map, the Averaging
+//!   Inverse Model, the draft's decision trees), re-exported from the
+//!   `memories` crate;
 //! * [`gate`]: the object-state model with gating function
 //!   (`docs/spec/gate-model.md`) and its planner (`docs/spec/planning.md` §2);
 //! * [`model`]: the [`Model`] trait both learners implement;
@@ -17,13 +18,10 @@
 //!   (`docs/spec/interaction-model.md`);
 //! * [`planning`]: the model-independent parts of Move to Target
 //!   (`docs/spec/planning.md` §1, §4, §5);
-//! * [`tree`]: the decision trees of the thesis draft's AC selector;
 //! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2);
 //! * `testing` (feature `testing`): the [`Model`] test double of every
 //!   crate's tests.
 
-pub mod aim;
-pub mod aitm;
 pub mod eval;
 pub mod features;
 pub mod flags;
@@ -35,8 +33,9 @@ pub mod planning;
 pub mod stats;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
-pub mod tree;
 pub mod types;
+
+pub use memories::{aim, aitm, tree};
 
 pub use aitm::MapStats;
 pub use features::ParseError;

@@ -6,7 +6,7 @@
 //! training sample (output-driven insertion).
 //!
 //! ```
-//! use learner::aitm::{Aitm, AitmConfig, QueryMode};
+//! use memories::aitm::{Aitm, AitmConfig, QueryMode};
 //!
 //! // An object predictor of the gate model: 8 inputs, 3 outputs, BESTTWO.
 //! let mut map = Aitm::new(AitmConfig::regressor(QueryMode::BestTwo), 8, 3);

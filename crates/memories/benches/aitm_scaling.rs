@@ -3,7 +3,7 @@
 //! 1 M nodes, searched through the spatial index, and the brute-force scan
 //! beside it up to 100 k.
 //!
-//! `cargo bench -p learner --bench aitm_scaling` prints a table and writes
+//! `cargo bench -p memories --bench aitm_scaling` prints a table and writes
 //! `target/aitm_scaling.csv`; `… -- runs` (or `uniform`) times one shape
 //! only and writes `target/aitm_scaling-runs.csv` (or `-uniform`). Not
 //! criterion: an update grows the map, so each timed batch runs on a fresh
@@ -36,7 +36,7 @@ use std::hint::black_box;
 use std::io::Write;
 use std::time::Instant;
 
-use learner::aitm::{Aitm, AitmConfig, QueryMode};
+use memories::aitm::{Aitm, AitmConfig, QueryMode};
 
 const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
 const QUERIES: usize = 2_000;

@@ -47,7 +47,7 @@ use super::distance::pairwise_sq_sum;
 
 /// Rows per leaf before it is split. With a leaf's inputs contiguous, a
 /// longer leaf costs little to scan and saves a tree level, which is a
-/// cache miss in a large map: `cargo bench -p learner --bench aitm_scaling`
+/// cache miss in a large map: `cargo bench -p memories --bench aitm_scaling`
 /// was fastest at 1 M nodes with 32 (of 16, 32, 64) and no slower at 1 k.
 const LEAF_CAP: usize = 32;
 

@@ -10,7 +10,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use learner::aitm::{Aitm, AitmConfig, QueryMode};
+use memories::aitm::{Aitm, AitmConfig, QueryMode};
 
 #[path = "support/rng.rs"]
 mod rng;

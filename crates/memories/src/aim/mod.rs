@@ -7,7 +7,7 @@
 //! time.
 //!
 //! ```
-//! use learner::aim::{AimConfig, InverseModel, PrototypeKey, Sign};
+//! use memories::aim::{AimConfig, InverseModel, PrototypeKey, Sign};
 //!
 //! let mut aim = InverseModel::new(AimConfig::hz100());
 //! // Precondition p produced a change d: feature 1 grew by 0.1.
