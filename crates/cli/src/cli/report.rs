@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use pushlearn_cli::models::ModelKind;
+use pushlearn_cli::models::{ModelKind, Named as _};
 use pushlearn_cli::output;
 use pushlearn_cli::report::plot;
 use pushlearn_cli::results::AnyReport;
@@ -46,8 +46,8 @@ fn load(file: &std::path::Path) -> Result<(AnyReport, ModelKind)> {
     let report =
         AnyReport::from_json(&text).with_context(|| format!("reading {}", file.display()))?;
     let model = report.setup().model.as_str();
-    let model = <ModelKind as clap::ValueEnum>::from_str(model, false)
-        .map_err(|_| anyhow::anyhow!("{}: unknown model {model:?}", file.display()))?;
+    let model = ModelKind::from_name(model)
+        .ok_or_else(|| anyhow::anyhow!("{}: unknown model {model:?}", file.display()))?;
     Ok((report, model))
 }
 

@@ -41,8 +41,9 @@ pub const LATENCY_MAX_STEPS_HARSH: u32 = 5;
 /// The thesis's model update rate (`docs/spec/experiments.md` §6).
 pub const RATE_HZ: u32 = 100;
 
-/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4, configuration 2).
-pub const LOW_RATE_HZ: u32 = 10;
+/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4,
+/// configuration 2), at which a model takes the LOWFREQ thresholds.
+pub use learner::registry::LOW_RATE_HZ;
 
 /// How the world is timed (`docs/spec/world.md` §8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
