@@ -395,7 +395,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     bar.finish_and_clear();
     // The tables first: a file that cannot be written after all (a full
     // disk) must not cost the run's results.
-    let printout = document.printout();
+    let printout = document.printout()?;
     {
         let mut out = std::io::stdout().lock();
         printout.write_text(&mut out)?;
