@@ -78,8 +78,12 @@ class GateModel:
     learning rate (0 in the final thesis); ``publish_rate_hz`` the world's
     rate (10 selects the LOWFREQ thresholds, as bit 2 does);
     ``no_angular_velocity`` leaves the block's angular velocity out of the
-    USE_DYNS features. The checks and the texts of the ValueError they raise
-    are the command line's (``pushlearn learn --model gate``).
+    USE_DYNS features; ``improve`` names changes beyond the thesis as
+    ``--improve`` does: "unrounded", "interpolate", "adapt-actuator",
+    "average-outputs", "forward-check", "shared-blocks", or "all", which is
+    the command line's gate+ model (docs/models.md, "Beyond the thesis").
+    The checks and the texts of the ValueError they raise are the command
+    line's (``pushlearn learn --model gate``), from the same model registry.
 
     Thread safety: a GateModel may be used from any thread (it is Send and
     Sync in Rust); every method holds the GIL throughout, so calls from
@@ -92,10 +96,16 @@ class GateModel:
         eta: float = 0.0,
         publish_rate_hz: int = 100,
         no_angular_velocity: bool = False,
+        improve: Sequence[str] = (),
     ) -> None:
         """Raises ValueError for unknown configuration bits, a negative or
-        non-finite eta, no_angular_velocity without bit 1, or an integer out
-        of range."""
+        non-finite eta, no_angular_velocity without bit 1, an unknown change
+        in improve (the message lists the valid names), or an integer out of
+        range."""
+    @property
+    def name(self) -> str:
+        """The name reports give this model, as ``pushlearn experiment``
+        names it: "gate", "gate+" (every change) or "gate+CHANGE+…"."""
     def parse(self, bodies: Sequence[_Body]) -> GateWorld:
         """Parse one world-state message into a world of this model
         (``Model::parse``).
@@ -209,6 +219,9 @@ class InteractionModel:
         """Raises ValueError for configuration bits that do not apply, a
         negative or non-finite eta, an unknown selector (the message lists
         the valid names) or an integer out of range."""
+    @property
+    def name(self) -> str:
+        """The name reports give this model: "interaction"."""
     def parse(self, bodies: Sequence[_Body]) -> InteractionWorld:
         """Parse one world-state message into a world of this model
         (``Model::parse``); ``bodies`` as for GateModel.parse.

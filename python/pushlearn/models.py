@@ -4,7 +4,10 @@ Both serve a model of the native extension (``pushlearn._native``,
 ``GateModel`` / ``InteractionModel``) over the learner protocol, forward
 *and* inverse (Move to Target), so that ``pushlearn experiment … --learner
 "python -m pushlearn.serve pushlearn.models:GateLearner"`` runs the very
-model the built-in ``--model gate`` runs, through the external-learner path.
+model the built-in ``--model gate`` runs, through the external-learner path,
+and ``… GateLearner --improve all`` the one of ``--model gate+``. The
+options, their checks and the names reports give the models are the
+command line's: the extension builds its models with the same registry.
 
 Bit identity with the in-process model depends on two rules, which this
 module follows:
@@ -32,6 +35,7 @@ Needs the native extension: build the package with ``pip install .`` or
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from .learner import (
@@ -100,6 +104,12 @@ class NativeLearner(Learner):
     def _build(self, publish_rate_hz: int) -> Any:
         """The untrained native model for ``publish_rate_hz``."""
         raise NotImplementedError
+
+    @property
+    def display_name(self) -> str:
+        """The name ``pushlearn experiment`` gives the built-in model under these
+        options (``"gate"``, ``"gate+"``, ``"gate+unrounded"``, ``"interaction"``)."""
+        return str(self.template.name)
 
     # -- lifecycle -------------------------------------------------------------
 
@@ -191,6 +201,11 @@ class NativeLearner(Learner):
         return dict(self.model.stats())
 
 
+def _names(text: str) -> list[str]:
+    """A comma-separated list of names (checked by the native model)."""
+    return text.split(",")
+
+
 def _common_options(parser: ArgumentParser) -> None:
     parser.add_argument(
         "--config", type=int, default=0, help="configuration bit flags (default 0)"
@@ -215,10 +230,14 @@ class GateLearner(NativeLearner):
         config: int = 0,
         eta: float = 0.0,
         no_angular_velocity: bool = False,
+        improve: Sequence[str] = (),
         publish_rate_hz: int = 100,
     ) -> None:
         self.no_angular_velocity = no_angular_velocity
         """The gate model's ablation without the angular-velocity feature."""
+        self.improve = list(improve)
+        """Changes beyond the thesis by the names of ``--improve`` (``["all"]``:
+        the ``gate+`` model; ``docs/models.md``, "Beyond the thesis")."""
         super().__init__(config=config, eta=eta, publish_rate_hz=publish_rate_hz)
 
     def _build(self, publish_rate_hz: int) -> Any:
@@ -227,11 +246,12 @@ class GateLearner(NativeLearner):
             eta=self.eta,
             publish_rate_hz=publish_rate_hz,
             no_angular_velocity=self.no_angular_velocity,
+            improve=self.improve,
         )
 
     @classmethod
     def from_args(cls, argv: list[str]) -> GateLearner:
-        """``[--config N] [--eta E] [--no-angular-velocity]``."""
+        """``[--config N] [--eta E] [--no-angular-velocity] [--improve CHANGE,…]``."""
         parser = ArgumentParser(prog="gate", description="the gate model")
         _common_options(parser)
         parser.add_argument(
@@ -239,12 +259,22 @@ class GateLearner(NativeLearner):
             action="store_true",
             help="leave out the angular-velocity feature",
         )
+        parser.add_argument(
+            "--improve",
+            metavar="CHANGE,…",
+            action="extend",
+            type=_names,
+            default=[],
+            help="changes beyond the thesis, comma-separated, as `pushlearn "
+            "experiment --improve` takes them (all: the gate+ model)",
+        )
         args = parser.parse_args(argv)
         try:
             return cls(
                 config=args.config,
                 eta=args.eta,
                 no_angular_velocity=args.no_angular_velocity,
+                improve=args.improve,
             )
         except ValueError as err:
             raise UsageError(f"gate: {err}") from None

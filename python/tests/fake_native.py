@@ -54,6 +54,10 @@ class FakeModel:
         self.seeded: int | None = None
         self.copy_of: FakeModel | None = None
 
+    @property
+    def name(self) -> str:
+        return self.kind
+
     def copy(self) -> FakeModel:
         twin = type(self)(**self.params)
         twin.log = self.log

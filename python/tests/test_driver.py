@@ -141,6 +141,48 @@ def test_the_gate_model_served_from_python_is_the_in_process_one_bit_for_bit(
     assert comparable(inside) == comparable(outside)
 
 
+# Not `unrounded` (so not gate+): through the learner protocol its model is
+# not the in-process one bit for bit, `pushlearn serve-learner --model gate+`
+# neither; GateModel(improve=["all"]) is checked against the native model in
+# test_models.py.
+@pytest.mark.parametrize(
+    ("changes", "name"),
+    [
+        ("average-outputs", "gate+average-outputs"),
+        (
+            "shared-blocks,forward-check,interpolate,adapt-actuator",
+            "gate+interpolate+adapt-actuator+forward-check+shared-blocks",
+        ),
+    ],
+    ids=["one", "four"],
+)
+def test_the_improved_gate_model_served_from_python_is_the_in_process_one(
+    driver_bin: Path,
+    sim_bin: Path,
+    tmp_path: Path,
+    changes: str,
+    name: str,
+) -> None:
+    """``GateModel(improve=[…])`` is ``--model gate --improve …`` (one registry)."""
+    pytest.importorskip("pushlearn._native")
+    task = ["push-task", "--train-runs", "1,3", "--folds", "2"]
+    inside, outside = tmp_path / "inside.json", tmp_path / "outside.json"
+    model = ["--model", "gate", "--improve", changes]
+    run_driver(driver_bin, sim_bin, *task, *model, "--json", str(inside))
+    served = (
+        f"{sys.executable} -m pushlearn.serve "
+        f"pushlearn.models:GateLearner --improve {changes}"
+    )
+    table = run_driver(
+        driver_bin, sim_bin, *task, "--learner", served, "--json", str(outside)
+    )
+    assert f"learner '{name}'" in table
+    assert "thesis values: the gate model's" in table
+    for path in (inside, outside):
+        assert json.loads(path.read_text())["model"] == name
+    assert comparable(inside) == comparable(outside)
+
+
 def test_the_readme_learner_runs_through_the_driver(
     driver_bin: Path, sim_bin: Path, tmp_path: Path
 ) -> None:

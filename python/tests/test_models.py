@@ -14,7 +14,7 @@ import pytest
 from driver import LAST_OBSERVED, LAST_PREDICTION, Script, action, observed, recent, run
 from pushlearn import Capability, State
 from pushlearn._pb import learner_pb2
-from pushlearn.learner import _stats_to_proto
+from pushlearn.learner import UsageError, _stats_to_proto
 from pushlearn.models import GateLearner, InteractionLearner, NativeLearner
 from synthetic import synthetic_run
 
@@ -141,6 +141,27 @@ def test_served_predictions_are_the_native_models_bit_for_bit(
     # synthetic_run(x0, 20) has 21 states: one prediction on each.
     assert len(got) == len(expected) == 3 * 21 + 31
     assert got == expected  # exact float equality, not approx
+
+
+def test_improvements_are_the_command_lines() -> None:
+    assert GateLearner().display_name == "gate"
+    assert GateLearner(improve=["all"]).display_name == "gate+"
+    learner = GateLearner.from_args(["--improve", "shared-blocks,unrounded"])
+    assert learner.display_name == "gate+unrounded+shared-blocks"
+    assert InteractionLearner().display_name == "interaction"
+    with pytest.raises(UsageError) as e:
+        GateLearner.from_args(["--improve", "unrounded,turbo"])
+    assert str(e.value) == (
+        "gate: unknown change 'turbo' to improve; one of: unrounded, interpolate, "
+        "forward-check, shared-blocks, adapt-actuator, average-outputs, all"
+    )
+
+
+@pytest.mark.parametrize("improve", [["average-outputs"], ["all"]])
+def test_served_improved_gate_models_are_the_native_ones(improve: list[str]) -> None:
+    starts = [-0.03, 0.0, 0.03]
+    expected = direct(lambda: native.GateModel(improve=improve), starts, 0.01)
+    assert served(GateLearner(improve=improve), starts, 0.01) == expected
 
 
 def test_the_same_fold_seed_gives_the_same_predictions() -> None:

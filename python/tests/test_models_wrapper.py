@@ -129,6 +129,7 @@ def test_a_fold_is_a_seeded_copy_of_the_template() -> None:
         "eta": 0.5,
         "publish_rate_hz": 100,
         "no_angular_velocity": True,
+        "improve": [],
     }
     learner.start("push-task", 100)
     assert learner.template is template  # same rate: not rebuilt
@@ -229,6 +230,10 @@ def test_command_line_options() -> None:
         gate.template.params["config"] == 8
         and gate.template.params["no_angular_velocity"]
     )
+    gate = GateLearner.from_args(
+        ["--improve", "forward-check,unrounded", "--improve", "all"]
+    )
+    assert gate.template.params["improve"] == ["forward-check", "unrounded", "all"]
     interaction = InteractionLearner.from_args(["--selector", "tree"])
     assert interaction.template.params["selector"] == "tree"
     with pytest.raises(UsageError, match="unrecognized arguments: --selector"):

@@ -41,6 +41,7 @@ class GateKwargs(TypedDict, total=False):
     eta: float
     publish_rate_hz: int
     no_angular_velocity: bool
+    improve: list[str]
 
 
 class InteractionKwargs(TypedDict, total=False):
@@ -116,6 +117,21 @@ def test_defaults_and_repr() -> None:
     # Both models accept the driver-only bits.
     GateModel(config=4 | 8)
     InteractionModel(config=2 | 4 | 8)
+    assert repr(GateModel(improve=["average-outputs", "unrounded"])) == (
+        "GateModel(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False, "
+        "improve=['average-outputs', 'unrounded'])"
+    )
+
+
+def test_models_are_named_as_reports_name_them() -> None:
+    assert GateModel().name == "gate"
+    assert InteractionModel(selector="tree").name == "interaction"
+    # The order of the reports, whatever the arguments'.
+    changes = ["forward-check", "unrounded"]
+    assert GateModel(improve=changes).name == "gate+unrounded+forward-check"
+    # `all` is the command line's gate+.
+    assert GateModel(improve=["all"]).name == "gate+"
+    assert GateModel(improve=("unrounded", "all")).name == "gate+"
 
 
 @pytest.mark.parametrize(
@@ -129,9 +145,20 @@ def test_defaults_and_repr() -> None:
         ({"eta": float("inf")}, "eta inf is not a finite, non-negative number"),
         (
             {"no_angular_velocity": True},
-            "no_angular_velocity needs velocity features (bit 1, USE_DYNS, of config)",
+            (
+                "--no-angular-velocity needs velocity features "
+                "(--flag use-dyns or bit 1 of --config)"
+            ),
         ),
         ({"publish_rate_hz": -10}, "-10 is out of range"),
+        (
+            {"improve": ["average-outputs", "turbo"]},
+            (
+                "unknown change 'turbo' to improve; one of: unrounded, interpolate, "
+                "forward-check, shared-blocks, adapt-actuator, average-outputs, all"
+            ),
+        ),
+        ({"improve": ["Unrounded"]}, "unknown change 'Unrounded' to improve"),
     ],
 )
 def test_gate_model_refusals(kwargs: GateKwargs, message: str) -> None:
@@ -169,6 +196,10 @@ def test_wrong_argument_types_are_type_errors() -> None:
         GateModel(config="1")  # type: ignore[arg-type]
     with pytest.raises(TypeError):
         InteractionModel(selector=3)  # type: ignore[arg-type]
+    with pytest.raises(TypeError):
+        GateModel(improve="unrounded")  # a list of names, not one
+    with pytest.raises(TypeError):
+        InteractionModel(improve=["unrounded"])  # type: ignore[call-arg]
     with pytest.raises(TypeError):
         GateWorld()  # worlds come from parse and predict only
 

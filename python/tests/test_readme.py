@@ -94,3 +94,18 @@ def test_the_readme_sim_client_example_runs(start_sim: Callable[..., Daemon]) ->
     first, last = done.stdout.strip().splitlines()
     assert first == "one_block lockstep 100"
     assert last.startswith("Pose(x=") and "y=0.82" in last
+
+
+def test_the_readme_native_model_options_run() -> None:
+    pytest.importorskip("pushlearn._native")
+    (source,) = [b for b in python_blocks() if "GateModel(improve" in b]
+    done = subprocess.run(
+        [sys.executable, "-c", source],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "gate+average-outputs gate+\n"

@@ -14,8 +14,10 @@ use serde::{Deserialize, Serialize};
 /// The thesis's model update rate (`docs/spec/experiments.md` §6).
 pub const RATE_HZ: u32 = 100;
 
-/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4, configuration 2).
-pub const LOW_RATE_HZ: u32 = 10;
+/// The constant-feedback images' rate (`docs/spec/experiments.md` §3.4,
+/// configuration 2), at which a model takes the LOWFREQ thresholds: the
+/// model registry's.
+pub use learner::registry::LOW_RATE_HZ;
 
 /// z of a SetPose for the actuator and for blocks (`docs/spec/protocol.md` §6).
 pub const ACTUATOR_Z: f64 = 0.03;

@@ -18,7 +18,7 @@ use crate::report::table;
 use crate::results::push_task::PushJobResult;
 use crate::results::run_info::RunInfo;
 use crate::results::LearnerRecord;
-use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup};
+use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup, UnknownModel};
 use crate::scene::{self, Transfer};
 use crate::scene::{LOW_RATE_HZ, RATE_HZ};
 
@@ -492,39 +492,49 @@ impl Document {
 
     /// The terminal tables beside the thesis's numbers, as `pushlearn
     /// experiment` prints them, each also as CSV.
-    #[must_use]
-    pub fn printout(&self) -> Printout {
-        match self {
+    ///
+    /// # Errors
+    /// A model the thesis's numbers cannot be chosen for
+    /// ([`Setup::reference_model`]; never a document of a run or one read
+    /// back by [`AnyReport::from_json`]).
+    pub fn printout(&self) -> Result<Printout, UnknownModel> {
+        Ok(match self {
             Document::Push(r) => {
-                let mut printout = table::push_printout(r, model_of(&r.setup));
+                let mut printout = table::push_printout(r, r.setup.reference_model()?);
                 printout.tables.push(draft::keypoint_table(r));
                 printout
             }
-            Document::Feedback(r) => table::feedback_printout(r, model_of(&r.setup)),
-            Document::MoveToTarget(r) => table::move_to_target_printout(r, model_of(&r.setup)),
+            Document::Feedback(r) => table::feedback_printout(r, r.setup.reference_model()?),
+            Document::MoveToTarget(r) => {
+                table::move_to_target_printout(r, r.setup.reference_model()?)
+            }
             Document::Draft(r) => draft::printout(r),
-        }
+        })
     }
 
     /// The terminal tables beside the thesis's numbers, as `pushlearn
     /// experiment` prints them.
     ///
     /// # Errors
-    /// Writing to `out`.
+    /// Writing to `out`, or an unknown model (as [`Document::printout`]).
     pub fn write_tables(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
-        self.printout().write_text(out)
+        let printout = self
+            .printout()
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
+        printout.write_text(out)
     }
 
     /// Draws the document's figures into `dir` (the draft's tables have
     /// none).
     ///
     /// # Errors
-    /// A figure cannot be drawn or written.
+    /// A figure cannot be drawn or written, or an unknown model (as
+    /// [`Document::printout`]).
     pub fn plot(&self, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, PlotError> {
         match self {
-            Document::Push(r) => plot::push(r, model_of(&r.setup), dir),
-            Document::Feedback(r) => plot::feedback(r, model_of(&r.setup), dir),
-            Document::MoveToTarget(r) => plot::move_to_target(r, model_of(&r.setup), dir),
+            Document::Push(r) => plot::push(r, r.setup.reference_model()?, dir),
+            Document::Feedback(r) => plot::feedback(r, r.setup.reference_model()?, dir),
+            Document::MoveToTarget(r) => plot::move_to_target(r, r.setup.reference_model()?, dir),
             Document::Draft(_) => Ok(Vec::new()),
         }
     }
@@ -684,10 +694,4 @@ impl WithModel for MoveToTarget<'_> {
             self.progress,
         )
     }
-}
-
-/// The model a document of ours names (the gate model's tables for any
-/// other name, which only a hand-edited file has).
-fn model_of(setup: &Setup) -> ModelKind {
-    ModelKind::of_report_name(&setup.model).unwrap_or(ModelKind::Gate)
 }

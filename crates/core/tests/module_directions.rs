@@ -92,18 +92,15 @@ const CRATES: &[(&str, Table)] = &[
                 "interaction",
                 &["features", "flags", "model", "planning", "stats", "types"],
             ),
+            // The models by name, their options and building them.
+            ("registry", &["flags", "gate", "interaction"]),
             ("eval", &["features", "keypoints", "model", "types"]),
             ("testing", &["features", "model", "stats", "types"]),
         ],
     ),
     (
         "crates/python/src",
-        &[
-            ("args", &[]),
-            ("options", &["args"]),
-            ("aitm", &["args"]),
-            ("models", &["args", "options"]),
-        ],
+        &[("args", &[]), ("aitm", &["args"]), ("models", &["args"])],
     ),
     (
         "crates/cli/src",

@@ -18,6 +18,9 @@
 //!   (`docs/spec/interaction-model.md`);
 //! * [`planning`]: the model-independent parts of Move to Target
 //!   (`docs/spec/planning.md` §1, §4, §5);
+//! * [`registry`]: the models by name, their options as plain data with
+//!   their checks, and building an untrained model from them (what the
+//!   command line and the Python extension both use);
 //! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2);
 //! * `testing` (feature `testing`): the [`Model`] test double of every
 //!   crate's tests.
@@ -30,6 +33,7 @@ pub mod interaction;
 pub mod keypoints;
 pub mod model;
 pub mod planning;
+pub mod registry;
 pub mod stats;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;

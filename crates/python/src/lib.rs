@@ -5,8 +5,8 @@
 //!
 //! * `GateModel` / `GateWorld`, `InteractionModel` / `InteractionWorld`:
 //!   the two learners, one method per [`learner::Model`] method
-//!   (`models.rs`), configured as the command line configures them
-//!   (`options.rs`);
+//!   (`models.rs`), configured by the model registry
+//!   (`learner::registry`) as the command line's models are;
 //! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
@@ -22,7 +22,6 @@
 mod aitm;
 mod args;
 mod models;
-mod options;
 
 use learner::ModelStats;
 use pyo3::prelude::*;

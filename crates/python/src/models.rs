@@ -3,8 +3,11 @@
 //! method.
 //!
 //! Both classes come from one macro, so that their surfaces cannot drift
-//! apart; only the constructors and `__repr__` differ.
+//! apart; only the constructors and `__repr__` differ. Both are configured
+//! by the model registry (`learner::registry`), as the command line's
+//! models are: the same options, checks and refusals.
 
+use learner::registry::{self, Improvement, ModelKind, ModelOptions};
 use learner::{Model, Poses, Target};
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::prelude::*;
@@ -12,7 +15,58 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::args::{self, value_error, Body, Unsigned};
-use crate::options::{self, GateOptions, InteractionOptions};
+
+/// A constructor's arguments: the registry's options and the world's
+/// publish rate (10 Hz selects the LOWFREQ thresholds, as bit 2 does).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    model: ModelOptions,
+    publish_rate_hz: u32,
+    /// The improvements as the caller named them, for `__repr__`.
+    improve: Vec<String>,
+}
+
+impl Options {
+    /// The gate model's arguments, `improve` by the names of `--improve`.
+    fn gate(
+        config: u32,
+        eta: f64,
+        publish_rate_hz: u32,
+        no_angular_velocity: bool,
+        improve: Vec<String>,
+    ) -> PyResult<Self> {
+        let changes = improve
+            .iter()
+            .map(|name| Improvement::named(name))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(value_error)?;
+        Ok(Self {
+            model: ModelOptions {
+                config,
+                eta,
+                no_angular_velocity,
+                improve: changes,
+                ..ModelOptions::default()
+            },
+            publish_rate_hz,
+            improve,
+        })
+    }
+
+    /// The interaction model's arguments.
+    fn interaction(config: u32, eta: f64, publish_rate_hz: u32, selector: &str) -> PyResult<Self> {
+        Ok(Self {
+            model: ModelOptions {
+                config,
+                eta,
+                selector: registry::selector(selector).map_err(value_error)?,
+                ..ModelOptions::default()
+            },
+            publish_rate_hz,
+            improve: Vec::new(),
+        })
+    }
+}
 
 /// The rows `[id, x, y, theta]` of `poses`: the actuator first, then the
 /// blocks in ascending id order.
@@ -62,7 +116,8 @@ macro_rules! model_class {
         world_name: $world_name:tt,
         model_doc: $model_doc:tt,
         world_doc: $world_doc:tt,
-        options: $Options:ty,
+        kind: $kind:expr,
+        config: $config:ident,
         constructor: { $($constructor:tt)* }
     ) => {
         #[doc = $world_doc]
@@ -96,14 +151,18 @@ macro_rules! model_class {
             model: $Model,
             /// The exploration generator `act` draws from.
             rng: ChaCha8Rng,
-            /// The constructor's arguments, for `__repr__`.
-            options: $Options,
+            /// The constructor's arguments, for `__repr__` and `name`.
+            options: Options,
         }
 
         impl $PyModel {
-            fn with_options(options: $Options) -> PyResult<Self> {
+            fn with_options(options: Options) -> PyResult<Self> {
+                let config = options
+                    .model
+                    .$config(options.publish_rate_hz)
+                    .map_err(value_error)?;
                 Ok(Self {
-                    model: <$Model>::new(options.config()?),
+                    model: <$Model>::new(config),
                     rng: ChaCha8Rng::seed_from_u64(0),
                     options,
                 })
@@ -113,6 +172,14 @@ macro_rules! model_class {
         #[pymethods]
         impl $PyModel {
             $($constructor)*
+
+            /// The name reports give this model under its arguments, as
+            /// `pushlearn experiment` names it: "gate", "gate+" (every
+            /// change), "gate+CHANGE+…" or "interaction".
+            #[getter]
+            fn name(&self) -> String {
+                self.options.model.report_name($kind)
+            }
 
             /// Parse one world-state message into a world of this model
             /// (`Model::parse`).
@@ -250,15 +317,19 @@ model_class! {
     world_name: "GateWorld",
     model_doc: "The object-state model with gating function (docs/spec/gate-model.md).
 
-GateModel(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False)
+GateModel(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False, improve=())
 
 config is the original's configuration number, the sum of its bits (1
 USE_DYNS, 2 LOWFREQ, 4 and 8 driver-only, 16 HARDCODEDACT, 32 HARDCODEDGATE,
 64 USINGPREDICTIONBOOST); eta the forward models' learning rate (0 in the
 final thesis); publish_rate_hz the world's rate (10 selects the LOWFREQ
 thresholds, as bit 2 does); no_angular_velocity leaves the block's angular
-velocity out of the USE_DYNS features. The checks and the texts of the
-ValueError they raise are the command line's (`pushlearn learn --model gate`).
+velocity out of the USE_DYNS features; improve names changes beyond the
+thesis as --improve does: \"unrounded\", \"interpolate\", \"adapt-actuator\",
+\"average-outputs\", \"forward-check\", \"shared-blocks\", or \"all\", which
+is the command line's gate+ model (docs/models.md, \"Beyond the thesis\").
+The checks and the texts of the ValueError they raise are the command
+line's (`pushlearn learn --model gate`), from the same model registry.
 
 Thread safety: a GateModel may be used from any thread (it is Send and Sync
 in Rust); every method holds the GIL throughout, so calls from several
@@ -270,35 +341,47 @@ It holds the model's own world unchanged, including the identity of its
 block records (docs/spec/gate-model.md §4.1): a block the model adopted as
 its record shows the model's current state whenever it is read, as in the
 original. Never rebuild a world from its poses.",
-    options: GateOptions,
+    kind: ModelKind::Gate,
+    config: gate,
     constructor: {
         #[new]
         #[pyo3(
-            signature = (config = Unsigned(0), eta = 0.0, publish_rate_hz = Unsigned(100), no_angular_velocity = false),
-            text_signature = "(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False)"
+            signature = (config = Unsigned(0), eta = 0.0, publish_rate_hz = Unsigned(100), no_angular_velocity = false, improve = Vec::new()),
+            text_signature = "(config=0, eta=0.0, publish_rate_hz=100, no_angular_velocity=False, improve=())"
         )]
         fn new(
             config: Unsigned<u32>,
             eta: f64,
             publish_rate_hz: Unsigned<u32>,
             no_angular_velocity: bool,
+            improve: Vec<String>,
         ) -> PyResult<Self> {
-            Self::with_options(GateOptions {
-                config: config.0,
+            Self::with_options(Options::gate(
+                config.0,
                 eta,
-                publish_rate_hz: publish_rate_hz.0,
+                publish_rate_hz.0,
                 no_angular_velocity,
-            })
+                improve,
+            )?)
         }
 
         fn __repr__(&self) -> String {
             let o = &self.options;
+            // `improve` only when given, as a model without changes was
+            // shown before it existed. The names are known ones (the
+            // constructor checked them): nothing to escape.
+            let improve = if o.improve.is_empty() {
+                String::new()
+            } else {
+                let names: Vec<String> = o.improve.iter().map(|n| format!("'{n}'")).collect();
+                format!(", improve=[{}]", names.join(", "))
+            };
             format!(
-                "GateModel(config={}, eta={:?}, publish_rate_hz={}, no_angular_velocity={})",
-                o.config,
-                o.eta,
+                "GateModel(config={}, eta={:?}, publish_rate_hz={}, no_angular_velocity={}{improve})",
+                o.model.config,
+                o.model.eta,
                 o.publish_rate_hz,
-                py_bool(o.no_angular_velocity)
+                py_bool(o.model.no_angular_velocity)
             )
         }
     }
@@ -330,7 +413,8 @@ several threads on one model run one after another.",
     world_doc: "A world state of the interaction model, parsed or predicted (returned by
 InteractionModel.parse and InteractionModel.predict; not constructible): the
 object states and the interaction states computed from them.",
-    options: InteractionOptions,
+    kind: ModelKind::Interaction,
+    config: interaction,
     constructor: {
         #[new]
         #[pyo3(
@@ -343,22 +427,22 @@ object states and the interaction states computed from them.",
             publish_rate_hz: Unsigned<u32>,
             selector: &str,
         ) -> PyResult<Self> {
-            Self::with_options(InteractionOptions {
-                config: config.0,
+            Self::with_options(Options::interaction(
+                config.0,
                 eta,
-                publish_rate_hz: publish_rate_hz.0,
-                selector: options::selector(selector)?,
-            })
+                publish_rate_hz.0,
+                selector,
+            )?)
         }
 
         fn __repr__(&self) -> String {
             let o = &self.options;
             format!(
                 "InteractionModel(config={}, eta={:?}, publish_rate_hz={}, selector='{}')",
-                o.config,
-                o.eta,
+                o.model.config,
+                o.model.eta,
                 o.publish_rate_hz,
-                o.selector.as_str()
+                o.model.selector.as_str()
             )
         }
     }

@@ -16,7 +16,7 @@ use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, World
 use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::external::LearnerChoice;
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
-use pushlearn_cli::models::{ModelKind, ModelOptions};
+use pushlearn_cli::models::{named, ModelArgs, ModelKind, ModelOptions};
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
 use pushlearn_cli::scene::RATE_HZ;
 use pushlearn_cli::scene::{Object, Transfer};
@@ -128,7 +128,7 @@ struct WorldArgs {
 #[derive(Debug, Args)]
 struct LearnerArgs {
     /// The built-in learner.
-    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    #[arg(long, value_parser = named::<ModelKind>(), default_value_t = ModelKind::Gate)]
     model: ModelKind,
 
     /// Run an external learner instead: a command (run by `sh -c`, one
@@ -212,7 +212,7 @@ struct PushTaskArgs {
     test_on: Option<Object>,
 
     #[command(flatten)]
-    options: ModelOptions,
+    options: ModelArgs,
 
     #[command(flatten)]
     world: WorldArgs,
@@ -253,7 +253,7 @@ struct MoveToTargetArgs {
     max_steps: u64,
 
     #[command(flatten)]
-    options: ModelOptions,
+    options: ModelArgs,
 
     #[command(flatten)]
     world: WorldArgs,
@@ -397,7 +397,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     bar.finish_and_clear();
     // The tables first: a file that cannot be written after all (a full
     // disk) must not cost the run's results.
-    let printout = document.printout();
+    let printout = document.printout()?;
     {
         let mut out = std::io::stdout().lock();
         printout.write_text(&mut out)?;
@@ -465,7 +465,7 @@ impl PushTaskLine {
         spec.validate()?;
         // The options' fit to the model, checked now rather than in the
         // sweep's first job of this configuration.
-        let options = &line.args.options;
+        let options = &line.args.options.options();
         let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
         match line.args.learner.choice() {
             LearnerChoice::Builtin(ModelKind::Gate) => options.gate(rate).map(drop)?,
@@ -500,7 +500,7 @@ fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
             || args.train_runs.is_some()
             || args.train_on.is_some()
             || args.test_on.is_some()
-            || args.options != ModelOptions::default()
+            || args.options.options() != ModelOptions::default()
         {
             bail!("--report draft runs the draft's own rows (models, flags, training runs, protocol); drop --variant, --train-runs, --train-on, --test-on and the model options");
         }
@@ -525,12 +525,12 @@ fn push_task_spec(args: &PushTaskArgs) -> Result<Spec> {
         }
         return Ok(Spec::ConstantFeedback {
             model: args.learner.choice(),
-            options: args.options.clone(),
+            options: args.options.options(),
         });
     }
     Ok(Spec::PushTask {
         model: args.learner.choice(),
-        options: args.options.clone(),
+        options: args.options.options(),
         variant,
         transfer,
         train_runs: match &args.train_runs {
@@ -554,7 +554,7 @@ fn variant_folds(variant: Variant) -> usize {
 fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
     Spec::MoveToTarget {
         model: args.learner.choice(),
-        options: args.options.clone(),
+        options: args.options.options(),
         targets: match args.sample_targets {
             Some(n) => sampled_targets(n as usize, args.world.seed),
             None if args.target.is_empty() => TARGETS.to_vec(),

@@ -17,7 +17,7 @@ use pushlearn_cli::learn::state::{
 use pushlearn_cli::learn::{
     EpisodeResult, Episodes, Event, Learner, OnState, Policy, ServeOptions, Stop, StopReport,
 };
-use pushlearn_cli::models::{ModelKind, ModelOptions, WithModel};
+use pushlearn_cli::models::{named, ModelArgs, ModelKind, WithModel};
 
 use super::experiment::{parse_numbers, parse_pose};
 
@@ -69,7 +69,7 @@ pub struct LearnArgs {
     sim: String,
 
     /// The learner.
-    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    #[arg(long, value_parser = named::<ModelKind>(), default_value_t = ModelKind::Gate)]
     model: ModelKind,
 
     /// Always send this velocity VX,VY (m/s).
@@ -137,7 +137,7 @@ pub struct LearnArgs {
     seed: u64,
 
     #[command(flatten)]
-    options: ModelOptions,
+    options: ModelArgs,
 
     /// Keep the learner's memory in DIR (created if missing) and resume from
     /// it: a snapshot plus a journal of every state since. One daemon at a
@@ -210,7 +210,7 @@ pub fn run(args: LearnArgs) -> Result<()> {
         let client =
             SimClient::connect_with(args.sim.as_str(), ClientOptions::clock_seqs()).await?;
         let rate = client.hello().publish_rate;
-        if args.options.low_frequency() && rate != pushlearn_cli::scene::LOW_RATE_HZ {
+        if args.options.options().low_frequency() && rate != pushlearn_cli::scene::LOW_RATE_HZ {
             anyhow::bail!(
                 "LOWFREQ (bit 2, --flag low-freq) needs a world publishing at {} Hz; this one publishes at {rate} Hz (set it with `pushlearn ctl` or start pushlearn-sim at that rate)",
                 pushlearn_cli::scene::LOW_RATE_HZ
@@ -227,7 +227,7 @@ pub fn run(args: LearnArgs) -> Result<()> {
             args: &args,
             lock,
         };
-        args.model.dispatch(&args.options, rate, job)?.await
+        args.model.dispatch(&args.options.options(), rate, job)?.await
     })
 }
 
@@ -284,7 +284,7 @@ impl<'a> WithModel for Daemon<'a> {
                 policy,
                 shadows: args.shadows,
                 seed: args.seed,
-                model_options: args.options.canonical(),
+                model_options: args.options.options().canonical(),
                 episodes: args.episode_settings(),
             };
             let resuming = args.state.as_ref().filter(|dir| holds_memory(dir));

@@ -6,10 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
-use pushlearn_cli::models::ModelKind;
 use pushlearn_cli::output;
-use pushlearn_cli::report::plot;
-use pushlearn_cli::results::AnyReport;
+use pushlearn_cli::results::{AnyReport, ReadError};
 use pushlearn_cli::spec::Document;
 
 /// Print the table or draw the figures of a report saved with `--json`.
@@ -40,27 +38,22 @@ enum ReportCommand {
     },
 }
 
-fn load(file: &std::path::Path) -> Result<(AnyReport, ModelKind)> {
+/// The document in `file`, its model known ([`AnyReport::from_json`]).
+fn load(file: &std::path::Path) -> Result<Document> {
     let text =
         std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
-    let report =
-        AnyReport::from_json(&text).with_context(|| format!("reading {}", file.display()))?;
-    let model = report.setup().model.as_str();
-    let model = <ModelKind as clap::ValueEnum>::from_str(model, false)
-        .map_err(|_| anyhow::anyhow!("{}: unknown model {model:?}", file.display()))?;
-    Ok((report, model))
+    let report = AnyReport::from_json(&text).map_err(|e| match e {
+        ReadError::UnknownModel(model) => anyhow::anyhow!("{}: {model}", file.display()),
+        e => anyhow::Error::new(e).context(format!("reading {}", file.display())),
+    })?;
+    Ok(Document::from(report))
 }
 
 /// Runs `pushlearn report`.
 pub fn run(args: ReportArgs) -> Result<()> {
     match args.command {
         ReportCommand::Plot { file, out } => {
-            let (report, model) = load(&file)?;
-            let written = match &report {
-                AnyReport::Push(r) => plot::push(r, model, &out)?,
-                AnyReport::Feedback(r) => plot::feedback(r, model, &out)?,
-                AnyReport::MoveToTarget(r) => plot::move_to_target(r, model, &out)?,
-            };
+            let written = load(&file)?.plot(&out)?;
             let mut stdout = std::io::stdout().lock();
             for path in written {
                 writeln!(stdout, "{}", path.display())?;
@@ -72,9 +65,7 @@ pub fn run(args: ReportArgs) -> Result<()> {
                 output::check_writable_dir(dir)
                     .with_context(|| format!("cannot write CSV files into {}", dir.display()))?;
             }
-            // The model is checked by `load`; the document names it.
-            let (report, _) = load(&file)?;
-            let printout = Document::from(report).printout();
+            let printout = load(&file)?.printout()?;
             if let Some(dir) = &csv {
                 let written = printout
                     .write_csv(dir)

@@ -9,7 +9,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 use clap::Args;
 use pushlearn_cli::external::server::{refuse, serve_driver, stdout_file, Requests};
-use pushlearn_cli::models::{ModelKind, ModelOptions};
+use pushlearn_cli::models::{named, ModelArgs, ModelKind};
 
 /// Serve a built-in model over the learner protocol, so that any driver
 /// that speaks it (another harness, or `pushlearn experiment --learner`)
@@ -21,11 +21,11 @@ use pushlearn_cli::models::{ModelKind, ModelOptions};
 #[derive(Debug, Args)]
 pub struct ServeLearnerArgs {
     /// The model to serve.
-    #[arg(long, value_enum, default_value_t = ModelKind::Gate)]
+    #[arg(long, value_parser = named::<ModelKind>(), default_value_t = ModelKind::Gate)]
     model: ModelKind,
 
     #[command(flatten)]
-    options: ModelOptions,
+    options: ModelArgs,
 
     /// Listen on HOST:PORT instead of serving stdin and stdout (port 0: any
     /// free port; the address is printed as "listening on HOST:PORT"). A
@@ -152,7 +152,7 @@ fn refuse_stream(stream: TcpStream, max: usize) -> Result<()> {
 fn serve_one(args: &ServeLearnerArgs, input: impl std::io::Read, output: impl Write) -> Result<()> {
     Ok(serve_driver(
         args.model,
-        &args.options,
+        &args.options.options(),
         Requests::new(input),
         output,
     )?)

@@ -638,7 +638,7 @@ fn merge(dir: &Path, figures: bool) -> Result<Summary> {
         let run_dir = merged.join(format!("{}-s{}", configuration.id, first.seed));
         std::fs::create_dir_all(&run_dir)?;
         write_atomically(&run_dir.join("report.json"), document.to_json()?.as_bytes())?;
-        let printout = document.printout();
+        let printout = document.printout()?;
         let mut text = Vec::new();
         writeln!(
             text,

@@ -60,8 +60,11 @@ fn learner_title(setup: &crate::results::Setup, reference: ModelKind) -> String 
     match &setup.learner {
         None => format!("{} model", setup.model),
         Some(record) => format!(
-            "learner '{}' {} ({}; thesis values: the {reference} model's)",
-            setup.model, record.version, record.source
+            "learner '{}' {} ({}; thesis values: the {} model's)",
+            setup.model,
+            record.version,
+            record.source,
+            reference.family()
         ),
     }
 }

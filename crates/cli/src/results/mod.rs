@@ -29,6 +29,8 @@ use nodes::NodeSummary;
 use push_task::CurveEntry;
 use run_info::RunInfo;
 
+use crate::models::ModelKind;
+
 /// What identifies an experiment's configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Setup {
@@ -44,6 +46,30 @@ pub struct Setup {
     /// absent for the built-in models. `model` is the name it gave.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub learner: Option<LearnerRecord>,
+}
+
+/// A document's model that is neither a name the built-in models are
+/// reported under nor an external learner's (`Setup::learner` absent).
+#[derive(Debug, thiserror::Error)]
+#[error("unknown model {0:?}")]
+pub struct UnknownModel(pub String);
+
+impl Setup {
+    /// The built-in model the document is shown against (its tables,
+    /// figures and the thesis's reference numbers): the one `model` names
+    /// ([`ModelKind::of_report_name`]), or for an external learner of
+    /// another name (`knn`) the gate model, whose thesis numbers every
+    /// learner is compared with.
+    ///
+    /// # Errors
+    /// Any other name: a document we did not write, or a hand-edited one.
+    pub fn reference_model(&self) -> Result<ModelKind, UnknownModel> {
+        match ModelKind::of_report_name(&self.model) {
+            Some(kind) => Ok(kind),
+            None if self.learner.is_some() => Ok(ModelKind::Gate),
+            None => Err(UnknownModel(self.model.clone())),
+        }
+    }
 }
 
 /// An external learner, as its reports record it.
@@ -144,6 +170,8 @@ pub enum ReadError {
     NoExperiment,
     #[error("unknown experiment {0:?} (expected push-task or move-to-target)")]
     UnknownExperiment(String),
+    #[error(transparent)]
+    UnknownModel(#[from] UnknownModel),
 }
 
 impl AnyReport {
@@ -151,8 +179,16 @@ impl AnyReport {
     /// their `experiment` and `variant` keys.
     ///
     /// # Errors
-    /// Not JSON, or not one of the report documents.
+    /// Not JSON, not one of the report documents, or a model that is
+    /// neither built in nor an external learner
+    /// ([`Setup::reference_model`]).
     pub fn from_json(text: &str) -> Result<Self, ReadError> {
+        let report = Self::parse(text)?;
+        report.setup().reference_model()?;
+        Ok(report)
+    }
+
+    fn parse(text: &str) -> Result<Self, ReadError> {
         let value: serde_json::Value = serde_json::from_str(text)?;
         let experiment = value
             .get("experiment")
@@ -262,6 +298,33 @@ mod tests {
             AnyReport::from_json(r#"{"experiment": "move-to-target"}"#),
             Err(ReadError::Json(_))
         ));
+    }
+
+    #[test]
+    fn a_documents_model_is_built_in_or_an_external_learner() {
+        let named = |model: &str, external: bool| {
+            let mut report = push_report("random", &[1]);
+            report.setup.model = model.to_owned();
+            report.setup.learner = external.then(|| LearnerRecord {
+                version: "1".into(),
+                source: "`python3 -m pushlearn.baselines knn`".into(),
+            });
+            AnyReport::from_json(&serde_json::to_string(&report).unwrap())
+        };
+        let model = |model: &str, external: bool| {
+            named(model, external).map(|r| r.setup().reference_model().unwrap())
+        };
+        assert_eq!(model("interaction", false).unwrap(), ModelKind::Interaction);
+        assert_eq!(model("gate+unrounded", false).unwrap(), ModelKind::GatePlus);
+        // An external learner's own name: compared with the gate model, as
+        // the built-in learners are; a built-in name keeps its model.
+        assert_eq!(model("knn", true).unwrap(), ModelKind::Gate);
+        assert_eq!(model("interaction", true).unwrap(), ModelKind::Interaction);
+        for unknown in ["knn", "gate+turbo", "Gate"] {
+            let err = named(unknown, false).unwrap_err();
+            assert!(matches!(&err, ReadError::UnknownModel(UnknownModel(m)) if m == unknown));
+            assert_eq!(err.to_string(), format!("unknown model {unknown:?}"));
+        }
     }
 
     #[test]

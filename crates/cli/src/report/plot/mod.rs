@@ -59,4 +59,8 @@ pub enum PlotError {
     /// A line of a measurement table does not parse.
     #[error("line {line} of the measurements: {reason}")]
     Table { line: usize, reason: String },
+    /// The document's model is unknown, so are the thesis's numbers to
+    /// draw beside it.
+    #[error(transparent)]
+    Model(#[from] crate::results::UnknownModel),
 }

@@ -1,0 +1,920 @@
+//! The model registry: which models there are, their options as plain
+//! data with their checks, and building an untrained model from them.
+//!
+//! Every front end builds its models here — the command line
+//! (`crates/cli`, whose clap arguments map onto [`ModelOptions`]), the
+//! Python extension (`crates/python`) — so that a model and its refusals
+//! are the same wherever it is made. The names here are the command line's
+//! and the documents': a report names its model by
+//! [`ModelOptions::report_name`], read back by [`ModelKind::of_report_name`].
+//!
+//! The refusals name options by their command-line flags (`--eta`,
+//! `--improve`): those are the options' names in the documentation, and the
+//! Python extension's arguments are spelt after them.
+
+use serde::{Deserialize, Serialize};
+
+use crate::gate::{GateError, Improvements, VelocityFeatures};
+use crate::interaction::{InteractionError, SelectorKind};
+use crate::{flags, GateConfig, GateParams, InteractionConfig, InteractionParams};
+
+/// The publish rate that selects the LOWFREQ thresholds, as bit 2 does
+/// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
+pub const LOW_RATE_HZ: u32 = 10;
+
+/// A closed set of values known by name: the vocabulary of the command
+/// line, the documents and the Python arguments.
+pub trait Named: Copy + 'static {
+    /// Every value, in the order lists (and `--help`) show them.
+    const ALL: &'static [Self];
+
+    /// The value's name.
+    fn name(self) -> &'static str;
+
+    /// What the value means, in one line (the command line's help on it).
+    fn description(self) -> &'static str;
+
+    /// The value called `name`, exactly (no case folding).
+    #[must_use]
+    fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.iter().copied().find(|v| v.name() == name)
+    }
+
+    /// Every name, comma-separated.
+    #[must_use]
+    fn names() -> String {
+        let names: Vec<&str> = Self::ALL.iter().map(|v| v.name()).collect();
+        names.join(", ")
+    }
+}
+
+/// Which learner to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ModelKind {
+    Gate,
+    Interaction,
+    #[serde(rename = "gate+")]
+    GatePlus,
+}
+
+impl Named for ModelKind {
+    const ALL: &'static [Self] = &[ModelKind::Gate, ModelKind::Interaction, ModelKind::GatePlus];
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            ModelKind::Gate => "Object-state model with a gating function (`docs/spec/gate-model.md`)",
+            ModelKind::Interaction => {
+                "Interaction-state model with Abstract Collections (`docs/spec/interaction-model.md`)"
+            }
+            ModelKind::GatePlus => {
+                "The gate model with every change beyond the thesis (`--improve`, \
+                 `docs/models.md` \"Beyond the thesis\"); not the thesis's model"
+            }
+        }
+    }
+}
+
+impl ModelKind {
+    /// The name on the command line and in reports.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ModelKind::Gate => "gate",
+            ModelKind::Interaction => "interaction",
+            ModelKind::GatePlus => "gate+",
+        }
+    }
+
+    /// The thesis's model this one is, or is built on: the gate model for
+    /// `gate+`. Tables, figures and the thesis's reference numbers follow it.
+    #[must_use]
+    pub fn family(self) -> ModelKind {
+        match self {
+            ModelKind::Gate | ModelKind::GatePlus => ModelKind::Gate,
+            ModelKind::Interaction => ModelKind::Interaction,
+        }
+    }
+
+    /// The model a report's `model` names, if it is a name
+    /// [`ModelOptions::report_name`] gives: `gate`, `interaction`, `gate+`,
+    /// or the gate model with some changes (`gate+unrounded+interpolate`,
+    /// in the order of [`Improvement::EACH`]) as [`ModelKind::GatePlus`].
+    /// `None` for any other name (an external learner's, a typo).
+    #[must_use]
+    pub fn of_report_name(name: &str) -> Option<ModelKind> {
+        if let Some(kind) = ModelKind::from_name(name) {
+            return Some(kind);
+        }
+        let improve = name
+            .strip_prefix("gate+")?
+            .split('+')
+            .map(Improvement::from_name)
+            .collect::<Option<Vec<_>>>()?;
+        let options = ModelOptions {
+            improve,
+            ..ModelOptions::default()
+        };
+        // Only the spelling reports use: no repeats, no other order, no
+        // `all` or every change spelt out (that is `gate+`).
+        (options.report_name(ModelKind::Gate) == name).then_some(ModelKind::GatePlus)
+    }
+
+    /// Calls `job` with an untrained model of this kind configured by
+    /// `options` for the world's publish rate (10 Hz: the LOWFREQ
+    /// thresholds of `docs/spec/experiments.md` §1, as with bit 2).
+    ///
+    /// # Errors
+    /// Options that do not apply to this model, or invalid values.
+    pub fn dispatch<W: WithModel>(
+        self,
+        options: &ModelOptions,
+        publish_rate_hz: u32,
+        job: W,
+    ) -> Result<W::Output, ModelOptionsError> {
+        Ok(match self {
+            ModelKind::Gate => job.run(crate::GateModel::new(options.gate(publish_rate_hz)?)),
+            ModelKind::Interaction => job.run(crate::InteractionModel::new(
+                options.interaction(publish_rate_hz)?,
+            )),
+            ModelKind::GatePlus => {
+                job.run(crate::GateModel::new(options.gate_plus(publish_rate_hz)?))
+            }
+        })
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Something to do with an untrained model of any kind: the one generic
+/// entry point that [`ModelKind::dispatch`] instantiates for each learner.
+pub trait WithModel {
+    /// The result.
+    type Output;
+    /// Runs with `untrained`.
+    fn run<M: crate::Model + 'static>(self, untrained: M) -> Self::Output;
+}
+
+/// One change of the improved gate model (`docs/models.md` "Beyond the
+/// thesis"), by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Improvement {
+    Unrounded,
+    Interpolate,
+    ForwardCheck,
+    SharedBlocks,
+    AdaptActuator,
+    AverageOutputs,
+    /// Every change (what `gate+` has).
+    All,
+}
+
+impl Named for Improvement {
+    const ALL: &'static [Self] = &[
+        Improvement::Unrounded,
+        Improvement::Interpolate,
+        Improvement::ForwardCheck,
+        Improvement::SharedBlocks,
+        Improvement::AdaptActuator,
+        Improvement::AverageOutputs,
+        Improvement::All,
+    ];
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Improvement::Unrounded => {
+                "Features, changes and predictions at full precision, not rounded to 3 decimals"
+            }
+            Improvement::Interpolate => {
+                "Forward models blend the winner with all its neighbours instead of the two \
+                 nearest nodes"
+            }
+            Improvement::ForwardCheck => {
+                "The planner ranks the inverse model's push and variants of it with the \
+                 forward model"
+            }
+            Improvement::SharedBlocks => {
+                "One forward and inverse model for every block, block ids left out of the \
+                 features"
+            }
+            Improvement::AdaptActuator => {
+                "The actuator's forward model averages its samples (η = 0.1)"
+            }
+            Improvement::AverageOutputs => {
+                "The block forward models' nodes average the changes they win (η_out = 0.1)"
+            }
+            Improvement::All => "Every change (what `--model gate+` has)",
+        }
+    }
+}
+
+impl Improvement {
+    /// Every single change, in the order of reports and tables.
+    pub const EACH: [Improvement; 6] = [
+        Improvement::Unrounded,
+        Improvement::Interpolate,
+        Improvement::AdaptActuator,
+        Improvement::AverageOutputs,
+        Improvement::ForwardCheck,
+        Improvement::SharedBlocks,
+    ];
+
+    /// The name on the command line.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Improvement::Unrounded => "unrounded",
+            Improvement::Interpolate => "interpolate",
+            Improvement::ForwardCheck => "forward-check",
+            Improvement::SharedBlocks => "shared-blocks",
+            Improvement::AdaptActuator => "adapt-actuator",
+            Improvement::AverageOutputs => "average-outputs",
+            Improvement::All => "all",
+        }
+    }
+
+    /// The change called `name`.
+    ///
+    /// # Errors
+    /// An unknown name, with the names there are.
+    pub fn named(name: &str) -> Result<Improvement, ModelOptionsError> {
+        Improvement::from_name(name).ok_or_else(|| ModelOptionsError::UnknownImprovement {
+            name: name.to_owned(),
+        })
+    }
+
+    fn set(self, on: &mut Improvements) {
+        match self {
+            Improvement::Unrounded => on.unrounded = true,
+            Improvement::Interpolate => on.interpolate = true,
+            Improvement::ForwardCheck => on.forward_check = true,
+            Improvement::SharedBlocks => on.shared_blocks = true,
+            Improvement::AdaptActuator => on.adapt_actuator = true,
+            Improvement::AverageOutputs => on.average_outputs = true,
+            Improvement::All => *on = Improvements::ALL,
+        }
+    }
+
+    fn is_in(self, on: Improvements) -> bool {
+        match self {
+            Improvement::Unrounded => on.unrounded,
+            Improvement::Interpolate => on.interpolate,
+            Improvement::ForwardCheck => on.forward_check,
+            Improvement::SharedBlocks => on.shared_blocks,
+            Improvement::AdaptActuator => on.adapt_actuator,
+            Improvement::AverageOutputs => on.average_outputs,
+            Improvement::All => on == Improvements::ALL,
+        }
+    }
+}
+
+/// A name for each configuration bit of the original
+/// (`docs/spec/experiments.md` §1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ConfigFlag {
+    UseDyns,
+    LowFreq,
+    AllowMissPositions,
+    FixFirstThree,
+    HardCodedActuator,
+    HardCodedGate,
+    PredictionBoost,
+}
+
+impl Named for ConfigFlag {
+    const ALL: &'static [Self] = &[
+        ConfigFlag::UseDyns,
+        ConfigFlag::LowFreq,
+        ConfigFlag::AllowMissPositions,
+        ConfigFlag::FixFirstThree,
+        ConfigFlag::HardCodedActuator,
+        ConfigFlag::HardCodedGate,
+        ConfigFlag::PredictionBoost,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            ConfigFlag::UseDyns => "use-dyns",
+            ConfigFlag::LowFreq => "low-freq",
+            ConfigFlag::AllowMissPositions => "allow-miss-positions",
+            ConfigFlag::FixFirstThree => "fix-first-three",
+            ConfigFlag::HardCodedActuator => "hard-coded-actuator",
+            ConfigFlag::HardCodedGate => "hard-coded-gate",
+            ConfigFlag::PredictionBoost => "prediction-boost",
+        }
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            ConfigFlag::UseDyns => {
+                "1, USE_DYNS: the block predictors also see the block's velocity (gate model)"
+            }
+            ConfigFlag::LowFreq => "2, LOWFREQ: 10 Hz publish rate and thresholds",
+            ConfigFlag::AllowMissPositions => {
+                "4, ALLOWMISSPOSITIONS: random training starts in [−0.35, 0.35)"
+            }
+            ConfigFlag::FixFirstThree => {
+                "8, FIXFIRSTTHREETRAININGRUNS: first training starts −0.18, 0.18, 0"
+            }
+            ConfigFlag::HardCodedActuator => {
+                "16, HARDCODEDACT: the actuator moves 0.01·a per message, untrained (gate model)"
+            }
+            ConfigFlag::HardCodedGate => {
+                "32, HARDCODEDGATE: a geometric contact rule instead of the learned gate \
+                 (gate model)"
+            }
+            ConfigFlag::PredictionBoost => {
+                "64, USINGPREDICTIONBOOST: predicted block changes × 1.5 (gate model)"
+            }
+        }
+    }
+}
+
+impl ConfigFlag {
+    /// The bit.
+    #[must_use]
+    pub fn bit(self) -> u32 {
+        match self {
+            ConfigFlag::UseDyns => flags::USE_DYNS,
+            ConfigFlag::LowFreq => flags::LOWFREQ,
+            ConfigFlag::AllowMissPositions => flags::ALLOWMISSPOSITIONS,
+            ConfigFlag::FixFirstThree => flags::FIXFIRSTTHREETRAININGRUNS,
+            ConfigFlag::HardCodedActuator => flags::HARDCODEDACT,
+            ConfigFlag::HardCodedGate => flags::HARDCODEDGATE,
+            ConfigFlag::PredictionBoost => flags::USINGPREDICTIONBOOST,
+        }
+    }
+}
+
+impl Named for SelectorKind {
+    const ALL: &'static [Self] = &SelectorKind::ALL;
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            SelectorKind::Aitm => "the final thesis's AITM classifier",
+            SelectorKind::Tree => "the draft's decision tree, refitted on every stored reference",
+            SelectorKind::IncrementalTree => "Hoeffding tree, keeps no references",
+            SelectorKind::Nearest => "the nearest stored reference: the draft's naive baseline",
+        }
+    }
+}
+
+/// The interaction model's selector called `name`.
+///
+/// # Errors
+/// An unknown name, with the names there are.
+pub fn selector(name: &str) -> Result<SelectorKind, ModelOptionsError> {
+    SelectorKind::from_name(name).ok_or_else(|| ModelOptionsError::UnknownSelector {
+        name: name.to_owned(),
+    })
+}
+
+/// Whether `eta` can be a learning rate: finite and not negative.
+#[must_use]
+pub fn is_learning_rate(eta: f64) -> bool {
+    eta.is_finite() && eta >= 0.0
+}
+
+/// The model variants of the original's configuration bits and of the
+/// thesis draft, and the changes beyond the thesis: what configures a
+/// built-in model besides its kind. The default is the final thesis's
+/// models.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields, rename_all = "kebab-case")]
+pub struct ModelOptions {
+    /// Configuration number of the original: the sum of its bits.
+    pub config: u32,
+    /// Configuration bits by name, added to `config`.
+    pub flags: Vec<ConfigFlag>,
+    /// Learning rate η (η_in = η_out = η_A) of the forward models: the
+    /// gate model's actuator and block predictors, the interaction model's
+    /// ACs. 0 in the final thesis.
+    pub eta: f64,
+    /// The interaction model's Abstract Collection Selector.
+    pub selector: SelectorKind,
+    /// With USE_DYNS, leave the block's angular velocity out (the draft's
+    /// "NoAV" rows).
+    pub no_angular_velocity: bool,
+    /// Changes beyond the thesis for the gate model.
+    pub improve: Vec<Improvement>,
+}
+
+/// Why a combination of [`ModelOptions`] cannot configure a model.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelOptionsError {
+    #[error("gate model: {0}")]
+    Gate(#[from] GateError),
+    #[error("interaction model: {0}")]
+    Interaction(#[from] InteractionError),
+    #[error("{option} does not apply to the {model} model")]
+    NotForModel {
+        option: &'static str,
+        model: ModelKind,
+    },
+    #[error(
+        "--no-angular-velocity needs velocity features (--flag use-dyns or bit 1 of --config)"
+    )]
+    NoVelocities,
+    #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
+    NotForExternal { option: String },
+    #[error("--improve adds changes to --model gate; gate+ already has every one")]
+    ImproveOnGatePlus,
+    #[error("eta {0} is not a finite, non-negative number")]
+    Eta(f64),
+    #[error("unknown selector '{name}'; one of: {}", SelectorKind::names())]
+    UnknownSelector { name: String },
+    #[error("unknown change '{name}' to improve; one of: {}", Improvement::names())]
+    UnknownImprovement { name: String },
+}
+
+impl ModelOptions {
+    /// `config` with every flag added.
+    #[must_use]
+    pub fn config_number(&self) -> u32 {
+        self.flags.iter().fold(self.config, |n, f| n | f.bit())
+    }
+
+    /// The options in one canonical line (the bits as one number, however
+    /// they were given), e.g. stored with a learner's memory so that it is
+    /// never resumed under other options.
+    #[must_use]
+    pub fn canonical(&self) -> String {
+        let mut line = format!(
+            "config {}, eta {}, selector {}, no-angular-velocity {}",
+            self.config_number(),
+            self.eta,
+            self.selector.as_str(),
+            self.no_angular_velocity
+        );
+        // Only when set, so that memory stored before --improve existed
+        // still compares equal.
+        let names = self.improvement_names();
+        if !names.is_empty() {
+            line.push_str(&format!(", improve {}", names.join("+")));
+        }
+        line
+    }
+
+    /// The names of the changes `improve` turns on, in the order of
+    /// [`Improvement::EACH`] (`all` spelt out), whatever the given order.
+    #[must_use]
+    pub fn improvement_names(&self) -> Vec<&'static str> {
+        let on = self.improvements();
+        Improvement::EACH
+            .into_iter()
+            .filter(|i| i.is_in(on))
+            .map(Improvement::as_str)
+            .collect()
+    }
+
+    /// The changes of `improve`.
+    #[must_use]
+    pub fn improvements(&self) -> Improvements {
+        let mut on = Improvements::default();
+        for i in &self.improve {
+            i.set(&mut on);
+        }
+        on
+    }
+
+    /// The name reports give a built-in model under these options: the
+    /// model's own, or for the gate model with changes `gate+` (all) or
+    /// `gate+CHANGE+…` in the order of [`Improvement::EACH`].
+    #[must_use]
+    pub fn report_name(&self, kind: ModelKind) -> String {
+        let on = self.improvements();
+        if kind != ModelKind::Gate || !on.any() {
+            return kind.as_str().to_owned();
+        }
+        if on == Improvements::ALL {
+            return ModelKind::GatePlus.as_str().to_owned();
+        }
+        format!("gate+{}", self.improvement_names().join("+"))
+    }
+
+    /// Refuses what only configures a built-in model: --eta, --selector,
+    /// --no-angular-velocity and the model bits of --config (1, 16, 32, 64).
+    /// The driver's bits (2, 4, 8: rate and training starts) apply to any
+    /// learner.
+    ///
+    /// # Errors
+    /// The first option that does not apply, named.
+    pub fn check_external(&self) -> Result<(), ModelOptionsError> {
+        let refuse = |option: &str| {
+            Err(ModelOptionsError::NotForExternal {
+                option: option.to_owned(),
+            })
+        };
+        if self.eta != 0.0 {
+            return refuse("--eta");
+        }
+        if self.selector != SelectorKind::Aitm {
+            return refuse("--selector");
+        }
+        if self.no_angular_velocity {
+            return refuse("--no-angular-velocity");
+        }
+        if !self.improve.is_empty() {
+            return refuse("--improve");
+        }
+        let model_bits = flags::USE_DYNS
+            | flags::HARDCODEDACT
+            | flags::HARDCODEDGATE
+            | flags::USINGPREDICTIONBOOST;
+        let bits = self.config_number() & model_bits;
+        if bits != 0 {
+            return refuse(&format!("configuration bits {bits} (of --config/--flag)"));
+        }
+        Ok(())
+    }
+
+    /// Whether LOWFREQ is set.
+    #[must_use]
+    pub fn low_frequency(&self) -> bool {
+        self.config_number() & flags::LOWFREQ != 0
+    }
+
+    /// The gate model's parameters; a 10 Hz world selects the LOWFREQ
+    /// thresholds as bit 2 does.
+    ///
+    /// # Errors
+    /// Options that do not apply to the gate model or invalid values.
+    pub fn gate(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
+        self.check_eta()?;
+        if self.selector != SelectorKind::Aitm {
+            return Err(ModelOptionsError::NotForModel {
+                option: "--selector",
+                model: ModelKind::Gate,
+            });
+        }
+        let mut params = GateParams::from_config_number(self.number_at(publish_rate_hz))?;
+        params.forward_learning_rate = self.eta;
+        params.improvements = self.improvements();
+        if self.no_angular_velocity {
+            if params.velocity_features != VelocityFeatures::LinearAngular {
+                return Err(ModelOptionsError::NoVelocities);
+            }
+            params.velocity_features = VelocityFeatures::Linear;
+        }
+        Ok(params.check()?)
+    }
+
+    /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
+    ///
+    /// # Errors
+    /// As [`ModelOptions::gate`], and --improve, which gate+ does not take.
+    pub fn gate_plus(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
+        if !self.improve.is_empty() {
+            return Err(ModelOptionsError::ImproveOnGatePlus);
+        }
+        let mut params = *self.gate(publish_rate_hz)?.params();
+        params.improvements = Improvements::ALL;
+        Ok(params.check()?)
+    }
+
+    /// The interaction model's parameters (see [`ModelOptions::gate`]).
+    ///
+    /// # Errors
+    /// Options that do not apply to the interaction model or invalid values.
+    pub fn interaction(
+        &self,
+        publish_rate_hz: u32,
+    ) -> Result<InteractionConfig, ModelOptionsError> {
+        self.check_eta()?;
+        if self.no_angular_velocity || !self.improve.is_empty() {
+            return Err(ModelOptionsError::NotForModel {
+                option: if self.no_angular_velocity {
+                    "--no-angular-velocity"
+                } else {
+                    "--improve"
+                },
+                model: ModelKind::Interaction,
+            });
+        }
+        let mut params = InteractionParams::from_config_number(self.number_at(publish_rate_hz))?;
+        params.ac_learning_rate = self.eta;
+        params.selector = self.selector;
+        Ok(params.check()?)
+    }
+
+    /// The command line refuses a bad --eta as it parses it; options built
+    /// as data (the Python arguments, a document) are checked here.
+    fn check_eta(&self) -> Result<(), ModelOptionsError> {
+        if is_learning_rate(self.eta) {
+            Ok(())
+        } else {
+            Err(ModelOptionsError::Eta(self.eta))
+        }
+    }
+
+    fn number_at(&self, publish_rate_hz: u32) -> u32 {
+        let low = publish_rate_hz == LOW_RATE_HZ;
+        self.config_number() | if low { flags::LOWFREQ } else { 0 }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn improve(changes: &[Improvement]) -> ModelOptions {
+        ModelOptions {
+            improve: changes.to_vec(),
+            ..ModelOptions::default()
+        }
+    }
+
+    #[test]
+    fn defaults_are_the_final_thesis_models() {
+        let o = ModelOptions::default();
+        assert_eq!(o.gate(100).unwrap(), GateConfig::hz100());
+        assert_eq!(o.gate(10).unwrap(), GateConfig::hz10());
+        assert_eq!(o.interaction(100).unwrap(), InteractionConfig::hz100());
+        assert_eq!(o.interaction(10).unwrap(), InteractionConfig::hz10());
+    }
+
+    #[test]
+    fn names_and_numbers_combine() {
+        let o = ModelOptions {
+            config: 8,
+            flags: vec![ConfigFlag::HardCodedGate, ConfigFlag::HardCodedActuator],
+            ..ModelOptions::default()
+        };
+        assert_eq!(o.config_number(), 8 | 16 | 32);
+        let g = o.gate(100).unwrap();
+        assert!(g.params().hard_coded_actuator && g.params().hard_coded_gate);
+        let o = ModelOptions {
+            flags: vec![ConfigFlag::UseDyns],
+            no_angular_velocity: true,
+            eta: 0.1,
+            ..ModelOptions::default()
+        };
+        let g = *o.gate(100).unwrap().params();
+        assert_eq!(g.velocity_features, VelocityFeatures::Linear);
+        assert_eq!(g.forward_learning_rate, 0.1);
+        let o = ModelOptions {
+            flags: vec![ConfigFlag::LowFreq],
+            selector: SelectorKind::Tree,
+            eta: 0.2,
+            ..ModelOptions::default()
+        };
+        assert!(o.low_frequency());
+        let i = o.interaction(100).unwrap();
+        assert_eq!(i.eps_noise(), InteractionConfig::hz10().eps_noise());
+        assert_eq!(i.selector(), SelectorKind::Tree);
+        assert_eq!(i.ac().params().eta_out, 0.2);
+    }
+
+    #[test]
+    fn improvements_name_the_model_and_reach_the_gate_model() {
+        use Improvement::{All, ForwardCheck, Unrounded};
+        let none = ModelOptions::default();
+        assert_eq!(none.report_name(ModelKind::Gate), "gate");
+        assert_eq!(none.report_name(ModelKind::GatePlus), "gate+");
+        assert!(!none.gate(100).unwrap().params().improvements.any());
+        let two = improve(&[ForwardCheck, Unrounded]);
+        // The order of Improvement::EACH, whatever the given order.
+        assert_eq!(
+            two.report_name(ModelKind::Gate),
+            "gate+unrounded+forward-check"
+        );
+        let on = two.gate(100).unwrap().params().improvements;
+        assert!(on.unrounded && on.forward_check && !on.interpolate);
+        let all = improve(&[All]);
+        assert_eq!(all.report_name(ModelKind::Gate), "gate+");
+        assert_eq!(
+            none.gate_plus(100).unwrap().params().improvements,
+            Improvements::ALL
+        );
+        assert_eq!(all.gate(100).unwrap(), none.gate_plus(100).unwrap());
+        assert_eq!(ModelKind::GatePlus.family(), ModelKind::Gate);
+    }
+
+    #[test]
+    fn report_names_read_back_only_as_reports_spell_them() {
+        assert_eq!(ModelKind::of_report_name("gate"), Some(ModelKind::Gate));
+        assert_eq!(
+            ModelKind::of_report_name("interaction"),
+            Some(ModelKind::Interaction)
+        );
+        assert_eq!(
+            ModelKind::of_report_name("gate+"),
+            Some(ModelKind::GatePlus)
+        );
+        assert_eq!(
+            ModelKind::of_report_name("gate+unrounded"),
+            Some(ModelKind::GatePlus)
+        );
+        assert_eq!(
+            ModelKind::of_report_name("gate+unrounded+adapt-actuator"),
+            Some(ModelKind::GatePlus)
+        );
+        // Every name report_name gives reads back.
+        for i in Improvement::EACH {
+            let name = improve(&[i]).report_name(ModelKind::Gate);
+            assert_eq!(ModelKind::of_report_name(&name), Some(ModelKind::GatePlus));
+        }
+        for other in [
+            "knn",
+            "",
+            "Gate",
+            "gate+turbo",
+            "gate+all",
+            "gate+unrounded+",
+            "gate++unrounded",
+            "gate+unrounded+unrounded",
+            "gate+adapt-actuator+unrounded",
+            "gate+unrounded+interpolate+adapt-actuator+average-outputs+forward-check+shared-blocks",
+            "interaction+unrounded",
+        ] {
+            assert_eq!(ModelKind::of_report_name(other), None, "{other:?}");
+        }
+    }
+
+    #[test]
+    fn memory_stored_without_improvements_still_compares_equal() {
+        let line = ModelOptions::default().canonical();
+        assert_eq!(
+            line,
+            "config 0, eta 0, selector aitm, no-angular-velocity false"
+        );
+        assert_eq!(
+            improve(&[Improvement::Interpolate]).canonical(),
+            format!("{line}, improve interpolate")
+        );
+    }
+
+    #[test]
+    fn improve_is_refused_where_it_does_not_apply() {
+        let o = improve(&[Improvement::Unrounded]);
+        assert!(matches!(
+            o.gate_plus(100),
+            Err(ModelOptionsError::ImproveOnGatePlus)
+        ));
+        assert!(matches!(
+            o.interaction(100),
+            Err(ModelOptionsError::NotForModel {
+                option: "--improve",
+                ..
+            })
+        ));
+        assert!(matches!(
+            o.check_external(),
+            Err(ModelOptionsError::NotForExternal { .. })
+        ));
+    }
+
+    #[test]
+    fn options_that_do_not_apply_are_refused() {
+        let nearest = ModelOptions {
+            selector: SelectorKind::Nearest,
+            ..ModelOptions::default()
+        };
+        assert!(matches!(
+            nearest.gate(100),
+            Err(ModelOptionsError::NotForModel { .. })
+        ));
+        let hg = ModelOptions {
+            flags: vec![ConfigFlag::HardCodedGate],
+            ..ModelOptions::default()
+        };
+        assert!(matches!(
+            hg.interaction(100),
+            Err(ModelOptionsError::Interaction(_))
+        ));
+        let noav = ModelOptions {
+            no_angular_velocity: true,
+            ..ModelOptions::default()
+        };
+        assert!(matches!(
+            noav.gate(100),
+            Err(ModelOptionsError::NoVelocities)
+        ));
+        assert!(matches!(
+            noav.interaction(100),
+            Err(ModelOptionsError::NotForModel { .. })
+        ));
+        let unknown_bits = ModelOptions {
+            config: 128,
+            ..ModelOptions::default()
+        };
+        assert!(matches!(
+            unknown_bits.gate(100),
+            Err(ModelOptionsError::Gate(_))
+        ));
+        for eta in [-1.0, f64::NAN, f64::INFINITY] {
+            let o = ModelOptions {
+                eta,
+                ..ModelOptions::default()
+            };
+            assert!(matches!(o.gate(100), Err(ModelOptionsError::Eta(_))));
+            assert!(matches!(o.interaction(100), Err(ModelOptionsError::Eta(_))));
+        }
+    }
+
+    #[test]
+    fn names_are_looked_up_exactly_and_refusals_list_them() {
+        assert_eq!(
+            Improvement::named("average-outputs").unwrap(),
+            Improvement::AverageOutputs
+        );
+        assert_eq!(
+            Improvement::named("turbo").unwrap_err().to_string(),
+            "unknown change 'turbo' to improve; one of: unrounded, interpolate, \
+             forward-check, shared-blocks, adapt-actuator, average-outputs, all"
+        );
+        assert_eq!(selector("tree").unwrap(), SelectorKind::Tree);
+        assert_eq!(
+            selector("forest").unwrap_err().to_string(),
+            "unknown selector 'forest'; one of: aitm, tree, incremental-tree, nearest"
+        );
+        assert_eq!(ModelKind::from_name("GATE"), None);
+        for flag in ConfigFlag::ALL {
+            assert_eq!(ConfigFlag::from_name(flag.name()), Some(*flag));
+        }
+        // The names are the serialised forms.
+        for kind in ModelKind::ALL {
+            let json = serde_json::to_string(kind).unwrap();
+            assert_eq!(json, format!("\"{}\"", kind.name()));
+        }
+        for i in Improvement::ALL {
+            assert_eq!(
+                serde_json::to_string(i).unwrap(),
+                format!("\"{}\"", i.name())
+            );
+        }
+        for f in ConfigFlag::ALL {
+            assert_eq!(
+                serde_json::to_string(f).unwrap(),
+                format!("\"{}\"", f.name())
+            );
+        }
+    }
+
+    #[test]
+    fn options_are_plain_data() {
+        let o = ModelOptions {
+            config: 8,
+            flags: vec![ConfigFlag::UseDyns],
+            eta: 0.1,
+            selector: SelectorKind::Tree,
+            no_angular_velocity: true,
+            improve: vec![Improvement::AverageOutputs],
+        };
+        let json = serde_json::to_string(&o).unwrap();
+        assert_eq!(
+            json,
+            r#"{"config":8,"flags":["use-dyns"],"eta":0.1,"selector":"tree","no-angular-velocity":true,"improve":["average-outputs"]}"#
+        );
+        assert_eq!(serde_json::from_str::<ModelOptions>(&json).unwrap(), o);
+        assert_eq!(
+            serde_json::from_str::<ModelOptions>("{}").unwrap(),
+            ModelOptions::default()
+        );
+        assert!(serde_json::from_str::<ModelOptions>(r#"{"improve":["turbo"]}"#).is_err());
+        assert!(serde_json::from_str::<ModelOptions>(r#"{"etta":0.1}"#).is_err());
+    }
+
+    #[test]
+    fn dispatch_builds_the_kind() {
+        struct Stats;
+        impl WithModel for Stats {
+            type Output = crate::ModelStats;
+            fn run<M: crate::Model + 'static>(self, untrained: M) -> crate::ModelStats {
+                untrained.stats()
+            }
+        }
+        use crate::ModelStats::{Gate, Interaction};
+        let o = ModelOptions::default();
+        for (kind, gate) in [
+            (ModelKind::Gate, true),
+            (ModelKind::GatePlus, true),
+            (ModelKind::Interaction, false),
+        ] {
+            let stats = kind.dispatch(&o, 100, Stats).unwrap();
+            assert_eq!(matches!(stats, Gate(_)), gate, "{kind}");
+            assert_eq!(matches!(stats, Interaction(_)), !gate, "{kind}");
+        }
+        assert!(ModelKind::GatePlus
+            .dispatch(&improve(&[Improvement::Unrounded]), 100, Stats)
+            .is_err());
+    }
+}
