@@ -437,7 +437,7 @@ def test_seeded_actions_are_reproducible(model_class: type[Model]) -> None:
 
 # The first actions after drive(model, 5), TARGET and seed(7), printed by the
 # same sequence run in-process in Rust (learner's Model with
-# ChaCha8Rng::seed_from_u64(7), as crates/cli/src/experiment/move_to_target.rs
+# ChaCha8Rng::seed_from_u64(7), as crates/drive/src/experiment/move_to_target.rs
 # seeds a job): the bindings draw the experiment driver's stream bit for bit.
 # The untrained inverse models of both learners fall back to exploration.
 IN_PROCESS_ACTIONS = [

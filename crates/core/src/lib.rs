@@ -14,6 +14,7 @@
 
 pub mod body;
 pub mod limits;
+pub mod named;
 pub mod observation;
 pub mod orientation;
 
@@ -23,4 +24,5 @@ pub use body::{
     TARGET_GHOST_SUFFIX,
 };
 pub use limits::{MAX_ACTION_SPEED, MAX_POSITION};
+pub use named::Named;
 pub use observation::{Frame, Observation};

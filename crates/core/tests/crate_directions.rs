@@ -22,9 +22,16 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("learner", &["memories", "pushlearn-core"]),
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
     ("pushlearn-python", &["learner", "pushlearn-core"]),
+    ("drive", &["learner", "pushlearn", "pushlearn-core"]),
     (
         "pushlearn-cli",
-        &["learner", "pushlearn", "pushlearn-core", "sim-plugin"],
+        &[
+            "drive",
+            "learner",
+            "pushlearn",
+            "pushlearn-core",
+            "sim-plugin",
+        ],
     ),
 ];
 
@@ -32,7 +39,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
 /// application or the Python extension), so no test makes a cycle.
 const DEV_ALLOWED: &[(&str, &[&str])] = &[
     ("sim-plugin", &["learner", "sim-plugin"]),
-    ("pushlearn-cli", &["learner", "sim-plugin"]),
+    ("drive", &["learner", "sim-plugin"]),
+    ("pushlearn-cli", &["drive", "learner", "sim-plugin"]),
 ];
 
 /// Every workspace member and its dependencies on other members, by kind.

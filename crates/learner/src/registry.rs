@@ -22,31 +22,7 @@ use crate::{flags, GateConfig, GateParams, InteractionConfig, InteractionParams}
 /// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
 pub const LOW_RATE_HZ: u32 = 10;
 
-/// A closed set of values known by name: the vocabulary of the command
-/// line, the documents and the Python arguments.
-pub trait Named: Copy + 'static {
-    /// Every value, in the order lists (and `--help`) show them.
-    const ALL: &'static [Self];
-
-    /// The value's name.
-    fn name(self) -> &'static str;
-
-    /// What the value means, in one line (the command line's help on it).
-    fn description(self) -> &'static str;
-
-    /// The value called `name`, exactly (no case folding).
-    #[must_use]
-    fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.iter().copied().find(|v| v.name() == name)
-    }
-
-    /// Every name, comma-separated.
-    #[must_use]
-    fn names() -> String {
-        let names: Vec<&str> = Self::ALL.iter().map(|v| v.name()).collect();
-        names.join(", ")
-    }
-}
+pub use pushlearn_core::Named;
 
 /// Which learner to run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

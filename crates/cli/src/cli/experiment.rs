@@ -69,7 +69,7 @@ struct WorldArgs {
     /// 0–L_max steps, the thesis's timing noise, reproducible), lockstep (no
     /// latency: folds of fixed-start experiments are identical), or realtime
     /// (the thesis's free-running world; the learner must keep up).
-    #[arg(long, value_enum, default_value_t = Mode::LockstepJitter)]
+    #[arg(long, value_parser = named::<Mode>(), default_value = "lockstep-jitter")]
     mode: Mode,
 
     /// With --mode lockstep-jitter: the largest delay of a Move, in physics
@@ -178,7 +178,7 @@ struct PushTaskArgs {
     /// feedback at 10 Hz (§3.4), or the thesis draft's protocol (starts at
     /// the block's ends and centre, then random in [−0.35, 0.35); 20 test
     /// runs from one fixed seed).
-    #[arg(long, value_enum, default_value_t = Variant::Random)]
+    #[arg(long, value_parser = named::<Variant>(), default_value = "random")]
     variant: Variant,
 
     /// Which tables to print: the final thesis's (for --variant), or the
@@ -203,12 +203,12 @@ struct PushTaskArgs {
     /// the training runs are about, taken in turn (blue, red, cylinder;
     /// e.g. blue,red) [default with --test-on: blue]. The learner sees only
     /// the run's object, as the blue block.
-    #[arg(long, value_name = "OBJECT,…", value_enum, value_delimiter = ',')]
+    #[arg(long, value_name = "OBJECT,…", value_parser = named::<Object>(), value_delimiter = ',')]
     train_on: Option<Vec<Object>>,
 
     /// New objects: the object every test run is about [default with
     /// --train-on: blue].
-    #[arg(long, value_name = "OBJECT", value_enum)]
+    #[arg(long, value_name = "OBJECT", value_parser = named::<Object>())]
     test_on: Option<Object>,
 
     #[command(flatten)]

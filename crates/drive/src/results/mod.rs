@@ -18,8 +18,8 @@ pub mod move_to_target;
 pub mod nodes;
 pub mod push_task;
 pub mod run_info;
-#[cfg(test)]
-pub(crate) mod test_support;
+#[cfg(any(test, feature = "testing"))]
+pub mod test_support;
 
 use serde::{Deserialize, Serialize};
 
@@ -29,7 +29,7 @@ use nodes::NodeSummary;
 use push_task::CurveEntry;
 use run_info::RunInfo;
 
-use crate::models::ModelKind;
+use learner::registry::ModelKind;
 
 /// What identifies an experiment's configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -81,10 +81,10 @@ pub struct LearnerRecord {
     pub source: String,
 }
 
-#[cfg(test)]
+#[cfg(any(test, feature = "testing"))]
 impl Setup {
     /// The setup of the tests' reports: `model` in lock-step, seed 1.
-    pub(crate) fn for_tests(experiment: &str, model: &str) -> Self {
+    pub fn for_tests(experiment: &str, model: &str) -> Self {
         Self {
             experiment: experiment.into(),
             model: model.into(),

@@ -307,8 +307,8 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
     }
 }
 
-#[cfg(test)]
-pub(crate) mod test_support {
+#[cfg(any(test, feature = "testing"))]
+pub mod test_support {
     //! A scripted world for driver tests: frames built from poses, the
     //! learner's test model (its predictions are visible), and a decoder for
     //! the commands.

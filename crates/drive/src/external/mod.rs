@@ -27,7 +27,7 @@ use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError};
 use serde::{Deserialize, Serialize};
 
-use crate::models::ModelKind;
+use learner::registry::ModelKind;
 use pushlearn::wire::pb;
 use pushlearn::wire::pb::learner::{self as lp, reply::Answer, request::Call};
 use session::Session;

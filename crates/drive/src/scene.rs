@@ -41,19 +41,7 @@ pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {
 pub const SCENE: &str = "objects";
 
 /// An object of the `objects` scene a push-task run can be about.
-#[derive(
-    Clone,
-    Copy,
-    Debug,
-    PartialEq,
-    Eq,
-    PartialOrd,
-    Ord,
-    Hash,
-    Serialize,
-    Deserialize,
-    clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Object {
     /// The thesis's blue block, 0.5 × 0.1 × 0.1 m (`blockA`).
@@ -62,6 +50,22 @@ pub enum Object {
     Red,
     /// A new shape: an upright cylinder, 0.2 m across, 0.1 m tall.
     Cylinder,
+}
+
+impl pushlearn_core::Named for Object {
+    const ALL: &'static [Self] = &Object::ALL;
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Object::Blue => "The thesis's blue block, 0.5 × 0.1 × 0.1 m (`blockA`)",
+            Object::Red => "The thesis's red block, 0.3 × 0.3 × 0.1 m (`blockB`)",
+            Object::Cylinder => "A new shape: an upright cylinder, 0.2 m across, 0.1 m tall",
+        }
+    }
 }
 
 impl Object {

@@ -12,7 +12,7 @@ use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request}
 
 use super::server::{serve_driver, Requests, ServeError};
 use super::{chosen_action, greeting, predicted_poses, stats_of, Source};
-use crate::models::{ModelKind, ModelOptions};
+use learner::registry::{ModelKind, ModelOptions};
 
 /// What a learner daemon made of one connection's bytes.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]

@@ -12,7 +12,7 @@ use super::{MttReport, PushReport, Setup, TargetEntry};
 
 /// Job `fold` of `n_train`: position i errs by 0.01 (i + fold) (the red
 /// block, with `two_blocks`, by 0.02 everywhere); one gate map; 100 messages.
-pub(crate) fn job(n_train: usize, fold: usize, two_blocks: bool) -> PushJobResult {
+pub fn job(n_train: usize, fold: usize, two_blocks: bool) -> PushJobResult {
     let e = |x: f64| BlockError {
         pos: x,
         ori: 2.0 * x,
@@ -64,7 +64,7 @@ pub(crate) fn job(n_train: usize, fold: usize, two_blocks: bool) -> PushJobResul
 
 /// Two folds of every N_train of `train_runs`, as the `variant` (by its
 /// report name) would test them.
-pub(crate) fn push_report(variant: &str, train_runs: &[usize]) -> PushReport {
+pub fn push_report(variant: &str, train_runs: &[usize]) -> PushReport {
     let two_blocks = variant == "two-objects";
     let (x0, blocks): (Vec<f64>, &[u32]) = if two_blocks {
         (two_object_test_positions().to_vec(), &[BLUE_ID, RED_ID])
@@ -87,7 +87,7 @@ pub(crate) fn push_report(variant: &str, train_runs: &[usize]) -> PushReport {
 }
 
 /// One run of one repetition that did not reach the thesis's first target.
-pub(crate) fn mtt_report() -> MttReport {
+pub fn mtt_report() -> MttReport {
     let run = MttRun {
         reached: false,
         steps: 3000,

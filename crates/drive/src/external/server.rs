@@ -22,7 +22,7 @@ use pushlearn::wire::pb::learner::{
 };
 use pushlearn::wire::{encode_frame, FrameDecoder, WireError, MAX_ACTION_SPEED, MAX_POSITION};
 
-use crate::models::{ModelKind, ModelOptions, WithModel};
+use learner::registry::{ModelKind, ModelOptions, WithModel};
 
 /// Why serving ended early.
 #[derive(Debug, thiserror::Error)]

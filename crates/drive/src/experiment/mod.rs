@@ -40,7 +40,7 @@ pub const LATENCY_MAX_STEPS: u32 = 2;
 pub const LATENCY_MAX_STEPS_HARSH: u32 = 5;
 
 /// How the world is timed (`docs/spec/world.md` §8).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {
     /// The world steps on its own at 500 steps/s, as in the thesis; the
@@ -51,6 +51,28 @@ pub enum Mode {
     /// Lock-step with seeded command latency of 0…L_max steps (default 2):
     /// the thesis's timing noise, reproducibly.
     LockstepJitter,
+}
+
+impl pushlearn_core::Named for Mode {
+    const ALL: &'static [Self] = &[Mode::Realtime, Mode::Lockstep, Mode::LockstepJitter];
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Mode::Realtime => {
+                "The world steps on its own at 500 steps/s, as in the thesis; the learner must \
+                 keep up (timing noise comes from the machine)"
+            }
+            Mode::Lockstep => "The world waits for the learner after every publish; bit-identical",
+            Mode::LockstepJitter => {
+                "Lock-step with seeded command latency of 0…L_max steps (default 2): the \
+                 thesis's timing noise, reproducibly"
+            }
+        }
+    }
 }
 
 impl Mode {

@@ -25,7 +25,7 @@ pub const DEFAULT_TRAIN_RUNS: [usize; 7] = [1, 2, 3, 5, 10, 20, 30];
 pub const TWO_OBJECT_TRAINING_STARTS: [f64; 7] = [-0.18, 0.18, 0.0, -0.73, -0.47, -0.6, -0.4];
 
 /// The push-task variants of `docs/spec/experiments.md` §3.1–§3.4.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Variant {
     /// §3.1: every training start uniform in [−0.25, 0.25) (configuration 0).
@@ -135,6 +135,40 @@ impl Protocol {
 impl From<Variant> for Protocol {
     fn from(variant: Variant) -> Self {
         Self::new(variant, 0)
+    }
+}
+
+impl pushlearn_core::Named for Variant {
+    const ALL: &'static [Self] = &[
+        Variant::Random,
+        Variant::FixedThree,
+        Variant::ConstantFeedback,
+        Variant::TwoObjects,
+        Variant::Draft,
+    ];
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Variant::Random => {
+                "§3.1: every training start uniform in [−0.25, 0.25) (configuration 0)"
+            }
+            Variant::FixedThree => "§3.2: configuration 8, training starts −0.18, 0.18, 0.0",
+            Variant::ConstantFeedback => {
+                "§3.4: no training, feedback from real states, 10 Hz (qualitative)"
+            }
+            Variant::TwoObjects => {
+                "§3.3: both blocks; six (or, with `--train-runs 7`, seven) fixed starts"
+            }
+            Variant::Draft => {
+                "The thesis draft's protocol (draft §6.1.1): training starts at the block's \
+                 left end, right end and centre, then uniform in [−0.35, 0.35); 20 test starts \
+                 drawn once from a fixed seed in the same range"
+            }
+        }
     }
 }
 

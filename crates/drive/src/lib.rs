@@ -1,0 +1,27 @@
+//! The experiment engine: what runs a learner against worlds, and what it
+//! measures.
+//!
+//! * [`experiment`]: the thesis's experiments over the sockets — the §2
+//!   driver, the tasks, links paced in lock-step or realtime, workers, seeds,
+//!   the run cache, whole experiments into their documents;
+//! * [`external`]: a learner in another process over the learner protocol,
+//!   the server side for any model, and which learner an experiment runs;
+//! * [`results`]: what the experiments measured, as plain data;
+//! * [`scene`]: the thesis's set-up the experiments, their documents and
+//!   figures and the learner daemon share (rates, start poses, objects);
+//! * [`frame`]: world states as the learner sees them;
+//! * [`latency`]: per-message work times in bounded memory and the budget
+//!   they are held to;
+//! * [`process`]: child processes and their groups.
+//!
+//! No clap, no figures, no sockets of its own beyond the worlds' and the
+//! learners': the application (`crates/cli`) parses arguments into what this
+//! crate runs, and renders what it returns.
+
+pub mod experiment;
+pub mod external;
+pub mod frame;
+pub mod latency;
+pub mod process;
+pub mod results;
+pub mod scene;
