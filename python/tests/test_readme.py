@@ -37,6 +37,18 @@ def learner_example() -> str:
     return sources[0]
 
 
+def run_snippet(source: str) -> subprocess.CompletedProcess[str]:
+    """Runs a README block as its own Python process, as a reader pasting it would."""
+    return subprocess.run(
+        [sys.executable, "-c", source],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=LIMIT,
+        check=False,
+    )
+
+
 @pytest.mark.parametrize("how", ["serve", "script"])
 def test_the_readme_learner_serves_the_push_task_calls(
     tmp_path: Path, how: str
@@ -82,14 +94,7 @@ def test_the_readme_sim_client_example_runs(start_sim: Callable[..., Daemon]) ->
     daemon = start_sim("--mode", "lockstep")
     (source,) = [b for b in python_blocks() if "SimClient.connect" in b]
     source = source.replace("11345", str(daemon.port))
-    done = subprocess.run(
-        [sys.executable, "-c", source],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        timeout=LIMIT,
-        check=False,
-    )
+    done = run_snippet(source)
     assert done.returncode == 0, done.stderr
     first, last = done.stdout.strip().splitlines()
     assert first == "one_block lockstep 100"
@@ -99,13 +104,6 @@ def test_the_readme_sim_client_example_runs(start_sim: Callable[..., Daemon]) ->
 def test_the_readme_native_model_options_run() -> None:
     pytest.importorskip("pushlearn._native")
     (source,) = [b for b in python_blocks() if "GateModel(improve" in b]
-    done = subprocess.run(
-        [sys.executable, "-c", source],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        timeout=LIMIT,
-        check=False,
-    )
+    done = run_snippet(source)
     assert done.returncode == 0, done.stderr
     assert done.stdout == "gate+average-outputs gate+\n"
