@@ -342,11 +342,17 @@ struct Source {
     code: Vec<char>,
 }
 
-/// Edges `(from, to)` of one crate's top-level modules, each with the places
-/// that make it. Code compiled for tests alone (a `#[cfg(test)]` module,
+/// One crate's top-level modules, and the edges `(from, to)` between them,
+/// each with the places that make it.
+struct CrateGraph {
+    modules: BTreeSet<String>,
+    edges: BTreeMap<(String, String), Vec<String>>,
+}
+
+/// The graph of one crate's top-level modules. Code compiled for tests alone (a `#[cfg(test)]` module,
 /// inline or in a file of its own) is left out: a test may use what it
 /// needs, and its edges make no cycle in what ships.
-fn module_graph(src: &Path) -> BTreeMap<(String, String), Vec<String>> {
+fn module_graph(src: &Path) -> CrateGraph {
     let mut files = Vec::new();
     rust_files(src, &mut files);
     let sources: Vec<Source> = files
@@ -361,7 +367,11 @@ fn module_graph(src: &Path) -> BTreeMap<(String, String), Vec<String>> {
             }
         })
         .collect();
-    let modules: BTreeSet<&String> = sources.iter().filter_map(|s| s.path.first()).collect();
+    let modules: BTreeSet<String> = sources
+        .iter()
+        .filter_map(|s| s.path.first())
+        .cloned()
+        .collect();
     // Files that hold a module declared `#[cfg(test)] mod name;`.
     let mut test_files: Vec<Vec<String>> = Vec::new();
     for source in &sources {
@@ -450,7 +460,7 @@ fn module_graph(src: &Path) -> BTreeMap<(String, String), Vec<String>> {
             i += 1;
         }
     }
-    edges
+    CrateGraph { modules, edges }
 }
 
 /// A cycle among `edges`, as a path that comes back to its start.
@@ -490,13 +500,7 @@ fn modules_use_each_other_only_in_the_allowed_directions() {
     let mut wrong = Vec::new();
     for (dir, table) in CRATES {
         let allowed: BTreeMap<&str, &[&str]> = table.iter().copied().collect();
-        let src = workspace_root().join(dir);
-        let mut files = Vec::new();
-        rust_files(&src, &mut files);
-        let modules: BTreeSet<String> = files
-            .iter()
-            .filter_map(|f| module_path(f.strip_prefix(&src).ok()?).first().cloned())
-            .collect();
+        let CrateGraph { modules, edges } = module_graph(&workspace_root().join(dir));
         for module in modules.iter().filter(|m| !allowed.contains_key(m.as_str())) {
             wrong.push(format!(
                 "{dir}: module {module} is not in the table of \
@@ -504,7 +508,7 @@ fn modules_use_each_other_only_in_the_allowed_directions() {
                  docs/architecture.md)"
             ));
         }
-        for ((from, to), places) in module_graph(&src) {
+        for ((from, to), places) in edges {
             // Modules outside the table are reported above.
             if let Some(may) = allowed.get(from.as_str()) {
                 if !may.contains(&to.as_str()) {
@@ -570,6 +574,7 @@ fn the_scanner_sees_groups_and_super_chains_and_skips_comments_strings_and_tests
         write(&format!("{module}.rs"), "");
     }
     let edges: BTreeSet<String> = module_graph(&dir)
+        .edges
         .into_keys()
         .map(|(from, to)| format!("{from}->{to}"))
         .collect();

@@ -40,15 +40,13 @@ pub fn push_task_blocks() -> BTreeMap<u32, ObjectState> {
 /// The scene of the new-object experiments.
 pub const SCENE: &str = "objects";
 
-/// An object of the `objects` scene a push-task run can be about.
+/// An object of the `objects` scene a push-task run can be about, each
+/// described in its [`Named`](pushlearn_core::Named) implementation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Object {
-    /// The thesis's blue block, 0.5 × 0.1 × 0.1 m (`blockA`).
     Blue,
-    /// The thesis's red block, 0.3 × 0.3 × 0.1 m (`blockB`).
     Red,
-    /// A new shape: an upright cylinder, 0.2 m across, 0.1 m tall.
     Cylinder,
 }
 

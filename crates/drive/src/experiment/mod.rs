@@ -39,17 +39,13 @@ pub const LATENCY_MAX_STEPS: u32 = 2;
 /// kept as the robustness setting `docs/results.md` reports beside the default.
 pub const LATENCY_MAX_STEPS_HARSH: u32 = 5;
 
-/// How the world is timed (`docs/spec/world.md` §8).
+/// How the world is timed (`docs/spec/world.md` §8); each mode is described
+/// in its [`Named`](pushlearn_core::Named) implementation, which `--help` shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Mode {
-    /// The world steps on its own at 500 steps/s, as in the thesis; the
-    /// learner must keep up (timing noise comes from the machine).
     Realtime,
-    /// The world waits for the learner after every publish; bit-identical.
     Lockstep,
-    /// Lock-step with seeded command latency of 0…L_max steps (default 2):
-    /// the thesis's timing noise, reproducibly.
     LockstepJitter,
 }
 

@@ -24,21 +24,16 @@ pub const DEFAULT_TRAIN_RUNS: [usize; 7] = [1, 2, 3, 5, 10, 20, 30];
 /// first variant uses the first six.
 pub const TWO_OBJECT_TRAINING_STARTS: [f64; 7] = [-0.18, 0.18, 0.0, -0.73, -0.47, -0.6, -0.4];
 
-/// The push-task variants of `docs/spec/experiments.md` §3.1–§3.4.
+/// The push-task variants of `docs/spec/experiments.md` §3.1–§3.4 (and the
+/// draft's protocol), each described in its
+/// [`Named`](pushlearn_core::Named) implementation, which `--help` shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Variant {
-    /// §3.1: every training start uniform in [−0.25, 0.25) (configuration 0).
     Random,
-    /// §3.2: configuration 8, training starts −0.18, 0.18, 0.0.
     FixedThree,
-    /// §3.4: no training, feedback from real states, 10 Hz (qualitative).
     ConstantFeedback,
-    /// §3.3: both blocks; six (or, with `--train-runs 7`, seven) fixed starts.
     TwoObjects,
-    /// The thesis draft's protocol (draft §6.1.1): training starts at the
-    /// block's left end, right end and centre, then uniform in [−0.35,
-    /// 0.35); 20 test starts drawn once from a fixed seed in the same range.
     Draft,
 }
 
