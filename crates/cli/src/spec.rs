@@ -8,8 +8,7 @@ use learner::{Model, ObjectState};
 use crate::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use crate::experiment::run::{self, Plan};
 use crate::experiment::ExperimentError;
-use crate::external::LearnerChoice;
-use crate::external::{ExternalModel, LearnerError};
+use crate::external::{ExternalModel, LearnerChoice, LearnerError};
 use crate::models::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
 use crate::report::draft::{self, DraftReport, DraftRowResult};
 use crate::report::layout::Printout;
@@ -19,8 +18,7 @@ use crate::results::push_task::PushJobResult;
 use crate::results::run_info::RunInfo;
 use crate::results::LearnerRecord;
 use crate::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup, UnknownModel};
-use crate::scene::{self, Transfer};
-use crate::scene::{LOW_RATE_HZ, RATE_HZ};
+use crate::scene::{self, Transfer, LOW_RATE_HZ, RATE_HZ};
 
 /// One experiment of `docs/spec/experiments.md`, fully configured.
 #[derive(Clone, Debug, PartialEq)]
