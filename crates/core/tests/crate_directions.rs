@@ -23,10 +23,12 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
     ("pushlearn-python", &["learner", "pushlearn-core"]),
     ("drive", &["learner", "pushlearn", "pushlearn-core"]),
+    ("lab", &["drive", "learner"]),
     (
         "pushlearn-cli",
         &[
             "drive",
+            "lab",
             "learner",
             "pushlearn",
             "pushlearn-core",
@@ -40,6 +42,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
 const DEV_ALLOWED: &[(&str, &[&str])] = &[
     ("sim-plugin", &["learner", "sim-plugin"]),
     ("drive", &["learner", "sim-plugin"]),
+    ("lab", &["drive", "sim-plugin"]),
     ("pushlearn-cli", &["drive", "learner", "sim-plugin"]),
 ];
 

@@ -5,13 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use super::{Sample, SoakReport};
-use crate::report::plot::draw::{palette, prepare, write, Grid, Panel, Series};
-use crate::report::plot::PlotError;
+use lab::report::plot::draw::{palette, prepare, write, Grid, Panel, Series};
+use lab::report::plot::PlotError;
 
 /// Draws `soak.png` and `soak.svg` into `dir`.
 ///
 /// # Errors
-/// As [`push`](crate::report::plot::push).
+/// As [`push`](lab::report::plot::push).
 pub fn soak(report: &SoakReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
     // Minutes for a long run, seconds for a short one.

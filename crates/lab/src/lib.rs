@@ -1,0 +1,20 @@
+//! pushlearn's experiments as a library, on the experiment engine
+//! (`drive`): what an experiment is as data, what it reports, and the
+//! reproduction of the results page. It parses no command line (the
+//! application maps its flags onto [`spec::Spec`]) and runs no daemon.
+//!
+//! * [`spec`]: an experiment as data, run into its report document;
+//! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
+//!   and figures, with the drawing toolkit other tools' figures share;
+//! * [`sweep`]: a grid of push-task configurations as data, planned into
+//!   fold jobs with stable ids, their outputs, and the Slurm array script;
+//! * [`reproduce`]: every experiment behind `docs/results.md`, and the page
+//!   itself, regenerated and checked;
+//! * [`output`]: output paths checked before the work that fills them, and
+//!   files written whole (temporary name, rename).
+
+pub mod output;
+pub mod report;
+pub mod reproduce;
+pub mod spec;
+pub mod sweep;

@@ -1,0 +1,695 @@
+//! An experiment as data: which experiment, which model and options, how
+//! many folds ([`Spec`]), run on a [`Plan`] into its report document
+//! ([`Document`]). `pushlearn experiment` builds one from its flags,
+//! `pushlearn reproduce` has a list of them (`crate::reproduce`).
+
+use learner::{Model, ObjectState};
+
+use crate::report::draft::{self, DraftReport, DraftRowResult};
+use crate::report::layout::Printout;
+use crate::report::plot::{self, PlotError};
+use crate::report::table;
+use drive::experiment::push_task::protocol::{Protocol, PushJob, Variant};
+use drive::experiment::run::{self, Plan};
+use drive::experiment::ExperimentError;
+use drive::external::{ExternalModel, LearnerChoice, LearnerError};
+use drive::results::push_task::PushJobResult;
+use drive::results::run_info::RunInfo;
+use drive::results::LearnerRecord;
+use drive::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup, UnknownModel};
+use drive::scene::{self, Transfer, LOW_RATE_HZ, RATE_HZ};
+use learner::registry::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
+
+/// One experiment of `docs/spec/experiments.md`, fully configured.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Spec {
+    /// Push Task Simulation (§3.1–§3.3, and the draft's protocol).
+    PushTask {
+        model: LearnerChoice,
+        options: ModelOptions,
+        variant: Variant,
+        /// The new-object experiments' objects (`objects` scene); `None`
+        /// for the thesis's.
+        transfer: Option<Transfer>,
+        train_runs: Vec<usize>,
+        folds: usize,
+    },
+    /// The push task with constant feedback at 10 Hz (§3.4).
+    ConstantFeedback {
+        model: LearnerChoice,
+        options: ModelOptions,
+    },
+    /// Move to Target (§4).
+    MoveToTarget {
+        model: LearnerChoice,
+        options: ModelOptions,
+        targets: Vec<ObjectState>,
+        repetitions: usize,
+        max_steps: u64,
+    },
+    /// Every row of the thesis draft's Tables 6.1 and 6.2, each on the
+    /// draft's protocol with `folds` folds.
+    DraftTables { folds: usize },
+}
+
+/// What a [`Spec`] produced.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Document {
+    Push(PushReport),
+    Feedback(FeedbackReport),
+    MoveToTarget(MttReport),
+    Draft(DraftReport),
+}
+
+/// Why a [`Spec`] did not produce its document.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// The model options do not fit the model.
+    #[error(transparent)]
+    Options(#[from] ModelOptionsError),
+    /// The experiment failed.
+    #[error(transparent)]
+    Experiment(#[from] ExperimentError),
+    /// The external learner cannot be used.
+    #[error(transparent)]
+    Learner(#[from] LearnerError),
+    /// The configuration cannot be run.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Spec {
+    /// The scene the experiment's worlds must load.
+    #[must_use]
+    pub fn scene(&self) -> &'static str {
+        match self {
+            Spec::PushTask {
+                transfer: Some(_), ..
+            } => scene::SCENE,
+            Spec::PushTask { variant, .. } => variant.scene(),
+            Spec::ConstantFeedback { .. } => Variant::ConstantFeedback.scene(),
+            Spec::MoveToTarget { .. } => "one_block",
+            Spec::DraftTables { .. } => Variant::Draft.scene(),
+        }
+    }
+
+    /// The learner the experiment runs (the draft has its own models).
+    #[must_use]
+    pub fn model(&self) -> Option<&LearnerChoice> {
+        match self {
+            Spec::PushTask { model, .. }
+            | Spec::ConstantFeedback { model, .. }
+            | Spec::MoveToTarget { model, .. } => Some(model),
+            Spec::DraftTables { .. } => None,
+        }
+    }
+
+    /// The task's name in the learner protocol's Start.
+    fn task(&self) -> &'static str {
+        match self {
+            Spec::PushTask { .. } | Spec::DraftTables { .. } => "push-task",
+            Spec::ConstantFeedback { .. } => "constant-feedback",
+            Spec::MoveToTarget { .. } => "move-to-target",
+        }
+    }
+
+    /// A few words for progress bars.
+    #[must_use]
+    pub fn title(&self) -> &'static str {
+        match self {
+            Spec::PushTask { .. } => "push task",
+            Spec::ConstantFeedback { .. } => "constant feedback",
+            Spec::MoveToTarget { .. } => "move to target",
+            Spec::DraftTables { .. } => "draft tables",
+        }
+    }
+
+    /// How many jobs the progress callback counts up to.
+    #[must_use]
+    pub fn jobs(&self) -> usize {
+        match self {
+            Spec::PushTask {
+                train_runs, folds, ..
+            } => train_runs.len() * folds,
+            Spec::ConstantFeedback { .. } => 1,
+            Spec::MoveToTarget {
+                targets,
+                repetitions,
+                ..
+            } => targets.len() * repetitions,
+            Spec::DraftTables { folds } => draft::rows().len() * folds,
+        }
+    }
+
+    /// Checks what can be checked before anything runs.
+    ///
+    /// # Errors
+    /// A configuration the experiment cannot run, named.
+    pub fn validate(&self) -> Result<(), SpecError> {
+        if let Spec::PushTask {
+            variant: Variant::TwoObjects,
+            train_runs,
+            ..
+        } = self
+        {
+            let fixed = Variant::TwoObjects.fixed_starts().len();
+            if train_runs.iter().any(|&n| n > fixed) {
+                return Err(SpecError::Invalid(format!(
+                    "the two-object experiment has {fixed} fixed training starts; --train-runs must not exceed {fixed}"
+                )));
+            }
+        }
+        if let Spec::PushTask {
+            variant: Variant::ConstantFeedback,
+            ..
+        } = self
+        {
+            return Err(SpecError::Invalid(
+                "constant feedback is its own experiment (Spec::ConstantFeedback)".into(),
+            ));
+        }
+        if let Spec::PushTask {
+            variant,
+            transfer: Some(_),
+            ..
+        } = self
+        {
+            if *variant != Variant::Random {
+                return Err(SpecError::Invalid(format!(
+                    "the new-object experiments (--train-on, --test-on) use the random variant's protocol; drop --variant {}",
+                    variant.as_str()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Runs the experiment on `plan` (whose model name is replaced by this
+    /// spec's), calling `progress` with the number of jobs done.
+    ///
+    /// # Errors
+    /// Invalid options or configuration, or the first failing job.
+    pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
+        self.validate()?;
+        let mut plan = plan.clone();
+        Ok(match self {
+            Spec::PushTask {
+                model,
+                options,
+                train_runs,
+                folds,
+                ..
+            } => {
+                let protocol = self
+                    .push_protocol()
+                    .ok_or_else(|| SpecError::Invalid("a push task has a protocol".into()))?;
+                let model = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
+                Document::Push(model.dispatch(
+                    options,
+                    protocol.rate_hz,
+                    Push {
+                        protocol: &protocol,
+                        train_runs,
+                        folds: *folds,
+                        plan: &plan,
+                        progress: &progress,
+                    },
+                )??)
+            }
+            Spec::ConstantFeedback { model, options } => {
+                progress(0);
+                let model = Ready::new(model, options, self.task(), LOW_RATE_HZ, &mut plan)?;
+                let report = model.dispatch(options, LOW_RATE_HZ, Feedback { plan: &plan })??;
+                progress(1);
+                Document::Feedback(report)
+            }
+            Spec::MoveToTarget {
+                model,
+                options,
+                targets,
+                repetitions,
+                max_steps,
+            } => Document::MoveToTarget(
+                Ready::new(model, options, self.task(), RATE_HZ, &mut plan)?.dispatch(
+                    options,
+                    RATE_HZ,
+                    MoveToTarget {
+                        targets,
+                        repetitions: *repetitions,
+                        max_steps: *max_steps,
+                        plan: &plan,
+                        progress: &progress,
+                    },
+                )??,
+            ),
+            Spec::DraftTables { folds } => Document::Draft(draft_tables(*folds, &plan, progress)?),
+        })
+    }
+}
+
+impl Spec {
+    /// The push-task protocol of a [`Spec::PushTask`] (else `None`).
+    #[must_use]
+    pub fn push_protocol(&self) -> Option<Protocol> {
+        match self {
+            Spec::PushTask {
+                options,
+                variant,
+                transfer,
+                ..
+            } => Some(
+                Protocol::new(*variant, options.config_number()).with_transfer(transfer.clone()),
+            ),
+            _ => None,
+        }
+    }
+
+    /// Runs only the jobs `wanted` — (N_train, fold) pairs — of a
+    /// [`Spec::PushTask`] on `plan`, calling `done` with the report's setup
+    /// and each job's result as it finishes (`pushlearn sweep`: one fold of
+    /// one configuration is a job). A job's seeds depend only on the plan's
+    /// seed and its own (N_train, fold), so its result is the one the whole
+    /// experiment would have given it.
+    ///
+    /// # Errors
+    /// Not a push task, invalid options, the first failing job or the first
+    /// error of `done`.
+    pub fn run_push_jobs(
+        &self,
+        plan: &Plan,
+        wanted: &[(usize, usize)],
+        done: impl Fn(&Setup, &PushJobResult) -> Result<(), ExperimentError> + Sync,
+        progress: impl Fn(usize),
+    ) -> Result<(), SpecError> {
+        self.validate()?;
+        let (Spec::PushTask { model, options, .. }, Some(protocol)) = (self, self.push_protocol())
+        else {
+            return Err(SpecError::Invalid(format!(
+                "a sweep job is one fold of a push task, not of {}",
+                self.title()
+            )));
+        };
+        let mut plan = plan.clone();
+        let ready = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
+        let setup = plan.setup(drive::results::push_task::EXPERIMENT);
+        let mut all = PushJob::all(protocol.clone(), &[], 0, plan.seed);
+        for &(n_train, fold) in wanted {
+            all.extend(
+                PushJob::all(protocol.clone(), &[n_train], fold + 1, plan.seed)
+                    .into_iter()
+                    .filter(|job| job.fold == fold),
+            );
+        }
+        ready.dispatch(
+            options,
+            protocol.rate_hz,
+            PushSome {
+                rate_hz: protocol.rate_hz,
+                jobs: &all,
+                plan: &plan,
+                done: &|result: &PushJobResult| done(&setup, result),
+                progress: &progress,
+            },
+        )??;
+        Ok(())
+    }
+
+    /// The report of a [`Spec::PushTask`] from its jobs' results (as
+    /// [`Spec::run_push_jobs`] gave them) and the `setup` they ran under,
+    /// without timing: what `pushlearn experiment` writes for the spec, less
+    /// its machine-dependent part.
+    ///
+    /// # Errors
+    /// Not a push task, or results that do not cover every N_train.
+    pub fn push_report(
+        &self,
+        setup: Setup,
+        results: &[PushJobResult],
+    ) -> Result<PushReport, SpecError> {
+        match (self, self.push_protocol()) {
+            (
+                Spec::PushTask {
+                    train_runs, folds, ..
+                },
+                Some(protocol),
+            ) => Ok(run::push_report(
+                setup, &protocol, train_runs, *folds, results,
+            )?),
+            _ => Err(SpecError::Invalid(format!(
+                "only a push task's report is made of fold jobs, not {}'s",
+                self.title()
+            ))),
+        }
+    }
+}
+
+/// Some jobs of a push task, for [`Spec::run_push_jobs`].
+struct PushSome<'a> {
+    rate_hz: u32,
+    jobs: &'a [PushJob],
+    plan: &'a Plan,
+    done: &'a (dyn Fn(&PushJobResult) -> Result<(), ExperimentError> + Sync),
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for PushSome<'_> {
+    type Output = Result<Vec<PushJobResult>, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::push_jobs(
+            untrained,
+            self.rate_hz,
+            self.jobs,
+            self.plan,
+            self.done,
+            self.progress,
+        )
+    }
+}
+
+/// Every row of the draft's tables on the draft's protocol, one after the
+/// other on `plan` (so with its cache, if it has one).
+fn draft_tables(
+    folds: usize,
+    plan: &Plan,
+    progress: impl Fn(usize),
+) -> Result<DraftReport, SpecError> {
+    let rows = draft::rows();
+    let mut results = Vec::new();
+    let mut reports = Vec::new();
+    for (i, row) in rows.iter().enumerate() {
+        let mut plan = plan.clone();
+        row.model.as_str().clone_into(&mut plan.model);
+        let protocol = Protocol::new(Variant::Draft, row.options.config_number());
+        let report = row.model.dispatch(
+            &row.options,
+            protocol.rate_hz,
+            Push {
+                protocol: &protocol,
+                train_runs: &[row.train_runs],
+                folds,
+                plan: &plan,
+                progress: &|done| progress(i * folds + done),
+            },
+        )??;
+        let entry = report
+            .results
+            .first()
+            .ok_or_else(|| SpecError::Invalid(format!("draft row {} gave no results", row.name)))?;
+        results.push(DraftRowResult::of(row, entry));
+        reports.push(report);
+    }
+    let setup = reports
+        .first()
+        .map(|r| r.setup.clone())
+        .ok_or_else(|| SpecError::Invalid("the draft has no rows".into()))?;
+    Ok(DraftReport {
+        setup,
+        folds,
+        test_positions: Protocol::from(Variant::Draft).test_positions,
+        rows: results,
+        reports,
+    })
+}
+
+impl Document {
+    /// The document's setup (its experiment, model, mode and seed).
+    #[must_use]
+    pub fn setup(&self) -> &Setup {
+        match self {
+            Document::Push(r) => &r.setup,
+            Document::Feedback(r) => &r.setup,
+            Document::MoveToTarget(r) => &r.setup,
+            Document::Draft(r) => &r.setup,
+        }
+    }
+
+    /// How its runs went: one, or one per row of the draft's tables.
+    #[must_use]
+    pub fn runs(&self) -> Vec<&RunInfo> {
+        match self {
+            Document::Push(r) => vec![&r.run],
+            Document::Feedback(r) => vec![&r.run],
+            Document::MoveToTarget(r) => vec![&r.run],
+            Document::Draft(r) => r.reports.iter().map(|r| &r.run).collect(),
+        }
+    }
+
+    /// The document without its machine-dependent parts, so that two runs
+    /// of the same spec give the same bytes.
+    #[must_use]
+    pub fn without_timing(self) -> Self {
+        match self {
+            Document::Push(mut r) => {
+                r.run = r.run.without_timing();
+                Document::Push(r)
+            }
+            Document::Feedback(mut r) => {
+                r.run = r.run.without_timing();
+                Document::Feedback(r)
+            }
+            Document::MoveToTarget(mut r) => {
+                r.run = r.run.without_timing();
+                Document::MoveToTarget(r)
+            }
+            Document::Draft(mut r) => {
+                for report in &mut r.reports {
+                    report.run = std::mem::take(&mut report.run).without_timing();
+                }
+                Document::Draft(r)
+            }
+        }
+    }
+
+    /// The document without its fold-level detail
+    /// ([`CurveEntry::without_folds`](drive::results::push_task::CurveEntry::without_folds)),
+    /// as the reproduction keeps its documents.
+    #[must_use]
+    pub fn without_folds(self) -> Self {
+        let strip = |r: &mut PushReport| {
+            r.results = std::mem::take(&mut r.results)
+                .into_iter()
+                .map(|e| e.without_folds())
+                .collect();
+        };
+        match self {
+            Document::Push(mut r) => {
+                strip(&mut r);
+                Document::Push(r)
+            }
+            Document::Draft(mut r) => {
+                r.reports.iter_mut().for_each(strip);
+                Document::Draft(r)
+            }
+            Document::MoveToTarget(mut r) => {
+                r.training_starts = Vec::new();
+                Document::MoveToTarget(r)
+            }
+            other @ Document::Feedback(_) => other,
+        }
+    }
+
+    /// The terminal tables beside the thesis's numbers, as `pushlearn
+    /// experiment` prints them, each also as CSV.
+    ///
+    /// # Errors
+    /// A model the thesis's numbers cannot be chosen for
+    /// ([`Setup::reference_model`]; never a document of a run or one read
+    /// back by [`AnyReport::from_json`]).
+    pub fn printout(&self) -> Result<Printout, UnknownModel> {
+        Ok(match self {
+            Document::Push(r) => {
+                let mut printout = table::push_printout(r, r.setup.reference_model()?);
+                printout.tables.push(draft::keypoint_table(r));
+                printout
+            }
+            Document::Feedback(r) => table::feedback_printout(r, r.setup.reference_model()?),
+            Document::MoveToTarget(r) => {
+                table::move_to_target_printout(r, r.setup.reference_model()?)
+            }
+            Document::Draft(r) => draft::printout(r),
+        })
+    }
+
+    /// The terminal tables beside the thesis's numbers, as `pushlearn
+    /// experiment` prints them.
+    ///
+    /// # Errors
+    /// Writing to `out`, or an unknown model (as [`Document::printout`]).
+    pub fn write_tables(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        let printout = self
+            .printout()
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e))?;
+        printout.write_text(out)
+    }
+
+    /// Draws the document's figures into `dir` (the draft's tables have
+    /// none).
+    ///
+    /// # Errors
+    /// A figure cannot be drawn or written, or an unknown model (as
+    /// [`Document::printout`]).
+    pub fn plot(&self, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, PlotError> {
+        match self {
+            Document::Push(r) => plot::push(r, r.setup.reference_model()?, dir),
+            Document::Feedback(r) => plot::feedback(r, r.setup.reference_model()?, dir),
+            Document::MoveToTarget(r) => plot::move_to_target(r, r.setup.reference_model()?, dir),
+            Document::Draft(_) => Ok(Vec::new()),
+        }
+    }
+
+    /// Reads back a document `spec` produced (as [`Document::to_json`]
+    /// wrote it).
+    ///
+    /// # Errors
+    /// Not JSON, not a report, or a report of another experiment.
+    pub fn from_json(text: &str, spec: &Spec) -> Result<Self, String> {
+        if let Spec::DraftTables { .. } = spec {
+            return serde_json::from_str(text)
+                .map(Document::Draft)
+                .map_err(|e| format!("not the draft's tables: {e}"));
+        }
+        let document = Document::from(AnyReport::from_json(text).map_err(|e| e.to_string())?);
+        let fits = matches!(
+            (&document, spec),
+            (Document::Push(_), Spec::PushTask { .. })
+                | (Document::Feedback(_), Spec::ConstantFeedback { .. })
+                | (Document::MoveToTarget(_), Spec::MoveToTarget { .. })
+        );
+        if fits {
+            Ok(document)
+        } else {
+            Err(format!(
+                "a {} document, expected one of {}",
+                document.setup().experiment,
+                spec.title()
+            ))
+        }
+    }
+
+    /// Pretty JSON, one trailing newline.
+    ///
+    /// # Errors
+    /// Serialisation failed (not expected for these types).
+    pub fn to_json(&self) -> Result<String, serde_json::Error> {
+        let mut text = match self {
+            Document::Push(r) => serde_json::to_string_pretty(r),
+            Document::Feedback(r) => serde_json::to_string_pretty(r),
+            Document::MoveToTarget(r) => serde_json::to_string_pretty(r),
+            Document::Draft(r) => serde_json::to_string_pretty(r),
+        }?;
+        text.push('\n');
+        Ok(text)
+    }
+}
+
+impl From<AnyReport> for Document {
+    fn from(report: AnyReport) -> Self {
+        match report {
+            AnyReport::Push(r) => Document::Push(r),
+            AnyReport::Feedback(r) => Document::Feedback(r),
+            AnyReport::MoveToTarget(r) => Document::MoveToTarget(r),
+        }
+    }
+}
+
+/// A learner ready to run: a built-in model's kind, or a connected
+/// external learner. Getting ready names the plan's model.
+enum Ready {
+    Builtin(ModelKind),
+    External(Box<ExternalModel>),
+}
+
+impl Ready {
+    fn new(
+        choice: &LearnerChoice,
+        options: &ModelOptions,
+        task: &str,
+        publish_rate_hz: u32,
+        plan: &mut Plan,
+    ) -> Result<Self, SpecError> {
+        Ok(match choice {
+            LearnerChoice::Builtin(kind) => {
+                plan.model = options.report_name(*kind);
+                plan.learner = None;
+                Ready::Builtin(*kind)
+            }
+            LearnerChoice::External(spec) => {
+                options.check_external()?;
+                let model = ExternalModel::connect(spec, task, publish_rate_hz)?;
+                model.info().name.clone_into(&mut plan.model);
+                plan.learner = Some(LearnerRecord {
+                    version: model.info().version.clone(),
+                    source: spec.source.to_string(),
+                });
+                Ready::External(Box::new(model))
+            }
+        })
+    }
+
+    fn dispatch<W: WithModel>(
+        self,
+        options: &ModelOptions,
+        publish_rate_hz: u32,
+        job: W,
+    ) -> Result<W::Output, ModelOptionsError> {
+        match self {
+            Ready::Builtin(kind) => kind.dispatch(options, publish_rate_hz, job),
+            Ready::External(model) => Ok(job.run(*model)),
+        }
+    }
+}
+
+struct Push<'a> {
+    protocol: &'a Protocol,
+    train_runs: &'a [usize],
+    folds: usize,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for Push<'_> {
+    type Output = Result<PushReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::push_task(
+            untrained,
+            self.protocol,
+            self.train_runs,
+            self.folds,
+            self.plan,
+            self.progress,
+        )
+    }
+}
+
+struct Feedback<'a> {
+    plan: &'a Plan,
+}
+
+impl WithModel for Feedback<'_> {
+    type Output = Result<FeedbackReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::constant_feedback(untrained, self.plan)
+    }
+}
+
+struct MoveToTarget<'a> {
+    targets: &'a [ObjectState],
+    repetitions: usize,
+    max_steps: u64,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for MoveToTarget<'_> {
+    type Output = Result<MttReport, ExperimentError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        run::move_to_target(
+            untrained,
+            self.targets,
+            self.repetitions,
+            self.max_steps,
+            self.plan,
+            self.progress,
+        )
+    }
+}
