@@ -382,13 +382,21 @@ pub(crate) fn end_worlds_on_signal() {
     });
 }
 
+impl ExperimentArgs {
+    /// The experiment the command line asks for, and where its worlds come
+    /// from: the inverse of `lab::reproduce::manifest::Entry::command`.
+    fn spec(&self) -> Result<(Spec, &WorldArgs)> {
+        Ok(match &self.command {
+            ExperimentCommand::PushTask(args) => (push_task_spec(args)?, &args.world),
+            ExperimentCommand::MoveToTarget(args) => (move_to_target_spec(args), &args.world),
+        })
+    }
+}
+
 /// Runs `pushlearn experiment`.
 pub fn run(args: ExperimentArgs) -> Result<()> {
     end_worlds_on_signal();
-    let (spec, world) = match &args.command {
-        ExperimentCommand::PushTask(args) => (push_task_spec(args)?, &args.world),
-        ExperimentCommand::MoveToTarget(args) => (move_to_target_spec(args), &args.world),
-    };
+    let (spec, world) = args.spec()?;
     spec.validate()?;
     world.check_outputs()?;
     let plan = world.plan(spec.scene())?;
@@ -579,5 +587,54 @@ mod tests {
         assert!(parse_pose("1,nan,2").unwrap_err().contains("finite"));
         assert!(parse_pose("1,x,2").is_err());
         assert_eq!(parse_numbers("0,0.5", 2), Ok(vec![0.0, 0.5]));
+    }
+
+    /// The command the reproduction prints beside each of its documents
+    /// (`Entry::command`, on the page and in `docs/results/timing.md`),
+    /// parsed by this command's own parser, is the experiment it was
+    /// printed for: the manifest's specs and the command line cannot drift
+    /// apart.
+    #[test]
+    fn the_reproductions_commands_parse_back_into_their_experiments() {
+        use clap::Parser as _;
+        use pushlearn_cli::reproduce::manifest;
+
+        #[derive(clap::Parser)]
+        #[command(name = "pushlearn")]
+        struct Line {
+            #[command(subcommand)]
+            command: Top,
+        }
+        #[derive(clap::Subcommand)]
+        enum Top {
+            Experiment(ExperimentArgs),
+        }
+
+        let entries: Vec<_> = manifest::full()
+            .into_iter()
+            .chain(manifest::quick())
+            .collect();
+        assert!(entries.len() > 60, "the full set and the quick one");
+        for entry in entries {
+            let command = entry.command("docs/results");
+            let words = shlex::split(&command).expect("the command is valid shell words");
+            let line = Line::try_parse_from(&words)
+                .unwrap_or_else(|err| panic!("`{command}` does not parse: {err}"));
+            let Top::Experiment(args) = line.command;
+            let (spec, world) = args
+                .spec()
+                .unwrap_or_else(|err| panic!("`{command}` is refused: {err}"));
+            assert_eq!(spec, entry.spec, "`{command}`");
+            assert_eq!(
+                (world.mode, world.latency_max, world.seed),
+                (entry.mode, entry.latency_max, entry.seed),
+                "`{command}`"
+            );
+            assert_eq!(
+                world.json,
+                Some(PathBuf::from(format!("docs/results/{}.json", entry.name))),
+                "`{command}`"
+            );
+        }
     }
 }
