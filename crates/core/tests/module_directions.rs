@@ -131,7 +131,10 @@ const CRATES: &[(&str, Table)] = &[
             ("output", &[]),
             // Tables and figures of the documents, and the drawing toolkit.
             ("report", &["output"]),
-            ("spec", &["report"]),
+            // One folder per experiment: its tables and figures, made with
+            // the report's pieces.
+            ("experiments", &["report"]),
+            ("spec", &["experiments", "report"]),
             ("sweep", &["output", "report"]),
             ("reproduce", &["output", "report", "spec", "sweep"]),
         ],

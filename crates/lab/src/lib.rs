@@ -4,8 +4,12 @@
 //! application maps its flags onto [`spec::Spec`]) and runs no daemon.
 //!
 //! * [`spec`]: an experiment as data, run into its report document;
-//! * [`report`]: JSON documents, terminal tables beside the thesis's numbers
-//!   and figures, with the drawing toolkit other tools' figures share;
+//! * [`experiments`]: one folder per experiment, each with its tables
+//!   beside the thesis's numbers and its figures, behind one
+//!   [`Experiment`](experiments::Experiment) trait;
+//! * [`report`]: what every experiment's tables and figures are made of
+//!   (table layout, the thesis's numbers, the drawing toolkit other tools'
+//!   figures share), JSON documents;
 //! * [`sweep`]: a grid of push-task configurations as data, planned into
 //!   fold jobs with stable ids, their outputs, and the Slurm array script;
 //! * [`reproduce`]: every experiment behind `docs/results.md`, and the page
@@ -13,6 +17,7 @@
 //! * [`output`]: output paths checked before the work that fills them, and
 //!   files written whole (temporary name, rename).
 
+pub mod experiments;
 pub mod output;
 pub mod report;
 pub mod reproduce;

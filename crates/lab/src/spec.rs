@@ -5,10 +5,13 @@
 
 use learner::{Model, ObjectState};
 
-use crate::report::draft::{self, DraftReport, DraftRowResult};
+use crate::experiments::constant_feedback::ConstantFeedback;
+use crate::experiments::draft::{self, DraftReport, DraftRowResult, DraftTables};
+use crate::experiments::move_to_target::MoveToTarget as MoveToTargetExperiment;
+use crate::experiments::push_task::PushTask;
+use crate::experiments::Experiment;
 use crate::report::layout::Printout;
-use crate::report::plot::{self, PlotError};
-use crate::report::table;
+use crate::report::plot::PlotError;
 use drive::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use drive::experiment::run::{self, Plan};
 use drive::experiment::ExperimentError;
@@ -416,10 +419,10 @@ impl Document {
     #[must_use]
     pub fn setup(&self) -> &Setup {
         match self {
-            Document::Push(r) => &r.setup,
-            Document::Feedback(r) => &r.setup,
-            Document::MoveToTarget(r) => &r.setup,
-            Document::Draft(r) => &r.setup,
+            Document::Push(r) => PushTask::setup(r),
+            Document::Feedback(r) => ConstantFeedback::setup(r),
+            Document::MoveToTarget(r) => MoveToTargetExperiment::setup(r),
+            Document::Draft(r) => DraftTables::setup(r),
         }
     }
 
@@ -427,10 +430,10 @@ impl Document {
     #[must_use]
     pub fn runs(&self) -> Vec<&RunInfo> {
         match self {
-            Document::Push(r) => vec![&r.run],
-            Document::Feedback(r) => vec![&r.run],
-            Document::MoveToTarget(r) => vec![&r.run],
-            Document::Draft(r) => r.reports.iter().map(|r| &r.run).collect(),
+            Document::Push(r) => PushTask::runs(r),
+            Document::Feedback(r) => ConstantFeedback::runs(r),
+            Document::MoveToTarget(r) => MoveToTargetExperiment::runs(r),
+            Document::Draft(r) => DraftTables::runs(r),
         }
     }
 
@@ -439,24 +442,12 @@ impl Document {
     #[must_use]
     pub fn without_timing(self) -> Self {
         match self {
-            Document::Push(mut r) => {
-                r.run = r.run.without_timing();
-                Document::Push(r)
+            Document::Push(r) => Document::Push(PushTask::without_timing(r)),
+            Document::Feedback(r) => Document::Feedback(ConstantFeedback::without_timing(r)),
+            Document::MoveToTarget(r) => {
+                Document::MoveToTarget(MoveToTargetExperiment::without_timing(r))
             }
-            Document::Feedback(mut r) => {
-                r.run = r.run.without_timing();
-                Document::Feedback(r)
-            }
-            Document::MoveToTarget(mut r) => {
-                r.run = r.run.without_timing();
-                Document::MoveToTarget(r)
-            }
-            Document::Draft(mut r) => {
-                for report in &mut r.reports {
-                    report.run = std::mem::take(&mut report.run).without_timing();
-                }
-                Document::Draft(r)
-            }
+            Document::Draft(r) => Document::Draft(DraftTables::without_timing(r)),
         }
     }
 
@@ -465,26 +456,13 @@ impl Document {
     /// as the reproduction keeps its documents.
     #[must_use]
     pub fn without_folds(self) -> Self {
-        let strip = |r: &mut PushReport| {
-            r.results = std::mem::take(&mut r.results)
-                .into_iter()
-                .map(|e| e.without_folds())
-                .collect();
-        };
         match self {
-            Document::Push(mut r) => {
-                strip(&mut r);
-                Document::Push(r)
+            Document::Push(r) => Document::Push(PushTask::without_folds(r)),
+            Document::Feedback(r) => Document::Feedback(ConstantFeedback::without_folds(r)),
+            Document::MoveToTarget(r) => {
+                Document::MoveToTarget(MoveToTargetExperiment::without_folds(r))
             }
-            Document::Draft(mut r) => {
-                r.reports.iter_mut().for_each(strip);
-                Document::Draft(r)
-            }
-            Document::MoveToTarget(mut r) => {
-                r.training_starts = Vec::new();
-                Document::MoveToTarget(r)
-            }
-            other @ Document::Feedback(_) => other,
+            Document::Draft(r) => Document::Draft(DraftTables::without_folds(r)),
         }
     }
 
@@ -496,18 +474,12 @@ impl Document {
     /// ([`Setup::reference_model`]; never a document of a run or one read
     /// back by [`AnyReport::from_json`]).
     pub fn printout(&self) -> Result<Printout, UnknownModel> {
-        Ok(match self {
-            Document::Push(r) => {
-                let mut printout = table::push_printout(r, r.setup.reference_model()?);
-                printout.tables.push(draft::keypoint_table(r));
-                printout
-            }
-            Document::Feedback(r) => table::feedback_printout(r, r.setup.reference_model()?),
-            Document::MoveToTarget(r) => {
-                table::move_to_target_printout(r, r.setup.reference_model()?)
-            }
-            Document::Draft(r) => draft::printout(r),
-        })
+        match self {
+            Document::Push(r) => PushTask::printout(r),
+            Document::Feedback(r) => ConstantFeedback::printout(r),
+            Document::MoveToTarget(r) => MoveToTargetExperiment::printout(r),
+            Document::Draft(r) => DraftTables::printout(r),
+        }
     }
 
     /// The terminal tables beside the thesis's numbers, as `pushlearn
@@ -530,10 +502,10 @@ impl Document {
     /// [`Document::printout`]).
     pub fn plot(&self, dir: &std::path::Path) -> Result<Vec<std::path::PathBuf>, PlotError> {
         match self {
-            Document::Push(r) => plot::push(r, r.setup.reference_model()?, dir),
-            Document::Feedback(r) => plot::feedback(r, r.setup.reference_model()?, dir),
-            Document::MoveToTarget(r) => plot::move_to_target(r, r.setup.reference_model()?, dir),
-            Document::Draft(_) => Ok(Vec::new()),
+            Document::Push(r) => PushTask::figures(r, dir),
+            Document::Feedback(r) => ConstantFeedback::figures(r, dir),
+            Document::MoveToTarget(r) => MoveToTargetExperiment::figures(r, dir),
+            Document::Draft(r) => DraftTables::figures(r, dir),
         }
     }
 

@@ -11,7 +11,7 @@ use lab::report::plot::PlotError;
 /// Draws `soak.png` and `soak.svg` into `dir`.
 ///
 /// # Errors
-/// As [`push`](lab::report::plot::push).
+/// As [`figures`](lab::experiments::push_task::figures).
 pub fn soak(report: &SoakReport, dir: &Path) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
     // Minutes for a long run, seconds for a short one.

@@ -1,10 +1,10 @@
-//! What the experiments report, rendered from the documents of
-//! [`drive::results`]: pretty JSON ([`write_json`]), the terminal tables in
-//! the thesis's layout beside the thesis's numbers ([`table`],
-//! [`reference`], [`draft`]; each table also as CSV, [`layout`]) and the
-//! figures ([`plot`]).
+//! What every experiment's report is made of, rendered from the documents
+//! of [`drive::results`]: pretty JSON ([`write_json`]), the pieces of the
+//! terminal tables in the thesis's layout ([`table`]; each table also as
+//! CSV, [`layout`]), the thesis's numbers ([`reference`]) and the figures'
+//! toolkit ([`plot`]). The tables and figures themselves live with their
+//! experiments (`crate::experiments`).
 
-pub mod draft;
 pub mod layout;
 pub mod plot;
 pub mod reference;

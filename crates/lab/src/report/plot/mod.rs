@@ -1,9 +1,6 @@
-//! Figures of the report documents, each written as PNG and SVG: learning
-//! curves with error bars beside the thesis's (`docs/spec/reference-results.md` §3.2,
-//! §3.4), per-position errors (§5, §6), top-down snapshots of actual versus
-//! predicted end configurations (predicted bodies translucent, as in the
-//! thesis's figures), constant-feedback errors per message (§7) and Move to
-//! Target errors over steps with the final block poses (§8).
+//! The figures' toolkit, each figure written as PNG and SVG. The
+//! experiments' own figures live with them (`crate::experiments`); here
+//! are what they are drawn with and the figures of no one experiment.
 //!
 //! Every entry point is a pure function from a report to files in a
 //! directory; it returns the paths it wrote. Text is laid out with the
@@ -12,32 +9,26 @@
 //!
 //! * [`draw`]: the font, writing PNG and SVG, colours, axis ranges, and the
 //!   panels of points with error bars that most figures are made of; the
-//!   tools' own figures use it too (the soak's, `crate::soak::figure`, and
+//!   tools' own figures use it too (the soak's, `pushlearn_cli::soak::figure`, and
 //!   the ablation sweep's, `crate::sweep::figure`), beside what they draw;
-//! * `curves`, `positions`, `snapshots`: the push-task figures ([`push`]);
-//! * `feedback`, `move_to_target`: those experiments' figures;
+//! * `snapshots`: top-down snapshots of actual versus predicted end
+//!   configurations (predicted bodies translucent, as in the thesis's
+//!   figures), for the push task's and Move to Target's figures;
+//! * `learners`: several learners' curves side by side (the results page);
 //! * `cost`, `scaling`: the performance figures of `docs/performance.md`.
 
 mod cost;
-mod curves;
 pub mod draw;
-mod feedback;
 mod learners;
-mod move_to_target;
-mod positions;
-mod push;
 mod scaling;
-mod snapshots;
+pub(crate) mod snapshots;
 #[cfg(test)]
-mod test_support;
+pub(crate) mod test_support;
 
 use std::path::PathBuf;
 
 pub use cost::{cost_csv, cost_growth, CostPoint};
-pub use feedback::feedback;
 pub use learners::{by_condition, learners};
-pub use move_to_target::move_to_target;
-pub use push::push;
 pub use scaling::{aitm_scaling, parse_scaling_csv, ScalingRow};
 pub use snapshots::{footprints, Footprint};
 

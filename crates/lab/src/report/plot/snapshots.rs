@@ -73,7 +73,7 @@ pub fn footprints() -> Result<Vec<(u32, Footprint)>, PlotError> {
 }
 
 /// The outline of `shape` at `pose`, in world coordinates.
-pub(super) fn outline(shape: &Footprint, pose: ObjectState) -> Vec<(f64, f64)> {
+pub(crate) fn outline(shape: &Footprint, pose: ObjectState) -> Vec<(f64, f64)> {
     match *shape {
         Footprint::Circle { radius } => (0..32)
             .map(|k| {
@@ -97,34 +97,34 @@ pub(super) fn outline(shape: &Footprint, pose: ObjectState) -> Vec<(f64, f64)> {
 /// How a body is drawn: filled with an opacity, or as an outline only (what
 /// must stay visible over filled bodies: starts, targets).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Look {
+pub(crate) enum Look {
     Filled(f64),
     Outline,
 }
 
 /// A body drawn in a snapshot.
 #[derive(Clone, Debug)]
-pub(super) struct Body {
-    pub(super) outline: Vec<(f64, f64)>,
-    pub(super) colour: RGBColor,
-    pub(super) look: Look,
+pub(crate) struct Body {
+    pub(crate) outline: Vec<(f64, f64)>,
+    pub(crate) colour: RGBColor,
+    pub(crate) look: Look,
 }
 
 /// An entry of a snapshot figure's legend: a swatch drawn as the bodies it
 /// names.
 #[derive(Clone, Debug)]
-pub(super) struct LegendEntry {
-    pub(super) label: String,
-    pub(super) colour: RGBColor,
-    pub(super) look: Look,
+pub(crate) struct LegendEntry {
+    pub(crate) label: String,
+    pub(crate) colour: RGBColor,
+    pub(crate) look: Look,
 }
 
 /// Colour of the start outlines.
 const START: RGBColor = RGBColor(20, 20, 20);
 
-pub(super) struct Snapshot {
-    pub(super) title: String,
-    pub(super) bodies: Vec<Body>,
+pub(crate) struct Snapshot {
+    pub(crate) title: String,
+    pub(crate) bodies: Vec<Body>,
 }
 
 fn bodies(poses: &Poses, shapes: &[(u32, Footprint)], look: Look) -> Vec<Body> {
@@ -189,13 +189,13 @@ fn fit_aspect(x: Range<f64>, y: Range<f64>, pixels: (u32, u32)) -> (Range<f64>, 
     }
 }
 
-pub(super) struct SnapshotGrid {
-    pub(super) title: String,
-    pub(super) columns: usize,
+pub(crate) struct SnapshotGrid {
+    pub(crate) title: String,
+    pub(crate) columns: usize,
     /// Side of one (square) plotting area in pixels.
-    pub(super) side: u32,
-    pub(super) snapshots: Vec<Snapshot>,
-    pub(super) legend: Vec<LegendEntry>,
+    pub(crate) side: u32,
+    pub(crate) snapshots: Vec<Snapshot>,
+    pub(crate) legend: Vec<LegendEntry>,
 }
 
 const SNAP_MARGIN: u32 = 4;
@@ -330,7 +330,7 @@ impl Figure for SnapshotGrid {
     }
 }
 
-pub(super) fn push_snapshots(
+pub(crate) fn push_snapshots(
     report: &PushReport,
     model: ModelKind,
     entry: &CurveEntry,

@@ -3,7 +3,7 @@
 
 use learner::eval::MeanStd;
 
-use super::draw::{ours, thesis, Grid, Panel, Series, EXTRA};
+use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA};
 use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use drive::results::push_task::CurveEntry;

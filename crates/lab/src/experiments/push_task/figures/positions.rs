@@ -4,7 +4,7 @@
 use learner::eval::MeanStd;
 use learner::{BLUE_ID, RED_ID};
 
-use super::draw::{ours, padded, thesis, Grid, Panel};
+use crate::report::plot::draw::{ours, padded, thesis, Grid, Panel};
 use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use drive::results::push_task::{BlockCurve, CurveEntry, PositionSummary};

@@ -4,9 +4,11 @@ use std::path::{Path, PathBuf};
 
 use learner::{ObjectState, BLUE_ID};
 
-use super::draw::{palette, prepare, write, Grid, Panel, Series, TARGET};
-use super::snapshots::{footprints, outline, Body, LegendEntry, Look, Snapshot, SnapshotGrid};
-use super::PlotError;
+use crate::report::plot::draw::{palette, prepare, write, Grid, Panel, Series, TARGET};
+use crate::report::plot::snapshots::{
+    footprints, outline, Body, LegendEntry, Look, Snapshot, SnapshotGrid,
+};
+use crate::report::plot::PlotError;
 use crate::report::plural;
 use drive::results::MttReport;
 use drive::scene::RATE_HZ;
@@ -18,7 +20,7 @@ use learner::registry::ModelKind;
 /// top, so that runs ending on it do not hide it).
 ///
 /// # Errors
-/// As [`push`](super::push).
+/// As [`figures`](crate::experiments::push_task::figures).
 pub fn move_to_target(
     report: &MttReport,
     model: ModelKind,
@@ -159,8 +161,8 @@ pub fn move_to_target(
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::{count, is_png, scratch, thick_polylines};
     use super::*;
+    use crate::report::plot::test_support::{count, is_png, scratch, thick_polylines};
     use drive::results::move_to_target::{ErrorTrace, MttRun, TargetSummary};
     use drive::results::run_info::RunInfo;
     use drive::results::{Setup, TargetEntry};

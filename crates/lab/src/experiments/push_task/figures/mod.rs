@@ -1,15 +1,18 @@
 //! The push-task figures: learning curves, per-position errors and
 //! snapshots of the test runs' ends.
 
+mod curves;
+mod positions;
+
 use std::path::{Path, PathBuf};
 
-use super::curves::curve_grid;
-use super::draw::{prepare, write};
-use super::positions::positions_grid;
-use super::snapshots::{footprints, push_snapshots};
-use super::PlotError;
+use crate::report::plot::draw::{prepare, write};
+use crate::report::plot::snapshots::{footprints, push_snapshots};
+use crate::report::plot::PlotError;
+use curves::curve_grid;
 use drive::results::PushReport;
 use learner::registry::ModelKind;
+use positions::positions_grid;
 
 fn stem(report: &PushReport, model: ModelKind) -> String {
     format!("push-task-{model}-{}", report.variant)
@@ -68,8 +71,8 @@ mod tests {
     use learner::eval::{BlockError, RunErrors};
     use learner::{ModelStats, ObjectState, Poses, BLUE_ID};
 
-    use super::super::test_support::{count, is_png, scratch, thick_polylines};
     use super::*;
+    use crate::report::plot::test_support::{count, is_png, scratch, thick_polylines};
     use drive::results::push_task::{summarise, EndPoses, PushJobResult};
     use drive::results::run_info::{Counters, RunInfo};
     use drive::results::Setup;

@@ -14,8 +14,8 @@ use learner::keypoints::KeyPointScore;
 use learner::{ACTUATOR_ID, BLUE_ID};
 use serde::{Deserialize, Serialize};
 
-use super::layout::{field, Cell, Column, Kind, Printout, Table};
-use super::plural;
+use crate::report::layout::{field, Cell, Column, Kind, Printout, Table};
+use crate::report::plural;
 use drive::results::push_task::{CurveEntry, SelectionCount};
 use drive::results::{PushReport, Setup};
 use learner::registry::{ConfigFlag, ModelKind, ModelOptions};
@@ -395,6 +395,41 @@ pub fn keypoint_table(report: &PushReport) -> Table {
         ]);
     }
     t
+}
+
+/// The thesis draft's tables.
+pub struct DraftTables;
+
+impl super::Experiment for DraftTables {
+    type Report = DraftReport;
+
+    fn setup(report: &DraftReport) -> &Setup {
+        &report.setup
+    }
+
+    fn runs(report: &DraftReport) -> Vec<&drive::results::run_info::RunInfo> {
+        report.reports.iter().map(|r| &r.run).collect()
+    }
+
+    fn without_timing(mut report: DraftReport) -> DraftReport {
+        for row in &mut report.reports {
+            row.run = std::mem::take(&mut row.run).without_timing();
+        }
+        report
+    }
+
+    /// Without the per-fold detail of each row's report.
+    fn without_folds(mut report: DraftReport) -> DraftReport {
+        report.reports = std::mem::take(&mut report.reports)
+            .into_iter()
+            .map(super::push_task::PushTask::without_folds)
+            .collect();
+        report
+    }
+
+    fn printout(report: &DraftReport) -> Result<Printout, drive::results::UnknownModel> {
+        Ok(printout(report))
+    }
 }
 
 #[cfg(test)]

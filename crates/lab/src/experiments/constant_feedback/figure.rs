@@ -4,8 +4,8 @@ use std::path::{Path, PathBuf};
 
 use learner::BLUE_ID;
 
-use super::draw::{palette, prepare, write, Grid, Panel, Series};
-use super::PlotError;
+use crate::report::plot::draw::{palette, prepare, write, Grid, Panel, Series};
+use crate::report::plot::PlotError;
 use drive::results::FeedbackReport;
 use learner::registry::ModelKind;
 
@@ -13,7 +13,7 @@ use learner::registry::ModelKind;
 /// prediction over the run, one line per run.
 ///
 /// # Errors
-/// As [`push`](super::push).
+/// As [`figures`](crate::experiments::push_task::figures).
 pub fn feedback(
     report: &FeedbackReport,
     model: ModelKind,
