@@ -19,7 +19,9 @@ use drive::external::{ExternalModel, LearnerChoice, LearnerError};
 use drive::results::push_task::PushJobResult;
 use drive::results::run_info::RunInfo;
 use drive::results::LearnerRecord;
-use drive::results::{AnyReport, FeedbackReport, MttReport, PushReport, Setup, UnknownModel};
+use drive::results::{
+    AnyReport, FeedbackReport, MttReport, PushReport, ReadError, Setup, UnknownModel,
+};
 use drive::scene::{self, Transfer, LOW_RATE_HZ, RATE_HZ};
 use learner::registry::{ModelKind, ModelOptions, ModelOptionsError, WithModel};
 
@@ -509,23 +511,39 @@ impl Document {
         }
     }
 
+    /// Reads any document `pushlearn experiment --json` writes: one of the
+    /// engine's reports ([`AnyReport::from_json`]), or the draft's tables,
+    /// told apart by their `rows` of the draft's configurations.
+    ///
+    /// # Errors
+    /// Not JSON, not one of the documents, or a model that is neither
+    /// built in nor an external learner.
+    pub fn read(text: &str) -> Result<Self, ReadError> {
+        let value: serde_json::Value = serde_json::from_str(text)?;
+        if value.get("rows").is_some() && value.get("reports").is_some() {
+            return serde_json::from_value(value)
+                .map(Document::Draft)
+                .map_err(|source| ReadError::Shape {
+                    experiment: "draft tables".to_owned(),
+                    source,
+                });
+        }
+        Ok(Document::from(AnyReport::from_json(text)?))
+    }
+
     /// Reads back a document `spec` produced (as [`Document::to_json`]
     /// wrote it).
     ///
     /// # Errors
     /// Not JSON, not a report, or a report of another experiment.
     pub fn from_json(text: &str, spec: &Spec) -> Result<Self, String> {
-        if let Spec::DraftTables { .. } = spec {
-            return serde_json::from_str(text)
-                .map(Document::Draft)
-                .map_err(|e| format!("not the draft's tables: {e}"));
-        }
-        let document = Document::from(AnyReport::from_json(text).map_err(|e| e.to_string())?);
+        let document = Document::read(text).map_err(|e| e.to_string())?;
         let fits = matches!(
             (&document, spec),
             (Document::Push(_), Spec::PushTask { .. })
                 | (Document::Feedback(_), Spec::ConstantFeedback { .. })
                 | (Document::MoveToTarget(_), Spec::MoveToTarget { .. })
+                | (Document::Draft(_), Spec::DraftTables { .. })
         );
         if fits {
             Ok(document)
@@ -663,5 +681,35 @@ impl WithModel for MoveToTarget<'_> {
             self.plan,
             self.progress,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use drive::results::test_support::{mtt_report, push_report};
+
+    /// Every kind of document reads back as itself, the draft's tables
+    /// (which are not one of the engine's reports) included.
+    #[test]
+    fn every_kind_of_document_reads_back() {
+        let push = Document::Push(push_report("random", &[1, 3]));
+        let mtt = Document::MoveToTarget(mtt_report());
+        let draft = Document::Draft(DraftReport {
+            setup: push.setup().clone(),
+            folds: 1,
+            test_positions: vec![0.1, -0.2],
+            rows: Vec::new(),
+            reports: vec![push_report("draft", &[3])],
+        });
+        for document in [push, mtt, draft] {
+            let text = document.to_json().expect("serialises");
+            assert_eq!(Document::read(&text).expect("reads back"), document);
+        }
+        let err = Document::read(r#"{"rows": [], "reports": 3}"#).unwrap_err();
+        assert!(
+            err.to_string().starts_with("not a draft tables document"),
+            "{err}"
+        );
     }
 }

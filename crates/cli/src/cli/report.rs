@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 use pushlearn_cli::output;
-use pushlearn_cli::results::{AnyReport, ReadError};
+use pushlearn_cli::results::ReadError;
 use pushlearn_cli::spec::Document;
 
 /// Print the table or draw the figures of a report saved with `--json`.
@@ -38,15 +38,14 @@ enum ReportCommand {
     },
 }
 
-/// The document in `file`, its model known ([`AnyReport::from_json`]).
+/// The document in `file`, its model known ([`Document::read`]).
 fn load(file: &std::path::Path) -> Result<Document> {
     let text =
         std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
-    let report = AnyReport::from_json(&text).map_err(|e| match e {
+    Document::read(&text).map_err(|e| match e {
         ReadError::UnknownModel(model) => anyhow::anyhow!("{}: {model}", file.display()),
         e => anyhow::Error::new(e).context(format!("reading {}", file.display())),
-    })?;
-    Ok(Document::from(report))
+    })
 }
 
 /// Runs `pushlearn report`.

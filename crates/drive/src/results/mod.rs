@@ -166,6 +166,12 @@ pub enum AnyReport {
 pub enum ReadError {
     #[error("not JSON: {0}")]
     Json(#[from] serde_json::Error),
+    /// JSON of a known experiment that does not fit its document.
+    #[error("not a {experiment} document as this version writes it: {source}")]
+    Shape {
+        experiment: String,
+        source: serde_json::Error,
+    },
     #[error("not a pushlearn report: no \"experiment\" key")]
     NoExperiment,
     #[error("unknown experiment {0:?} (expected push-task or move-to-target)")]
@@ -194,17 +200,24 @@ impl AnyReport {
             .get("experiment")
             .and_then(serde_json::Value::as_str)
             .ok_or(ReadError::NoExperiment)?;
-        Ok(match experiment {
+        let experiment = experiment.to_owned();
+        let shape = |source| ReadError::Shape {
+            experiment: experiment.clone(),
+            source,
+        };
+        Ok(match experiment.as_str() {
             push_task::EXPERIMENT => {
                 if value.get("variant").and_then(serde_json::Value::as_str)
                     == Some(constant_feedback::VARIANT)
                 {
-                    AnyReport::Feedback(serde_json::from_value(value)?)
+                    AnyReport::Feedback(serde_json::from_value(value).map_err(shape)?)
                 } else {
-                    AnyReport::Push(serde_json::from_value(value)?)
+                    AnyReport::Push(serde_json::from_value(value).map_err(shape)?)
                 }
             }
-            move_to_target::EXPERIMENT => AnyReport::MoveToTarget(serde_json::from_value(value)?),
+            move_to_target::EXPERIMENT => {
+                AnyReport::MoveToTarget(serde_json::from_value(value).map_err(shape)?)
+            }
             other => return Err(ReadError::UnknownExperiment(other.to_owned())),
         })
     }
@@ -296,6 +309,10 @@ mod tests {
         ));
         assert!(matches!(
             AnyReport::from_json(r#"{"experiment": "move-to-target"}"#),
+            Err(ReadError::Shape { experiment, .. }) if experiment == "move-to-target"
+        ));
+        assert!(matches!(
+            AnyReport::from_json("{\"experiment\""),
             Err(ReadError::Json(_))
         ));
     }
