@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import subprocess
 import sys
@@ -30,7 +31,7 @@ from pushlearn.baselines import (
     wrap_angle,
 )
 from pushlearn.learner import Pose, _stats_to_proto
-from synthetic import MESSAGES, PUSH, synthetic_run, synthetic_state
+from synthetic import MESSAGES, PUSH, STEP, synthetic_run, synthetic_state
 
 
 def train(learner: BaselineLearner, starts: list[float], seed: int = 7) -> None:
@@ -96,11 +97,35 @@ def test_knn_learns_the_push_and_chains_predictions() -> None:
     assert tuple(p.blocks[15]) == pytest.approx(tuple(truth.blocks[15]), abs=1e-6)
 
 
+def one_step_errors(learner: BaselineLearner, x0: float) -> list[float]:
+    """|predicted − true| block y of each message of a run, from the true state."""
+    run = synthetic_run(x0)
+    learner.reset(run[0])
+    errors = []
+    for state, after in itertools.pairwise(run):
+        learner.update(state, PUSH)
+        errors.append(
+            abs(learner.predict(state, PUSH).blocks[15].y - after.blocks[15].y)
+        )
+    return errors
+
+
 def test_gp_learns_the_push_and_chains_predictions() -> None:
     learner = GpLearner(max_samples=200)
     train(learner, [-0.04, 0.0, 0.04])
+    # Each message's prediction from the true state is off by less than the
+    # push moves the block in one message.
+    assert max(one_step_errors(learner, 0.02)) < STEP
     p, truth = chained_test_run(learner, 0.02)
-    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.03)
+    # Chained, a smooth regressor rides the contact edge (the block exactly
+    # 0.05 ahead of the actuator): whether the chain stays in contact for the
+    # last 70 messages turns on the BLAS kernel's last bits (0.800 with
+    # OpenBLAS's SkylakeX kernels, 0.700 with its Haswell and Zen ones, for
+    # the same fitted kernel). Either way it pushed the block most of the
+    # 0.55 m, straight.
+    assert truth.blocks[15].y > 0.8
+    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.12)
+    assert abs(p.blocks[15].x) < 0.01
     assert abs(p.blocks[15].theta) < 0.05
     assert len(learner.subsamples[15]) == 200
     assert "RBF" in learner.kernels[15] and "WhiteKernel" in learner.kernels[15]
