@@ -7,6 +7,7 @@
 //!   learner skips;
 //! * [`orientation`]: a yaw as the wire's quaternion and back;
 //! * [`limits`]: how far and how fast anything in a world can be;
+//! * [`motion`]: an action and an object's planar state;
 //! * [`observation`]: a published body as a learner sees it, with the rule
 //!   for a body published without a pose.
 //!
@@ -14,6 +15,7 @@
 
 pub mod body;
 pub mod limits;
+pub mod motion;
 pub mod named;
 pub mod observation;
 pub mod orientation;
@@ -24,5 +26,6 @@ pub use body::{
     TARGET_GHOST_SUFFIX,
 };
 pub use limits::{MAX_ACTION_SPEED, MAX_POSITION};
+pub use motion::{Action, ObjectState};
 pub use named::Named;
 pub use observation::{Frame, Observation};
