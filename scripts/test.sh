@@ -8,6 +8,8 @@ cd "$(dirname "$0")/.."
 scripts/ensure-deps.sh --test
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
+# The learner daemon alone (no experiments, figures or viewer) still builds.
+cargo clippy -p pushlearn-cli --no-default-features --all-targets --locked -- -D warnings
 cargo test --workspace --locked
 # The committed results still match the code: a change that moves a number
 # cannot land without `pushlearn reproduce --quick` (docs/results.md).

@@ -1,5 +1,8 @@
 //! The `pushlearn` command line. Subcommands live in `cli/`; this file only
 //! parses arguments, sets up logging and turns errors into an exit status.
+//! Built without default features it is the learner daemon and the world
+//! tools alone: no experiments or figures (feature `lab`), no viewer
+//! (feature `viewer`).
 
 mod cli;
 
@@ -22,16 +25,24 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per process, so the size of the largest variant (the
+// learner daemon's, once the experiments are left out) costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 enum Command {
     Ctl(cli::ctl::CtlArgs),
+    #[cfg(feature = "lab")]
     Experiment(cli::experiment::ExperimentArgs),
     Learn(cli::learn::LearnArgs),
     LearnerCheck(cli::learner_check::LearnerCheckArgs),
+    #[cfg(feature = "viewer")]
     View(cli::view::ViewArgs),
+    #[cfg(feature = "lab")]
     Report(cli::report::ReportArgs),
+    #[cfg(feature = "lab")]
     Reproduce(cli::reproduce::ReproduceArgs),
     ServeLearner(cli::serve_learner::ServeLearnerArgs),
+    #[cfg(feature = "lab")]
     Sweep(cli::sweep::SweepArgs),
 }
 
@@ -46,13 +57,18 @@ fn main() -> ExitCode {
         .init();
     let result = match cli.command {
         Command::Ctl(args) => cli::ctl::run(args),
+        #[cfg(feature = "lab")]
         Command::Experiment(args) => cli::experiment::run(args),
         Command::Learn(args) => cli::learn::run(args),
         Command::LearnerCheck(args) => cli::learner_check::run(args),
+        #[cfg(feature = "viewer")]
         Command::View(args) => cli::view::run(args),
+        #[cfg(feature = "lab")]
         Command::Report(args) => cli::report::run(args),
+        #[cfg(feature = "lab")]
         Command::Reproduce(args) => cli::reproduce::run(args),
         Command::ServeLearner(args) => cli::serve_learner::run(args),
+        #[cfg(feature = "lab")]
         Command::Sweep(args) => cli::sweep::run(args),
     };
     match result {

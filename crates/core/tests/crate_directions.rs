@@ -165,3 +165,46 @@ fn the_allowed_directions_have_no_cycle() {
         }
     }
 }
+
+/// What `pushlearn` built without default features, the learner daemon and
+/// the world tools, must not link: the experiments and their figures, and
+/// the viewer's WebSocket and HTTP stack (`docs/architecture.md`).
+const NOT_IN_THE_DAEMON: &[&str] = &["lab", "plotters", "tokio-tungstenite", "httparse"];
+
+#[test]
+fn the_daemon_build_links_neither_the_experiments_nor_the_viewer() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
+    let tree = |features: &[&str]| {
+        let output = Command::new(&cargo)
+            .args(["tree", "-p", "pushlearn-cli", "--edges", "normal,build"])
+            .args(features)
+            .args(["--prefix", "none", "--format", "{p}", "--offline"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .expect("cargo tree runs");
+        assert!(
+            output.status.success(),
+            "cargo tree failed: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        String::from_utf8(output.stdout)
+            .expect("cargo tree prints UTF-8")
+            .lines()
+            .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
+            .collect::<BTreeSet<_>>()
+    };
+    let daemon = tree(&["--no-default-features"]);
+    let linked: Vec<_> = NOT_IN_THE_DAEMON
+        .iter()
+        .filter(|name| daemon.contains(**name))
+        .collect();
+    assert!(
+        linked.is_empty(),
+        "pushlearn-cli without default features depends on {linked:?}"
+    );
+    // The check sees what it looks for: the default build has them all.
+    let full = tree(&[]);
+    for name in NOT_IN_THE_DAEMON {
+        assert!(full.contains(*name), "the default build lacks {name}");
+    }
+}

@@ -107,6 +107,7 @@ const CRATES: &[(&str, Table)] = &[
         "crates/drive/src",
         &[
             ("process", &[]),
+            ("output", &[]),
             ("frame", &[]),
             ("latency", &[]),
             ("scene", &[]),
@@ -128,15 +129,14 @@ const CRATES: &[(&str, Table)] = &[
     (
         "crates/lab/src",
         &[
-            ("output", &[]),
             // Tables and figures of the documents, and the drawing toolkit.
-            ("report", &["output"]),
+            ("report", &[]),
             // One folder per experiment: its tables and figures, made with
             // the report's pieces.
             ("experiments", &["report"]),
             ("spec", &["experiments", "report"]),
-            ("sweep", &["output", "report"]),
-            ("reproduce", &["output", "report", "spec", "sweep"]),
+            ("sweep", &["report"]),
+            ("reproduce", &["report", "spec", "sweep"]),
         ],
     ),
     // The application, on the engine and the experiments (whose modules it

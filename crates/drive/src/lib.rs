@@ -12,7 +12,10 @@
 //! * [`frame`]: world states as the learner sees them;
 //! * [`latency`]: per-message work times in bounded memory and the budget
 //!   they are held to;
-//! * [`process`]: child processes and their groups.
+//! * [`process`]: child processes and their groups;
+//! * [`output`]: output paths checked before the work that fills them, and
+//!   files written whole (temporary name, rename), for the experiments'
+//!   documents and figures and the learner daemon's files alike.
 //!
 //! No clap, no figures, no sockets of its own beyond the worlds' and the
 //! learners': the application (`crates/cli`) parses arguments into what this
@@ -22,6 +25,7 @@ pub mod experiment;
 pub mod external;
 pub mod frame;
 pub mod latency;
+pub mod output;
 pub mod process;
 pub mod results;
 pub mod scene;

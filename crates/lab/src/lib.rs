@@ -13,12 +13,12 @@
 //! * [`sweep`]: a grid of push-task configurations as data, planned into
 //!   fold jobs with stable ids, their outputs, and the Slurm array script;
 //! * [`reproduce`]: every experiment behind `docs/results.md`, and the page
-//!   itself, regenerated and checked;
-//! * [`output`]: output paths checked before the work that fills them, and
-//!   files written whole (temporary name, rename).
+//!   itself, regenerated and checked.
+//!
+//! Its files are written whole through the engine's
+//! [`drive::output`], which the learner daemon shares.
 
 pub mod experiments;
-pub mod output;
 pub mod report;
 pub mod reproduce;
 pub mod spec;

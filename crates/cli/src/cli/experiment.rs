@@ -22,6 +22,8 @@ use pushlearn_cli::scene::RATE_HZ;
 use pushlearn_cli::scene::{Object, Transfer};
 use pushlearn_cli::spec::Spec;
 
+use super::parse::parse_pose;
+
 /// Run one of the thesis's experiments and print its table beside the
 /// thesis's numbers.
 ///
@@ -257,34 +259,6 @@ struct MoveToTargetArgs {
 
     #[command(flatten)]
     world: WorldArgs,
-}
-
-/// `X,Y,ORI` as three finite numbers.
-pub fn parse_pose(text: &str) -> Result<ObjectState, String> {
-    let v = parse_numbers(text, 3)?;
-    Ok(ObjectState::new(v[0], v[1], v[2]))
-}
-
-/// `n` comma-separated finite numbers.
-pub fn parse_numbers(text: &str, n: usize) -> Result<Vec<f64>, String> {
-    let v: Vec<f64> = text
-        .split(',')
-        .map(|s| {
-            s.trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite())
-                .ok_or_else(|| format!("'{s}' is not a finite number"))
-        })
-        .collect::<Result<_, _>>()?;
-    if v.len() == n {
-        Ok(v)
-    } else {
-        Err(format!(
-            "expected {n} comma-separated numbers, got {}",
-            v.len()
-        ))
-    }
 }
 
 impl WorldArgs {
@@ -576,18 +550,6 @@ fn move_to_target_spec(args: &MoveToTargetArgs) -> Spec {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn poses_and_actions_parse_strictly() {
-        assert_eq!(
-            parse_pose("-0.6, 0.7,0.75"),
-            Ok(ObjectState::new(-0.6, 0.7, 0.75))
-        );
-        assert!(parse_pose("1,2").unwrap_err().contains("expected 3"));
-        assert!(parse_pose("1,nan,2").unwrap_err().contains("finite"));
-        assert!(parse_pose("1,x,2").is_err());
-        assert_eq!(parse_numbers("0,0.5", 2), Ok(vec![0.0, 0.5]));
-    }
 
     /// The command the reproduction prints beside each of its documents
     /// (`Entry::command`, on the page and in `docs/results/timing.md`),

@@ -19,7 +19,7 @@ use pushlearn_cli::learn::{
 };
 use pushlearn_cli::models::{named, ModelArgs, ModelKind, WithModel};
 
-use super::experiment::{parse_numbers, parse_pose};
+use super::parse::{parse_action, parse_pose};
 
 /// Attach a learner to a running world (pushlearn-sim): learn from every
 /// state it publishes and drive the actuator.
@@ -171,11 +171,6 @@ impl LearnArgs {
 
 fn parse_seconds_or_zero(text: &str) -> Result<Duration, String> {
     duration::parse_seconds(text).map_err(|_| format!("'{text}' is not a number of seconds"))
-}
-
-fn parse_action(text: &str) -> Result<Action, String> {
-    let v = parse_numbers(text, 2)?;
-    Ok(Action::new(v[0], v[1]))
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {

@@ -1,13 +1,19 @@
 //! Subcommands of the `pushlearn` binary.
 
 pub mod ctl;
+#[cfg(feature = "lab")]
 pub mod experiment;
 pub mod learn;
 pub mod learner_check;
+pub mod parse;
+#[cfg(feature = "lab")]
 pub mod report;
+#[cfg(feature = "lab")]
 pub mod reproduce;
 pub mod serve_learner;
+#[cfg(feature = "lab")]
 pub mod sweep;
+#[cfg(feature = "viewer")]
 pub mod view;
 
 /// Whether `err` comes from writing to a closed stdout pipe.

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use learner::eval::MeanStd;
 
 use super::reference::Ms;
-use crate::output::write_atomically;
+use drive::output::write_atomically;
 
 /// How a column's cells are printed and split into CSV fields.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -451,12 +451,12 @@ pub fn write_files(dir: &Path, files: &[(String, String)]) -> Result<(), Reprodu
     Ok(())
 }
 
-/// [`crate::output::write_atomically`], with the reproduction's error.
+/// [`drive::output::write_atomically`], with the reproduction's error.
 ///
 /// # Errors
 /// The file cannot be written or renamed.
 pub fn write_atomically(path: &Path, text: &str) -> Result<(), ReproduceError> {
-    crate::output::write_atomically(path, text.as_bytes()).map_err(|source| ReproduceError::Write {
+    drive::output::write_atomically(path, text.as_bytes()).map_err(|source| ReproduceError::Write {
         path: path.display().to_string(),
         source,
     })

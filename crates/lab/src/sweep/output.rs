@@ -9,7 +9,7 @@
 //! ```
 //!
 //! A job file is written whole under a temporary name and renamed
-//! ([`crate::output::write_atomically`]): a preempted or killed task leaves
+//! ([`drive::output::write_atomically`]): a preempted or killed task leaves
 //! no half file, only a `*.partial` one that nothing reads. A job is done
 //! when its file exists, which is what resuming skips.
 
@@ -119,7 +119,7 @@ impl JobOutput {
                 path: path.clone(),
                 source: std::io::Error::other(e),
             })?;
-            crate::output::write_atomically(&path, text.as_bytes())
+            drive::output::write_atomically(&path, text.as_bytes())
                 .map_err(|source| JobFileError::Write { path, source })
         };
         // The timing first: a job counts as done once its output exists.

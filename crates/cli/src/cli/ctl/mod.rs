@@ -8,6 +8,7 @@
 mod output;
 mod record;
 mod script;
+#[cfg(feature = "lab")]
 mod soak;
 
 use std::path::PathBuf;
@@ -21,6 +22,7 @@ use pushlearn::wire::pb::{self, client_message::Payload};
 use pushlearn::wire::{clamp_speed, BodyName};
 
 use output::Output;
+#[cfg(feature = "lab")]
 use soak::Soak;
 
 /// Send commands to a running world daemon (pushlearn-sim) and watch its states.
@@ -132,6 +134,7 @@ enum CtlCommand {
     /// records). Start the world with enough clients for all:
     /// `pushlearn-sim serve --mode realtime --real-time-rate 1000
     /// --max-clients 80`. docs/reliability.md, "Soak".
+    #[cfg(feature = "lab")]
     Soak(Soak),
 }
 
@@ -345,6 +348,7 @@ async fn execute(args: CtlArgs) -> Result<()> {
             }
             return Ok(());
         }
+        #[cfg(feature = "lab")]
         CtlCommand::Soak(soak) => return soak.run(&args.sim, args.json).await,
     };
     // Clock-based seqs keep `applied_seq` left over from earlier ctl runs

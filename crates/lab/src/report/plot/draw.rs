@@ -86,7 +86,7 @@ pub fn write(
             .and_then(|()| root.present().or_text())
             .map_err(failed(&svg))?;
     }
-    crate::output::write_atomically(&svg, text.as_bytes())
+    drive::output::write_atomically(&svg, text.as_bytes())
         .map_err(|err| failed(&svg)(err.to_string()))?;
     written.push(png);
     written.push(svg);
