@@ -14,6 +14,7 @@
 //!   the fuzzers and the tests that replay their inputs.
 
 pub mod calibration;
+pub mod lockstep;
 pub mod push_run;
 pub mod replay;
 pub mod scene;

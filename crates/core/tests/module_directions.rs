@@ -50,9 +50,15 @@ const CRATES: &[(&str, Table)] = &[
             ("world", &["scene"]),
             ("calibration", &["scene", "world"]),
             ("push_run", &["calibration", "scene", "world"]),
-            ("server", &["scene", "world"]),
+            // Lock-step timing and latency emulation, for the daemon and
+            // the embedded world alike.
+            ("lockstep", &["world"]),
+            ("server", &["lockstep", "scene", "world"]),
             ("replay", &["server"]),
-            ("untrusted", &["replay", "scene", "server", "world"]),
+            (
+                "untrusted",
+                &["lockstep", "replay", "scene", "server", "world"],
+            ),
             ("bin", &[]),
         ],
     ),

@@ -27,41 +27,7 @@ use super::{convert, Config, Timing, MAX_QUEUED_COMMANDS};
 use crate::scene::Scene;
 use crate::world::{Command, CommandError, MAX_GHOSTS};
 
-/// Identifies a connection for answers the physics thread sends it.
-pub(crate) type ClientId = u64;
-
-/// A command that passed every check, on its way to the physics thread.
-#[derive(Debug)]
-pub(crate) struct Accepted {
-    pub client: ClientId,
-    pub seq: u64,
-    pub op: Op,
-}
-
-/// What an accepted `ClientMessage` asks of the world.
-#[derive(Debug)]
-pub(crate) enum Op {
-    /// Commands of the world, applied together at one step boundary (a
-    /// `set_pose` may name several bodies).
-    World(Vec<Command>),
-    /// Lock-step: run to the next publish.
-    Advance,
-    /// Lock-step with latency emulation: reseed the delay generator.
-    LatencySeed(u64),
-}
-
-impl Op {
-    /// A Move: what latency emulation delays.
-    pub fn is_move(&self) -> bool {
-        matches!(
-            self,
-            Op::World(commands) if matches!(
-                commands.as_slice(),
-                [Command::Actuator { mode: crate::ActuatorMode::Move, .. }]
-            )
-        )
-    }
-}
+pub(crate) use crate::lockstep::{Accepted, ClientId, Op};
 
 /// What the physics thread receives.
 #[derive(Debug)]
@@ -114,11 +80,18 @@ impl Refusal {
     }
 }
 
-/// The world's state as of every accepted command, where checks need it.
-#[derive(Debug)]
-struct Mirror {
+/// The world's state as of every accepted command, where the checks on
+/// arrival need it: what decides whether a well-formed command is accepted.
+#[derive(Debug, Default)]
+pub(crate) struct Admission {
     paused: bool,
     ghosts: HashSet<Ghost>,
+}
+
+/// The admission state and the channel behind it, under one lock.
+#[derive(Debug)]
+struct Mirror {
+    admission: Admission,
     physics: Sender<ToPhysics>,
 }
 
@@ -146,8 +119,7 @@ impl Gate {
             ),
             queued: AtomicUsize::new(0),
             mirror: Mutex::new(Mirror {
-                paused: false,
-                ghosts: HashSet::new(),
+                admission: Admission::default(),
                 physics,
             }),
         }
@@ -177,14 +149,13 @@ impl Gate {
     /// Checks `message` from `client` and, if it passes, hands it to the
     /// physics thread behind everything accepted before it.
     pub fn admit(&self, client: ClientId, message: &pb::ClientMessage) -> Result<(), Refusal> {
-        validate(message)?;
-        let op = convert::operation(message, &self.scene)?;
+        let op = operation(message, &self.scene)?;
         let mut mirror = self.lock();
-        self.check_state(&mirror, &op)?;
+        mirror.admission.check(&op, self.timing)?;
         if self.queued.load(Ordering::Acquire) >= MAX_QUEUED_COMMANDS {
             return Err(Refusal::Busy);
         }
-        note(&mut mirror, &op);
+        mirror.admission.note(&op);
         // Counted before sending so the physics thread never takes more
         // than was counted.
         self.queued.fetch_add(1, Ordering::AcqRel);
@@ -198,37 +169,6 @@ impl Gate {
             return Err(Refusal::Stopping);
         }
         Ok(())
-    }
-
-    fn check_state(&self, mirror: &Mirror, op: &Op) -> Result<(), Refusal> {
-        match op {
-            Op::Advance => match self.timing {
-                Timing::Realtime { .. } => Err(InvalidCommand::AdvanceInRealtime.into()),
-                Timing::Lockstep { .. } if mirror.paused => {
-                    Err(InvalidCommand::AdvanceWhilePaused.into())
-                }
-                Timing::Lockstep { .. } => Ok(()),
-            },
-            Op::LatencySeed(_) if self.timing.latency().is_none() => {
-                Err(InvalidCommand::LatencySeedWithoutLatency.into())
-            }
-            Op::LatencySeed(_) => Ok(()),
-            Op::World(commands) => {
-                let mut new_ghosts = HashSet::new();
-                for ghost in commands.iter().filter_map(ghost) {
-                    if !mirror.ghosts.contains(ghost)
-                        && new_ghosts.insert(ghost)
-                        && mirror.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
-                    {
-                        return Err(Refusal::World {
-                            command: format!("set_pose: body '{ghost}'"),
-                            error: CommandError::TooManyGhosts,
-                        });
-                    }
-                }
-                Ok(())
-            }
-        }
     }
 
     /// The physics thread took `n` accepted commands off the channel.
@@ -249,23 +189,66 @@ impl Gate {
     }
 }
 
-/// Updates the mirror for an accepted `op`, as the world will change.
-fn note(mirror: &mut Mirror, op: &Op) {
-    let Op::World(commands) = op else { return };
-    for command in commands {
-        match command {
-            Command::Pause => mirror.paused = true,
-            Command::Unpause => mirror.paused = false,
-            Command::Reset => mirror.ghosts.clear(),
-            Command::SetPose {
-                name: BodyName::Ghost(ghost),
-                ..
-            } => {
-                mirror.ghosts.insert(ghost.clone());
+impl Admission {
+    /// Checks `op` against the world as it will be once everything
+    /// accepted before it is applied, in `timing`.
+    pub fn check(&self, op: &Op, timing: Timing) -> Result<(), Refusal> {
+        match op {
+            Op::Advance => match timing {
+                Timing::Realtime { .. } => Err(InvalidCommand::AdvanceInRealtime.into()),
+                Timing::Lockstep { .. } if self.paused => {
+                    Err(InvalidCommand::AdvanceWhilePaused.into())
+                }
+                Timing::Lockstep { .. } => Ok(()),
+            },
+            Op::LatencySeed(_) if timing.latency().is_none() => {
+                Err(InvalidCommand::LatencySeedWithoutLatency.into())
             }
-            Command::Actuator { .. } | Command::SetPose { .. } | Command::SetPublishRate(_) => {}
+            Op::LatencySeed(_) => Ok(()),
+            Op::World(commands) => {
+                let mut new_ghosts = HashSet::new();
+                for ghost in commands.iter().filter_map(ghost) {
+                    if !self.ghosts.contains(ghost)
+                        && new_ghosts.insert(ghost)
+                        && self.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
+                    {
+                        return Err(Refusal::World {
+                            command: format!("set_pose: body '{ghost}'"),
+                            error: CommandError::TooManyGhosts,
+                        });
+                    }
+                }
+                Ok(())
+            }
         }
     }
+
+    /// Updates the state for an accepted `op`, as the world will change.
+    pub fn note(&mut self, op: &Op) {
+        let Op::World(commands) = op else { return };
+        for command in commands {
+            match command {
+                Command::Pause => self.paused = true,
+                Command::Unpause => self.paused = false,
+                Command::Reset => self.ghosts.clear(),
+                Command::SetPose {
+                    name: BodyName::Ghost(ghost),
+                    ..
+                } => {
+                    self.ghosts.insert(ghost.clone());
+                }
+                Command::Actuator { .. } | Command::SetPose { .. } | Command::SetPublishRate(_) => {
+                }
+            }
+        }
+    }
+}
+
+/// `message`'s checks that need no state beyond the scene: the wire's,
+/// then the scene's; the operation it asks for.
+pub(crate) fn operation(message: &pb::ClientMessage, scene: &Scene) -> Result<Op, Refusal> {
+    validate(message)?;
+    convert::operation(message, scene)
 }
 
 fn ghost(command: &Command) -> Option<&Ghost> {

@@ -14,7 +14,9 @@
 //!   commands at step boundaries, paces or lock-steps the stepping and
 //!   publishes states;
 //! * `outbox`: a client's bounded outgoing queue (the slow-client policy);
-//! * `convert`: protobuf messages to world commands and back.
+//! * `convert`: protobuf messages to world commands and back;
+//! * `embedded`: the same checks and lock-step world for one client in its
+//!   own process, without sockets or threads ([`EmbeddedWorld`]).
 //!
 //! The physics thread and the tokio tasks only share plain data behind
 //! `std::sync::Mutex`es (never held across an `.await`) and a channel of
@@ -23,6 +25,7 @@
 
 pub(crate) mod connection;
 mod convert;
+mod embedded;
 pub(crate) mod gate;
 mod outbox;
 mod physics;
@@ -97,15 +100,8 @@ impl Timing {
     }
 }
 
-/// Lock-step latency emulation: each Move received before an Advance takes
-/// effect after `L` steps of the interval, `L` uniform in `0..=max_steps`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Latency {
-    /// The largest delay in steps (the thesis observed up to about 5).
-    pub max_steps: u32,
-    /// Seed of the delay generator at start-up (`latency_seed` reseeds it).
-    pub seed: u64,
-}
+pub use crate::lockstep::Latency;
+pub use embedded::EmbeddedWorld;
 
 /// Everything the daemon needs to start.
 #[derive(Debug, Clone)]

@@ -13,13 +13,12 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use pushlearn::wire::pb;
-use rand::rngs::ChaCha8Rng;
-use rand::{RngExt, SeedableRng};
 use tokio::sync::oneshot;
 use tokio_util::sync::CancellationToken;
 
-use super::gate::{Accepted, Op, ToPhysics};
-use super::{Config, Latency, ServerError, Shared, Timing, Wake};
+use super::gate::ToPhysics;
+use super::{Config, ServerError, Shared, Timing, Wake};
+use crate::lockstep::{Accepted, Event, Op, Stepper};
 use crate::world::{Command, StepError, World};
 
 /// In realtime mode, how far the world may fall behind its schedule (after
@@ -81,49 +80,10 @@ impl Drop for CancelOnDrop {
     }
 }
 
-/// Lock-step latency emulation: Moves wait for their drawn step offset.
-struct Delays {
-    max_steps: u32,
-    rng: ChaCha8Rng,
-    /// Commands received since the last Advance, with their step offsets
-    /// within the next interval (never decreasing, see [`Delays::schedule`]).
-    pending: Vec<(u32, Accepted)>,
-}
-
-impl Delays {
-    fn new(latency: Latency) -> Delays {
-        Delays {
-            max_steps: latency.max_steps,
-            rng: ChaCha8Rng::seed_from_u64(latency.seed),
-            pending: Vec::new(),
-        }
-    }
-
-    /// Gives `accepted` its offset: a Move draws one, other commands 0, but
-    /// none is applied before a command that arrived earlier. Arrival order
-    /// stays application order, as without latency: the learner's Move(0, 0)
-    /// before a Reset must not turn into a Reset followed by a stale Move.
-    fn schedule(&mut self, accepted: Accepted) {
-        if let Op::LatencySeed(seed) = accepted.op {
-            self.rng = ChaCha8Rng::seed_from_u64(seed);
-        }
-        let own = if accepted.op.is_move() {
-            self.rng.random_range(0..=self.max_steps)
-        } else {
-            0
-        };
-        let earliest = self.pending.last().map_or(0, |(offset, _)| *offset);
-        self.pending.push((own.max(earliest), accepted));
-    }
-}
-
 struct Physics {
-    world: World,
+    stepper: Stepper,
     inbox: Receiver<ToPhysics>,
     shared: Arc<Shared>,
-    publish_seq: u64,
-    applied_seq: u64,
-    delays: Option<Delays>,
     /// When published states' writers are woken: at once in realtime; in
     /// lock-step by [`Physics::run_lockstep`] (see [`MAX_UNWOKEN_STATES`]).
     wake: Wake,
@@ -151,12 +111,9 @@ impl Physics {
                 .map_err(ServerError::PublishRate)?;
         }
         Ok(Physics {
-            world,
+            stepper: Stepper::new(world, config.timing.latency()),
             inbox,
             shared,
-            publish_seq: 0,
-            applied_seq: 0,
-            delays: config.timing.latency().map(Delays::new),
             wake: match config.timing {
                 Timing::Realtime { .. } => Wake::Now,
                 Timing::Lockstep { .. } => Wake::Later,
@@ -190,7 +147,7 @@ impl Physics {
                     Err(TryRecvError::Disconnected) => return Ok(()),
                 }
             }
-            if self.world.is_paused() {
+            if self.stepper.is_paused() {
                 // Nothing to pace while paused: sleep until a command comes.
                 let Ok(message) = self.inbox.recv() else {
                     return Ok(());
@@ -276,52 +233,16 @@ impl Physics {
                 ToPhysics::Stop => return Ok(()),
             };
             self.shared.gate.taken(1);
-            if matches!(accepted.op, Op::Advance) {
-                self.run_interval(accepted.seq)?;
-            } else if let Some(delays) = &mut self.delays {
-                delays.schedule(accepted);
-            } else {
-                self.apply(accepted);
-            }
-        }
-    }
-
-    /// Runs to the next publish, applying delayed commands at their offsets
-    /// (all of them before the interval's last step).
-    fn run_interval(&mut self, advance: u64) -> Result<(), StepError> {
-        let pending = self
-            .delays
-            .as_mut()
-            .map(|delays| std::mem::take(&mut delays.pending))
-            .unwrap_or_default();
-        let mut pending = pending.into_iter().peekable();
-        let mut offset = 0;
-        let mut advance_applied = false;
-        loop {
-            while let Some((due, _)) = pending.peek() {
-                let now = *due <= offset || self.world.is_paused() || self.next_step_publishes();
-                if !now {
-                    break;
-                }
-                if let Some((_, accepted)) = pending.next() {
-                    self.apply(accepted);
-                }
-            }
-            if !advance_applied && pending.peek().is_none() {
-                // The Advance is in force once everything before it is.
-                self.applied_seq = advance;
-                advance_applied = true;
-            }
-            if self.world.is_paused() {
-                // The gate accepts an Advance only for a world that will be
-                // unpaused by then; never step a paused world in a loop.
-                tracing::error!("an Advance reached a paused world; interval skipped");
-                return Ok(());
-            }
-            if self.step()? {
-                return Ok(());
-            }
-            offset += 1;
+            let Physics {
+                stepper,
+                shared,
+                wake,
+                unwoken,
+                ..
+            } = self;
+            stepper.take(accepted, &mut |event| {
+                serve(shared, *wake, unwoken, event);
+            })?;
         }
     }
 
@@ -334,143 +255,61 @@ impl Physics {
 
     #[cfg(feature = "testing")]
     fn blow_up(&mut self, body: &str) {
-        if let Err(err) = self.world.provoke_blow_up(body) {
+        if let Err(err) = self.stepper.world_mut().provoke_blow_up(body) {
             tracing::error!("cannot provoke a blow-up: {err}");
         }
     }
 
-    fn next_step_publishes(&self) -> bool {
-        (self.world.step_count() + 1).is_multiple_of(u64::from(self.world.publish_interval_steps()))
-    }
-
-    /// Applies an accepted command (an Advance only counts as applied).
+    /// Realtime: applies an accepted command at once.
     fn apply(&mut self, accepted: Accepted) {
-        let Accepted { client, seq, op } = accepted;
-        if let Op::World(commands) = op {
-            for command in commands {
-                let rate = matches!(command, Command::SetPublishRate(_));
-                if let Err(err) = self.world.apply(command) {
-                    // The gate ran the same checks on arrival, so this is a
-                    // bug; the client still learns that nothing happened.
-                    tracing::error!(client, seq, "an accepted command was refused: {err}");
-                    self.shared.reply_to(
-                        client,
-                        pb::ServerMessage::error(
-                            seq,
-                            pb::error::Kind::RefusedByWorld,
-                            err.to_string(),
-                        ),
-                    );
-                    return;
-                }
-                if rate {
-                    self.shared
-                        .gate
-                        .set_publish_rate(1000 / self.world.publish_interval_steps());
-                }
-            }
-        }
-        self.applied_seq = seq;
+        let Physics {
+            stepper,
+            shared,
+            wake,
+            unwoken,
+            ..
+        } = self;
+        stepper.apply(accepted, &mut |event| serve(shared, *wake, unwoken, event));
     }
 
-    /// One step, publishing if one is due. Returns whether it published.
+    /// Realtime: one step, publishing if one is due.
     fn step(&mut self) -> Result<bool, StepError> {
-        match self.world.step() {
-            Ok(Some(snapshot)) => {
-                self.publish_seq += 1;
-                let state = super::state_message(&snapshot, self.publish_seq, self.applied_seq);
-                self.shared.broadcast_state(&Arc::new(state), self.wake);
-                if self.wake == Wake::Later {
-                    self.unwoken += 1;
-                }
-                Ok(true)
-            }
-            Ok(None) => Ok(false),
-            Err(err @ StepError::Diverged { .. }) => {
-                // The world has reset itself and logged it; tell everyone
-                // and carry on.
-                self.shared.broadcast_reply(&pb::ServerMessage::error(
-                    0,
-                    pb::error::Kind::PhysicsBlewUp,
-                    err.to_string(),
-                ));
-                Ok(false)
-            }
-            Err(err) => Err(err),
-        }
+        let Physics {
+            stepper,
+            shared,
+            wake,
+            unwoken,
+            ..
+        } = self;
+        stepper.step(&mut |event| serve(shared, *wake, unwoken, event))
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::ActuatorMode;
-
-    fn accepted(seq: u64, command: Command) -> Accepted {
-        Accepted {
-            client: 1,
-            seq,
-            op: Op::World(vec![command]),
-        }
-    }
-
-    #[test]
-    fn moves_draw_delays_and_nothing_overtakes_an_earlier_command() {
-        let mut delays = Delays::new(Latency {
-            max_steps: 5,
-            seed: 3,
-        });
-        for seq in 1..=60 {
-            let command = if seq % 3 == 0 {
-                Command::Reset
-            } else {
-                Command::Actuator {
-                    mode: ActuatorMode::Move,
-                    velocity: [0.0; 3],
-                }
-            };
-            delays.schedule(accepted(seq, command));
-        }
-        let offsets: Vec<u32> = delays.pending.iter().map(|(offset, _)| *offset).collect();
-        assert!(offsets.windows(2).all(|w| w[0] <= w[1]), "{offsets:?}");
-        assert!(offsets.iter().all(|&o| o <= 5), "{offsets:?}");
-        assert!(offsets.iter().any(|&o| o > 0), "{offsets:?}");
-        for (i, (offset, scheduled)) in delays.pending.iter().enumerate().skip(1) {
-            if !scheduled.op.is_move() {
-                assert_eq!(
-                    *offset,
-                    offsets[i - 1],
-                    "a Reset waits for the Move before it"
-                );
+/// Tells the clients what stepping the world produced.
+fn serve(shared: &Shared, wake: Wake, unwoken: &mut u32, event: Event) {
+    match event {
+        Event::Published {
+            snapshot,
+            publish_seq,
+            applied_seq,
+        } => {
+            let state = super::state_message(&snapshot, publish_seq, applied_seq);
+            shared.broadcast_state(&Arc::new(state), wake);
+            if wake == Wake::Later {
+                *unwoken += 1;
             }
         }
-    }
-
-    #[test]
-    fn reseeding_repeats_the_delays() {
-        let draw = |delays: &mut Delays| -> Vec<u32> {
-            delays.pending.clear();
-            for seq in 1..=20 {
-                delays.schedule(accepted(
-                    seq,
-                    Command::Actuator {
-                        mode: ActuatorMode::Move,
-                        velocity: [0.0; 3],
-                    },
-                ));
-            }
-            delays.pending.iter().map(|(offset, _)| *offset).collect()
-        };
-        let mut delays = Delays::new(Latency {
-            max_steps: 1000,
-            seed: 9,
-        });
-        let first = draw(&mut delays);
-        delays.schedule(Accepted {
-            client: 1,
-            seq: 21,
-            op: Op::LatencySeed(9),
-        });
-        assert_eq!(draw(&mut delays), first);
+        Event::Refused { client, seq, error } => shared.reply_to(
+            client,
+            pb::ServerMessage::error(seq, pb::error::Kind::RefusedByWorld, error.to_string()),
+        ),
+        Event::PublishRate(hz) => shared.gate.set_publish_rate(hz),
+        // The world has reset itself and logged it; tell everyone and
+        // carry on.
+        Event::Diverged(err) => shared.broadcast_reply(&pb::ServerMessage::error(
+            0,
+            pb::error::Kind::PhysicsBlewUp,
+            err.to_string(),
+        )),
     }
 }

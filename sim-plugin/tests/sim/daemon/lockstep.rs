@@ -1,7 +1,7 @@
 //! Lock-step determinism and latency emulation.
 
 use pushlearn::wire::pb::{self, client_message::Payload};
-use sim_plugin::server::Config;
+use sim_plugin::server::{Config, EmbeddedWorld};
 
 use super::support::*;
 
@@ -231,4 +231,147 @@ async fn queued_advances_give_the_states_of_advances_one_at_a_time() {
         "one interval per Advance"
     );
     assert_eq!(queued, one_at_a_time);
+}
+
+/// An [`EmbeddedWorld`] sent what a `SimClient` sends: numbered messages,
+/// each command followed by its barrier.
+struct OneClient {
+    world: EmbeddedWorld,
+    seq: u64,
+}
+
+impl OneClient {
+    fn new(config: &Config) -> OneClient {
+        let world = EmbeddedWorld::new(
+            config.scene.clone(),
+            config.publish_rate_hz,
+            config.timing.latency(),
+        )
+        .expect("a world");
+        OneClient { world, seq: 0 }
+    }
+
+    /// Sends `payload` (`None`: a barrier); what the world answered.
+    fn send(&mut self, payload: Option<Payload>) -> Vec<pb::ServerMessage> {
+        self.seq += 1;
+        let message = match payload {
+            Some(payload) => pb::ClientMessage::new(self.seq, payload),
+            None => pb::ClientMessage::barrier(self.seq),
+        };
+        self.world.send(&message).expect("the world steps");
+        std::iter::from_fn(|| self.world.next_message()).collect()
+    }
+
+    /// As `SimClient::command`: the command, then a barrier.
+    fn command(&mut self, payload: Payload) {
+        assert_eq!(self.send(Some(payload)), Vec::new(), "accepted");
+        let barrier = self.send(None);
+        let answered = matches!(
+            barrier.as_slice(),
+            [pb::ServerMessage { payload: Some(pb::server_message::Payload::Error(e)) }] if e.seq == self.seq
+        );
+        assert!(answered, "the barrier's answer: {barrier:?}");
+    }
+
+    fn advance(&mut self) -> pb::WorldState {
+        match self.send(Some(Payload::advance())).as_slice() {
+            [pb::ServerMessage {
+                payload: Some(pb::server_message::Payload::WorldState(state)),
+            }] => state.clone(),
+            other => panic!("an Advance gave {other:?}"),
+        }
+    }
+}
+
+/// The states `script` produces on an [`EmbeddedWorld`] with `config`'s
+/// scene and timing, sent exactly the messages `states` sends over the
+/// socket.
+fn embedded_states(config: &Config, first: Vec<Payload>) -> Vec<pb::WorldState> {
+    let mut client = OneClient::new(config);
+    for payload in first {
+        client.command(payload);
+    }
+    let mut states = Vec::new();
+    for step in script() {
+        match step {
+            Step::Command(payload) => client.command(payload),
+            Step::Advance(n) => states.extend((0..n).map(|_| client.advance())),
+        }
+    }
+    states
+}
+
+#[tokio::test]
+async fn the_embedded_world_gives_the_daemons_states() {
+    for (config, first) in [
+        (lockstep(), Vec::new()),
+        (with_latency(5, 11), Vec::new()),
+        (with_latency(2, 3), vec![Payload::latency_seed(42)]),
+    ] {
+        let embedded = embedded_states(&config, first.clone());
+        let served = states(config, first).await;
+        assert_eq!(served.len(), 62);
+        assert_eq!(embedded, served);
+    }
+}
+
+#[tokio::test]
+async fn the_embedded_world_greets_and_refuses_as_the_daemon_does() {
+    let config = with_latency(2, 1);
+    let server = start(config.clone()).await;
+    let mut client = connect(&server).await;
+    let mut world = EmbeddedWorld::new(
+        config.scene.clone(),
+        config.publish_rate_hz,
+        config.timing.latency(),
+    )
+    .expect("a world");
+    assert_eq!(&world.hello(), client.hello());
+    for (payload, refused) in [
+        (
+            Payload::set_pose("no-such-body", [0.0, 0.0, 0.05], 0.0),
+            true,
+        ),
+        (Payload::set_pose("blockA", [1.0e4, 0.0, 0.05], 0.0), true),
+        (Payload::latency_seed(0), false),
+    ] {
+        let served = client.command(payload.clone()).await;
+        let seq = client.last_seq().expect("sent") - 1;
+        world
+            .send(&pb::ClientMessage::new(seq, payload))
+            .expect("the world steps");
+        let embedded = world.next_message();
+        match (served, embedded) {
+            (
+                Err(pushlearn::client::ClientError::Refused { message, kind, .. }),
+                Some(pb::ServerMessage {
+                    payload: Some(pb::server_message::Payload::Error(error)),
+                }),
+            ) if refused => {
+                assert_eq!(error.seq, seq);
+                assert_eq!((error.kind(), error.message), (kind, message));
+            }
+            (Ok(_), None) if !refused => {}
+            other => panic!("the daemon and the embedded world differ: {other:?}"),
+        }
+    }
+    // A paused world refuses an Advance in both.
+    client.command(Payload::pause()).await.expect("accepted");
+    world
+        .send(&pb::ClientMessage::new(100, Payload::pause()))
+        .expect("the world steps");
+    let served = client.command(Payload::advance()).await;
+    world
+        .send(&pb::ClientMessage::new(101, Payload::advance()))
+        .expect("the world steps");
+    let Some(pb::ServerMessage {
+        payload: Some(pb::server_message::Payload::Error(error)),
+    }) = world.next_message()
+    else {
+        panic!("the embedded world advanced a paused world");
+    };
+    let Err(pushlearn::client::ClientError::Refused { message, .. }) = served else {
+        panic!("the daemon advanced a paused world: {served:?}");
+    };
+    assert_eq!(error.message, message);
 }

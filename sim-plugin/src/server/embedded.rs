@@ -1,0 +1,137 @@
+//! The daemon's lock-step world for a single client in the client's own
+//! process: every command passes the daemon's checks on arrival (the
+//! [`Admission`] and the wire's and scene's checks) and reaches the same
+//! lock-step [`Stepper`], latency emulation included, so a client that sends
+//! the same messages gets the same states and errors as over a socket,
+//! without a round trip per state. The experiments step their worlds this
+//! way (`docs/performance.md`).
+
+use std::collections::VecDeque;
+
+use pushlearn::wire::pb;
+
+use super::gate::{operation, Admission};
+use super::{convert, state_message, Latency, ServerError, Timing};
+use crate::lockstep::{Accepted, Event, Stepper};
+use crate::scene::Scene;
+use crate::world::{Command, StepError, World};
+
+/// The client id of the one client.
+const CLIENT: u64 = 1;
+
+/// A lock-step world served to one in-process client.
+pub struct EmbeddedWorld {
+    stepper: Stepper,
+    scene: Scene,
+    timing: Timing,
+    publish_rate_hz: u32,
+    admission: Admission,
+    /// What the daemon would have written to the client, oldest first.
+    outbox: VecDeque<pb::ServerMessage>,
+}
+
+impl std::fmt::Debug for EmbeddedWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EmbeddedWorld")
+            .field("scene", &self.scene.name)
+            .field("timing", &self.timing)
+            .field("publish_rate_hz", &self.publish_rate_hz)
+            .field("queued", &self.outbox.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl EmbeddedWorld {
+    /// The world of `scene` in lock-step, with `latency` emulation, at
+    /// `publish_rate_hz` (`None`: the scene's), as `pushlearn-sim serve
+    /// --mode lockstep` would start it.
+    ///
+    /// # Errors
+    /// The world cannot be built, or the rate does not divide 1000.
+    pub fn new(
+        scene: Scene,
+        publish_rate_hz: Option<u32>,
+        latency: Option<Latency>,
+    ) -> Result<EmbeddedWorld, ServerError> {
+        let mut world = World::new(&scene)?;
+        if let Some(hz) = publish_rate_hz {
+            world
+                .apply(Command::SetPublishRate(hz))
+                .map_err(ServerError::PublishRate)?;
+        }
+        Ok(EmbeddedWorld {
+            stepper: Stepper::new(world, latency),
+            publish_rate_hz: publish_rate_hz.unwrap_or(scene.publish_rate_hz),
+            scene,
+            timing: Timing::Lockstep { latency },
+            admission: Admission::default(),
+            outbox: VecDeque::new(),
+        })
+    }
+
+    /// The Hello the daemon greets a connection with.
+    #[must_use]
+    pub fn hello(&self) -> pb::Hello {
+        convert::hello(
+            &self.scene,
+            self.publish_rate_hz,
+            self.timing.mode(),
+            self.timing.latency().map(|latency| latency.max_steps),
+        )
+    }
+
+    /// Takes `message` as the daemon takes a message from its client: a
+    /// refusal becomes an `Error` answering its seq, an Advance runs the
+    /// world to its next publish. What the daemon would send back waits in
+    /// [`EmbeddedWorld::next_message`].
+    ///
+    /// # Errors
+    /// A step failed in a way the world cannot recover from (the daemon
+    /// stops then).
+    pub fn send(&mut self, message: &pb::ClientMessage) -> Result<(), StepError> {
+        let op = match operation(message, &self.scene)
+            .and_then(|op| self.admission.check(&op, self.timing).map(|()| op))
+        {
+            Ok(op) => op,
+            Err(refusal) => {
+                self.outbox.push_back(refusal.reply(message.seq));
+                return Ok(());
+            }
+        };
+        self.admission.note(&op);
+        let Self {
+            stepper,
+            outbox,
+            publish_rate_hz,
+            ..
+        } = self;
+        let accepted = Accepted {
+            client: CLIENT,
+            seq: message.seq,
+            op,
+        };
+        stepper.take(accepted, &mut |event| match event {
+            Event::Published {
+                snapshot,
+                publish_seq,
+                applied_seq,
+            } => outbox.push_back(state_message(&snapshot, publish_seq, applied_seq)),
+            Event::Refused { seq, error, .. } => outbox.push_back(pb::ServerMessage::error(
+                seq,
+                pb::error::Kind::RefusedByWorld,
+                error.to_string(),
+            )),
+            Event::PublishRate(hz) => *publish_rate_hz = hz,
+            Event::Diverged(err) => outbox.push_back(pb::ServerMessage::error(
+                0,
+                pb::error::Kind::PhysicsBlewUp,
+                err.to_string(),
+            )),
+        })
+    }
+
+    /// The next message the daemon would have written to the client.
+    pub fn next_message(&mut self) -> Option<pb::ServerMessage> {
+        self.outbox.pop_front()
+    }
+}
