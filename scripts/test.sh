@@ -15,6 +15,9 @@ cargo test --workspace --locked
 # cannot land without `pushlearn reproduce --quick` (docs/results.md).
 cargo build --release --locked -p pushlearn-cli -p sim-plugin --bins
 target/release/pushlearn reproduce --quick --check
+# The same documents from worlds spawned as daemons: the embedded worlds the
+# reproduction uses by default step the daemon's physics bit for bit.
+target/release/pushlearn reproduce --quick --check --world spawn
 target/release/pushlearn reproduce --page-only --check
 # Sweeps on a real Slurm: a one-node cluster started (and stopped) by the
 # script, the reduced ablation as a job array, merged, byte-identical to the

@@ -131,6 +131,14 @@ impl From<InvalidCommand> for ClientError {
     }
 }
 
+impl From<pb::Error> for ClientError {
+    /// An `Error` from the world as a client reports it: a refusal of the
+    /// command it answers, or a world error for `seq = 0`.
+    fn from(error: pb::Error) -> Self {
+        world_error(error)
+    }
+}
+
 fn world_error(error: pb::Error) -> ClientError {
     let kind = error.kind();
     match error.seq {

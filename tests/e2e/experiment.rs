@@ -841,3 +841,81 @@ fn new_object_runs_push_the_object_they_are_about() {
         text(&refused.stderr)
     );
 }
+
+/// Worlds embedded in the experiment's process, spawned as `pushlearn-sim`
+/// daemons and already running give the same reports bit for bit (all but
+/// the run-time fields): every kind of experiment, with and without latency
+/// emulation. The embedded world is what the experiments use by default, so
+/// this is what ties their documents to the daemon's physics.
+#[test]
+fn embedded_spawned_and_connected_worlds_give_identical_reports() {
+    let dir = TempDir::new("worlds");
+    let sim = binary();
+    let sim = sim.to_str().expect("UTF-8 target path");
+    let experiments: [&[&str]; 3] = [
+        &["push-task", "--train-runs", "1,2", "--folds", "2"],
+        &["push-task", "--variant", "constant-feedback"],
+        &["move-to-target", "--repetitions", "1"],
+    ];
+    for (mode, latency) in [("lockstep", None), ("lockstep-jitter", Some("2"))] {
+        let mut serve = vec!["--mode", "lockstep"];
+        if let Some(latency) = latency {
+            serve.extend(["--latency-max", latency]);
+        }
+        let world = Daemon::start(&serve);
+        let addr = world.addr.to_string();
+        for (i, experiment) in experiments.iter().enumerate() {
+            let report = |worlds: &[&str]| {
+                let json = dir.file(&format!("{mode}-{i}-{}.json", worlds[1]));
+                let mut args = vec!["experiment"];
+                args.extend_from_slice(experiment);
+                args.extend_from_slice(&["--mode", mode, "--json", &json]);
+                args.extend_from_slice(worlds);
+                succeeded(&pushlearn(&args));
+                without_run_time(read_json(&json))
+            };
+            // One worker each, as a running world has.
+            let embedded = report(&["--world", "embedded", "--workers", "1"]);
+            let spawned = report(&["--world", "spawn", "--workers", "1", "--sim-bin", sim]);
+            let connected = report(&["--sim", &addr]);
+            assert_eq!(embedded, spawned, "{mode}: {experiment:?}");
+            assert_eq!(embedded, connected, "{mode}: {experiment:?}");
+        }
+    }
+}
+
+#[test]
+fn embedded_worlds_refuse_realtime_and_a_daemon_binary() {
+    let out = pushlearn(&[
+        "experiment",
+        "push-task",
+        "--world",
+        "embedded",
+        "--mode",
+        "realtime",
+        "--folds",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("--mode realtime runs a free-running world daemon"),
+        "{stderr}"
+    );
+    let out = pushlearn(&[
+        "experiment",
+        "push-task",
+        "--world",
+        "embedded",
+        "--sim-bin",
+        "/nonexistent",
+        "--folds",
+        "1",
+    ]);
+    assert!(!out.status.success());
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("it has no use with --world embedded"),
+        "{stderr}"
+    );
+}

@@ -22,7 +22,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("learner", &["memories", "pushlearn-core"]),
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
     ("pushlearn-python", &["learner", "pushlearn-core"]),
-    ("drive", &["learner", "pushlearn", "pushlearn-core"]),
+    (
+        "drive",
+        &["learner", "pushlearn", "pushlearn-core", "sim-plugin"],
+    ),
     ("lab", &["drive", "learner"]),
     (
         "pushlearn-cli",

@@ -12,7 +12,7 @@ use pushlearn_cli::experiment::move_to_target::{sampled_targets, MAX_STEPS};
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::run_cache::RunCache;
-use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource};
+use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, WorldSource, Worlds};
 use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::external::LearnerChoice;
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
@@ -82,13 +82,18 @@ struct WorldArgs {
     #[arg(long, value_name = "N", default_value_t = LATENCY_MAX_STEPS)]
     latency_max: u32,
 
-    /// Number of worlds (processes) running jobs in parallel [default: the
-    /// number of CPUs].
+    /// Where the worlds run [default: embedded; spawn with --mode realtime
+    /// or --sim-bin].
+    #[arg(long, value_parser = named::<Worlds>(), conflicts_with = "sim")]
+    world: Option<Worlds>,
+
+    /// Number of worlds running jobs in parallel [default: the number of
+    /// CPUs].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 
-    /// The world daemon binary [default: `pushlearn-sim` next to this
-    /// executable, else on PATH].
+    /// The world daemon binary to spawn (implies --world spawn) [default:
+    /// `pushlearn-sim` next to this executable, else on PATH].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
 
@@ -266,12 +271,16 @@ impl WorldArgs {
         if self.mode != Mode::LockstepJitter && self.latency_max != LATENCY_MAX_STEPS {
             bail!("--latency-max sets the latency emulation of --mode lockstep-jitter; drop it or add --mode lockstep-jitter");
         }
+        let worlds = choose_worlds(
+            self.world,
+            self.sim_bin.is_some(),
+            Worlds::default_for(self.mode),
+        )?;
         let source = match &self.sim {
             Some(addr) => WorldSource::Connect(addr.clone()),
-            None => WorldSource::Spawn {
-                bin: find_sim_binary(self.sim_bin.as_deref())?,
-                args: self.mode.serve_args(scene, self.latency_max),
-            },
+            None => worlds.source(self.mode, scene, self.latency_max, || {
+                find_sim_binary(self.sim_bin.as_deref())
+            })?,
         };
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
         Ok(Plan {
@@ -305,6 +314,26 @@ impl WorldArgs {
         }
         Ok(())
     }
+}
+
+/// `--world` and `--sim-bin` together: a daemon binary named means
+/// spawned worlds, and `default` otherwise.
+///
+/// # Errors
+/// `--sim-bin` with `--world embedded`.
+pub(crate) fn choose_worlds(
+    world: Option<Worlds>,
+    sim_bin: bool,
+    default: Worlds,
+) -> Result<Worlds> {
+    Ok(match (world, sim_bin) {
+        (Some(Worlds::Embedded), true) => {
+            bail!("--sim-bin names the daemon to spawn; it has no use with --world embedded")
+        }
+        (Some(worlds), _) => worlds,
+        (None, true) => Worlds::Spawn,
+        (None, false) => default,
+    })
 }
 
 /// A progress bar on stderr, hidden when stdout is not a terminal (reports

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds};
+use pushlearn_cli::experiment::workers::{find_sim_binary, kill_all_worlds, Worlds};
+use pushlearn_cli::models::named;
 use pushlearn_cli::reproduce::compare::{first_json_difference, first_line_difference};
 use pushlearn_cli::reproduce::{
     self, manifest, page, Progress, Reproduction, Settings, FIGURES_DIR, PAGE, QUICK_DIR,
@@ -67,12 +68,18 @@ pub struct ReproduceArgs {
     #[arg(long, value_name = "DIR", default_value = ".")]
     root: PathBuf,
 
-    /// World processes per experiment [default: the number of CPUs].
+    /// Worlds (workers) per experiment [default: the number of CPUs].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 
-    /// The world daemon binary [default: `pushlearn-sim` next to this
-    /// executable, else on PATH].
+    /// Where the experiments' worlds run; the documents are the same bit
+    /// for bit either way.
+    #[arg(long, value_parser = named::<Worlds>(), default_value = "embedded")]
+    world: Worlds,
+
+    /// The world daemon binary, for the calibration sweep, the sweeps and
+    /// --world spawn [default: `pushlearn-sim` next to this executable,
+    /// else on PATH].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
 
@@ -155,6 +162,7 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         let settings = Settings {
             sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
             workers: args.workers.map_or(cpus, |n| n as usize),
+            worlds: args.world,
         };
         let run_all = |entries: &[manifest::Entry], sweeps: &[manifest::SweepEntry]| {
             let mut ran = run_with_bars(entries, &settings)?;
@@ -438,7 +446,11 @@ fn run_sweep(
         sweep.file,
         dir.display()
     );
-    let run = super::sweep::run_and_merge(&file, &dir, settings.workers, &settings.sim_bin)
+    let worlds = match settings.worlds {
+        Worlds::Embedded => super::sweep::JobWorlds::Embedded,
+        Worlds::Spawn => super::sweep::JobWorlds::Spawn(settings.sim_bin.clone()),
+    };
+    let run = super::sweep::run_and_merge(&file, &dir, settings.workers, &worlds)
         .with_context(|| format!("the sweep {} ({})", sweep.name, sweep.file));
     if temporary {
         // Kept only on purpose (--sweep-dir); a failed run's half is of no

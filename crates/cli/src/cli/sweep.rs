@@ -12,15 +12,16 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 use pushlearn_cli::experiment::run_cache::RunCache;
-use pushlearn_cli::experiment::workers::find_sim_binary;
+use pushlearn_cli::experiment::workers::{find_sim_binary, Worlds};
 use pushlearn_cli::experiment::ExperimentError;
+use pushlearn_cli::models::named;
 use pushlearn_cli::output::write_atomically;
 use pushlearn_cli::spec::Document;
 use pushlearn_cli::sweep::output::{self, JobOutput, JOBS, MERGED, PLAN, SLURM, TIMING};
 use pushlearn_cli::sweep::summary::Summary;
 use pushlearn_cli::sweep::{slurm, Job, Sweep};
 
-use super::experiment::{end_worlds_on_signal, progress, PushTaskLine};
+use super::experiment::{choose_worlds, end_worlds_on_signal, progress, PushTaskLine};
 
 /// Run a grid of push-task configurations — models, configuration bits,
 /// selectors, η, any option of `pushlearn experiment push-task` — over
@@ -82,11 +83,15 @@ struct RunArgs {
     /// The output directory (created if needed).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// World processes in parallel [default: the number of CPUs].
+    /// Worlds (workers) in parallel [default: the number of CPUs].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
-    /// The world daemon binary [default: `pushlearn-sim` next to this
-    /// executable, else on PATH].
+    /// Where the jobs' worlds run [default: embedded; spawn with
+    /// --sim-bin]; the outputs are the same bit for bit.
+    #[arg(long, value_parser = named::<Worlds>())]
+    world: Option<Worlds>,
+    /// The world daemon binary to spawn (implies --world spawn) [default:
+    /// `pushlearn-sim` next to this executable, else on PATH].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
     /// Run only these jobs (ids, comma-separated), if not done; merges only
@@ -287,9 +292,12 @@ fn run_here(args: &RunArgs) -> Result<()> {
     let loaded = load(&args.sweep)?;
     let cpus = std::thread::available_parallelism().map_or(1, usize::from);
     let workers = args.workers.map_or(cpus, |n| n as usize);
-    let sim = find_sim_binary(args.sim_bin.as_deref())?;
+    let worlds = JobWorlds::new(
+        choose_worlds(args.world, args.sim_bin.is_some(), Worlds::Embedded)?,
+        args.sim_bin.as_deref(),
+    )?;
     let selected = loaded.selected(&args.only)?;
-    run_pending(&loaded, &selected, &args.out, workers, &sim)?;
+    run_pending(&loaded, &selected, &args.out, workers, &worlds)?;
     if args.no_merge {
         return Ok(());
     }
@@ -326,12 +334,12 @@ pub fn run_and_merge(
     sweep_file: &Path,
     dir: &Path,
     workers: usize,
-    sim: &Path,
+    worlds: &JobWorlds,
 ) -> Result<LocalRun> {
     let started = Instant::now();
     let loaded = load(sweep_file)?;
     let jobs = loaded.sweep.jobs();
-    let ran = run_pending(&loaded, &jobs, dir, workers, sim)?;
+    let ran = run_pending(&loaded, &jobs, dir, workers, worlds)?;
     let summary = merge(dir, false)?;
     Ok(LocalRun {
         summary,
@@ -348,7 +356,7 @@ fn run_pending(
     selected: &[Job],
     dir: &Path,
     workers: usize,
-    sim: &Path,
+    worlds: &JobWorlds,
 ) -> Result<usize> {
     prepare(dir, loaded)?;
     let pending: Vec<Job> = output::pending(dir, selected)
@@ -362,7 +370,7 @@ fn run_pending(
         selected.len() - pending.len()
     );
     let started = Instant::now();
-    run_jobs(loaded, &pending, dir, workers, sim)?;
+    run_jobs(loaded, &pending, dir, workers, worlds)?;
     let seconds = started.elapsed().as_secs_f64();
     eprintln!(
         "ran {} jobs in {seconds:.1} s with {workers} worlds",
@@ -371,16 +379,53 @@ fn run_pending(
     Ok(pending.len())
 }
 
+/// Where a sweep's jobs get their worlds, as `pushlearn experiment`
+/// options.
+#[derive(Debug)]
+pub enum JobWorlds {
+    Embedded,
+    /// Spawned from this daemon binary.
+    Spawn(PathBuf),
+}
+
+impl JobWorlds {
+    /// `worlds`; a spawned world's binary is `sim_bin` or found as
+    /// `pushlearn experiment` finds it.
+    ///
+    /// # Errors
+    /// No daemon binary to spawn.
+    pub fn new(worlds: Worlds, sim_bin: Option<&Path>) -> Result<Self> {
+        Ok(match worlds {
+            Worlds::Embedded => JobWorlds::Embedded,
+            Worlds::Spawn => JobWorlds::Spawn(find_sim_binary(sim_bin)?),
+        })
+    }
+
+    fn args(&self) -> Vec<String> {
+        match self {
+            JobWorlds::Embedded => vec!["--world".into(), "embedded".into()],
+            JobWorlds::Spawn(bin) => vec![
+                "--world".into(),
+                "spawn".into(),
+                "--sim-bin".into(),
+                bin.display().to_string(),
+            ],
+        }
+    }
+}
+
 /// Runs `jobs` (none done yet) into `dir`, grouped by configuration and
 /// seed (one experiment each, its worlds started once), writing each job's
 /// output as it finishes.
-fn run_jobs(loaded: &Loaded, jobs: &[Job], dir: &Path, workers: usize, sim: &Path) -> Result<()> {
-    let world = [
-        "--workers".to_owned(),
-        workers.to_string(),
-        "--sim-bin".to_owned(),
-        sim.display().to_string(),
-    ];
+fn run_jobs(
+    loaded: &Loaded,
+    jobs: &[Job],
+    dir: &Path,
+    workers: usize,
+    worlds: &JobWorlds,
+) -> Result<()> {
+    let mut world = vec!["--workers".to_owned(), workers.to_string()];
+    world.extend(worlds.args());
     let mut groups: Vec<Vec<&Job>> = Vec::new();
     for job in jobs {
         match groups.last_mut() {
@@ -579,7 +624,7 @@ fn task(args: &TaskArgs) -> Result<()> {
         &pending,
         &args.out,
         args.workers as usize,
-        &args.sim_bin,
+        &JobWorlds::Spawn(args.sim_bin.clone()),
     )?;
     eprintln!(
         "array task {}: ran {} jobs in {:.1} s",

@@ -1,5 +1,9 @@
 //! A driver's connection to one world: the socket side of
 //! `docs/spec/experiments.md` §2 and the pacing of `docs/spec/world.md` §8.
+//! The world is a daemon behind a socket, or embedded in this process
+//! ([`sim_plugin::server::EmbeddedWorld`], lock-step only): both are sent
+//! the same messages and answer with the same states, the embedded one
+//! without a round trip per state.
 //!
 //! * **lock-step**: the world waits for Advance after every publish. The
 //!   link sends Advance, takes the first state produced after it (its
@@ -23,9 +27,11 @@ use super::ExperimentError;
 use crate::frame::frame_from_state;
 use crate::latency::budget;
 use crate::results::run_info::Timing;
-use pushlearn::client::{ClientOptions, SimClient};
-use pushlearn::wire::pb::client_message::Payload;
-use pushlearn::wire::TimingMode;
+use pushlearn::client::{ClientError, ClientOptions, SimClient};
+use pushlearn::wire::pb::{self, client_message::Payload, server_message};
+use pushlearn::wire::{validate, TimingMode};
+use sim_plugin::server::{EmbeddedWorld, Latency};
+use sim_plugin::Scene;
 
 /// How a link paces the world.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,12 +60,160 @@ impl Pacing {
     }
 }
 
+/// What a driver asks of a world, the same of a daemon behind a socket
+/// ([`SimClient`]) and of a world embedded in this process
+/// ([`Embedded`]).
+pub(crate) trait Wire {
+    /// The world's Hello.
+    fn hello(&self) -> &pb::Hello;
+
+    /// Sends `batch` in order; the last seq (`None` for an empty batch).
+    async fn send_all(&mut self, batch: Vec<Payload>) -> Result<Option<u64>, ExperimentError>;
+
+    /// The first state with `applied_seq >= seq`; any `Error` from the world
+    /// ends the wait.
+    async fn wait_applied(&mut self, seq: u64) -> Result<pb::WorldState, ExperimentError>;
+
+    /// The next state of a free-running world.
+    async fn next_state(&mut self) -> Result<pb::WorldState, ExperimentError>;
+
+    /// Fails with the first `Error` the world sent for a command so far.
+    async fn sync(&mut self) -> Result<(), ExperimentError>;
+}
+
+impl Wire for SimClient {
+    fn hello(&self) -> &pb::Hello {
+        SimClient::hello(self)
+    }
+
+    async fn send_all(&mut self, batch: Vec<Payload>) -> Result<Option<u64>, ExperimentError> {
+        Ok(SimClient::send_all(self, batch).await?)
+    }
+
+    async fn wait_applied(&mut self, seq: u64) -> Result<pb::WorldState, ExperimentError> {
+        Ok(SimClient::wait_applied(self, seq).await?)
+    }
+
+    async fn next_state(&mut self) -> Result<pb::WorldState, ExperimentError> {
+        Ok(SimClient::next_state(self).await?)
+    }
+
+    async fn sync(&mut self) -> Result<(), ExperimentError> {
+        Ok(SimClient::sync(self).await?)
+    }
+}
+
+/// A lock-step world in this process, sent numbered messages as a
+/// [`SimClient`] sends them; what it answers is read as the client reads
+/// the socket.
+#[derive(Debug)]
+pub(crate) struct Embedded {
+    world: EmbeddedWorld,
+    hello: pb::Hello,
+    last_seq: u64,
+}
+
+impl Embedded {
+    /// The world of the built-in scene `scene` with latency emulation up
+    /// to `latency_max` steps (`None`: none), as `pushlearn-sim serve
+    /// --scene SCENE --mode lockstep [--latency-max L]` starts it.
+    ///
+    /// # Errors
+    /// An unknown scene, or a world that cannot be built.
+    pub fn new(scene: &str, latency_max: Option<u32>) -> Result<Self, ExperimentError> {
+        let embedded = |why: String| ExperimentError::Embedded(why);
+        let scene = Scene::builtin(scene).map_err(|err| embedded(err.to_string()))?;
+        // The daemon's default seed; every job reseeds it anyway.
+        let latency = latency_max.map(|max_steps| Latency { max_steps, seed: 0 });
+        let world =
+            EmbeddedWorld::new(scene, None, latency).map_err(|err| embedded(err.to_string()))?;
+        Ok(Self {
+            hello: world.hello(),
+            world,
+            last_seq: 0,
+        })
+    }
+
+    /// The next answer; none left means the world has said all it will.
+    fn next(&mut self, waiting_for: &str) -> Result<server_message::Payload, ExperimentError> {
+        loop {
+            let Some(message) = self.world.next_message() else {
+                return Err(ExperimentError::Incomplete(format!(
+                    "the embedded world sent no {waiting_for}"
+                )));
+            };
+            if let Some(payload) = message.payload {
+                return Ok(payload);
+            }
+        }
+    }
+}
+
+impl Wire for Embedded {
+    fn hello(&self) -> &pb::Hello {
+        &self.hello
+    }
+
+    async fn send_all(&mut self, batch: Vec<Payload>) -> Result<Option<u64>, ExperimentError> {
+        let mut messages = Vec::with_capacity(batch.len());
+        for payload in batch {
+            let message = pb::ClientMessage::new(0, payload);
+            validate(&message).map_err(ClientError::from)?;
+            messages.push(message);
+        }
+        for mut message in messages {
+            self.last_seq += 1;
+            message.seq = self.last_seq;
+            self.world
+                .send(&message)
+                .map_err(|err| ExperimentError::Embedded(err.to_string()))?;
+        }
+        Ok((self.last_seq > 0).then_some(self.last_seq))
+    }
+
+    async fn wait_applied(&mut self, seq: u64) -> Result<pb::WorldState, ExperimentError> {
+        loop {
+            match self.next("state with the command applied")? {
+                server_message::Payload::WorldState(state) if state.applied_seq >= seq => {
+                    return Ok(state)
+                }
+                server_message::Payload::WorldState(_) | server_message::Payload::Hello(_) => {}
+                server_message::Payload::Error(error) => {
+                    return Err(ClientError::from(error).into())
+                }
+            }
+        }
+    }
+
+    async fn next_state(&mut self) -> Result<pb::WorldState, ExperimentError> {
+        Err(ExperimentError::Embedded(
+            "an embedded world runs in lock-step only".into(),
+        ))
+    }
+
+    async fn sync(&mut self) -> Result<(), ExperimentError> {
+        while let Some(message) = self.world.next_message() {
+            if let Some(server_message::Payload::Error(error)) = message.payload {
+                return Err(ClientError::from(error).into());
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A link's world.
+#[derive(Debug)]
+enum Conn {
+    Socket(Box<SimClient>),
+    Embedded(Box<Embedded>),
+}
+
 /// One connection to a world, with its own single-threaded runtime so that a
 /// worker thread can drive it with plain blocking calls.
 #[derive(Debug)]
 pub struct WorldLink {
     runtime: tokio::runtime::Runtime,
-    client: SimClient,
+    conn: Conn,
     pacing: Pacing,
     /// Set when recorded runs are reused (lock-step only; see
     /// [`super::run_cache`]), with the batch the last driver left unsent.
@@ -88,13 +242,41 @@ impl WorldLink {
                 wanted: pacing.timing_mode().as_str(),
             });
         }
-        Ok(Self {
+        Ok(Self::new(runtime, Conn::Socket(Box::new(client)), pacing))
+    }
+
+    /// A lock-step world of `scene` embedded in this process, with latency
+    /// emulation up to `latency_max` steps (`None`: none).
+    ///
+    /// # Errors
+    /// An unknown scene, or a world that cannot be built.
+    pub fn embedded(scene: &str, latency_max: Option<u32>) -> Result<Self, ExperimentError> {
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .build()
+            .map_err(ExperimentError::Runtime)?;
+        let world = Embedded::new(scene, latency_max)?;
+        Ok(Self::new(
             runtime,
-            client,
+            Conn::Embedded(Box::new(world)),
+            Pacing::Lockstep,
+        ))
+    }
+
+    fn new(runtime: tokio::runtime::Runtime, conn: Conn, pacing: Pacing) -> Self {
+        Self {
+            runtime,
+            conn,
             pacing,
             replay: None,
             last_sent: Vec::new(),
-        })
+        }
+    }
+
+    fn hello(&self) -> &pb::Hello {
+        match &self.conn {
+            Conn::Socket(client) => client.hello(),
+            Conn::Embedded(world) => world.hello(),
+        }
     }
 
     /// Serves states from `cache` where it has them and records the others
@@ -104,7 +286,7 @@ impl WorldLink {
     /// commands, so nothing is reused there.
     pub fn reuse_runs(&mut self, cache: Arc<RunCache>, latency: bool) {
         if self.pacing == Pacing::Lockstep {
-            let rate = self.client.hello().publish_rate;
+            let rate = self.hello().publish_rate;
             self.replay = Some((Cursor::new(cache, rate, latency), Vec::new()));
         }
     }
@@ -112,7 +294,7 @@ impl WorldLink {
     /// The scene the world reported in its Hello.
     #[must_use]
     pub fn scene(&self) -> &str {
-        &self.client.hello().scene
+        &self.hello().scene
     }
 
     /// Checks that the world runs `scene`.
@@ -137,7 +319,7 @@ impl WorldLink {
     /// # Errors
     /// The world's latency emulation differs.
     pub fn require_latency(&self, latency_max: Option<u32>) -> Result<(), ExperimentError> {
-        let found = self.client.hello().latency_max_steps;
+        let found = self.hello().latency_max_steps;
         if found == latency_max {
             return Ok(());
         }
@@ -163,32 +345,25 @@ impl WorldLink {
         driver: &mut Driver<M, T>,
         setup: Vec<Payload>,
     ) -> Result<Timing, ExperimentError> {
-        let Self {
-            runtime,
-            client,
-            pacing,
-            replay,
-            last_sent,
-        } = self;
-        let mut sent = Sent(last_sent);
-        match replay {
-            Some((cursor, pending)) => {
-                // After the last driver's commands, as on the socket: a latency
-                // seed must end the job's first batch to start a root there.
-                pending.extend(setup);
-                cursor.start_job();
-                let driven =
-                    runtime.block_on(drive_replaying(client, cursor, pending, driver, &mut sent));
-                if driven.is_err() {
-                    // What this job recorded is not kept: a world that failed
-                    // mid-job may have been wrong before it failed (ODE
-                    // aborts on an internal assertion), and stored states
-                    // reach later jobs unchecked.
-                    cursor.withdraw_job();
-                }
-                driven
-            }
-            None => runtime.block_on(drive_tracked(client, *pacing, driver, setup, &mut sent)),
+        match &mut self.conn {
+            Conn::Socket(client) => drive_link(
+                &self.runtime,
+                client.as_mut(),
+                self.pacing,
+                &mut self.replay,
+                &mut self.last_sent,
+                driver,
+                setup,
+            ),
+            Conn::Embedded(world) => drive_link(
+                &self.runtime,
+                world.as_mut(),
+                self.pacing,
+                &mut self.replay,
+                &mut self.last_sent,
+                driver,
+                setup,
+            ),
         }
     }
 
@@ -199,14 +374,46 @@ impl WorldLink {
         describe(&self.last_sent)
     }
 
-    /// Closes the connection.
+    /// Closes the connection (an embedded world just ends).
     pub fn close(self) {
-        let Self {
-            runtime, client, ..
-        } = self;
-        if let Err(err) = runtime.block_on(client.close()) {
-            tracing::debug!(%err, "closing the world connection");
+        let Self { runtime, conn, .. } = self;
+        if let Conn::Socket(client) = conn {
+            if let Err(err) = runtime.block_on(client.close()) {
+                tracing::debug!(%err, "closing the world connection");
+            }
         }
+    }
+}
+
+/// [`WorldLink::drive`] on the link's world `wire`.
+fn drive_link<M: Model, T: Task<M>, W: Wire>(
+    runtime: &tokio::runtime::Runtime,
+    wire: &mut W,
+    pacing: Pacing,
+    replay: &mut Option<(Cursor, Vec<Payload>)>,
+    last_sent: &mut Vec<Payload>,
+    driver: &mut Driver<M, T>,
+    setup: Vec<Payload>,
+) -> Result<Timing, ExperimentError> {
+    let mut sent = Sent(last_sent);
+    match replay {
+        Some((cursor, pending)) => {
+            // After the last driver's commands, as on the socket: a latency
+            // seed must end the job's first batch to start a root there.
+            pending.extend(setup);
+            cursor.start_job();
+            let driven =
+                runtime.block_on(drive_replaying(wire, cursor, pending, driver, &mut sent));
+            if driven.is_err() {
+                // What this job recorded is not kept: a world that failed
+                // mid-job may have been wrong before it failed (ODE aborts
+                // on an internal assertion), and stored states reach later
+                // jobs unchecked.
+                cursor.withdraw_job();
+            }
+            driven
+        }
+        None => runtime.block_on(drive_tracked(wire, pacing, driver, setup, &mut sent)),
     }
 }
 
@@ -230,25 +437,25 @@ struct Sent<'a>(&'a mut Vec<Payload>);
 
 impl Sent<'_> {
     /// Sends `batch` in one write, remembering it.
-    async fn send_all(
+    async fn send_all<W: Wire>(
         &mut self,
-        client: &mut SimClient,
+        wire: &mut W,
         batch: Vec<Payload>,
     ) -> Result<Option<u64>, ExperimentError> {
         if !batch.is_empty() {
             self.0.clone_from(&batch);
         }
-        Ok(client.send_all(batch).await?)
+        wire.send_all(batch).await
     }
 
     /// Sends `batch` and an Advance in one write; the Advance's seq.
-    async fn send_with_advance(
+    async fn send_with_advance<W: Wire>(
         &mut self,
-        client: &mut SimClient,
+        wire: &mut W,
         mut batch: Vec<Payload>,
     ) -> Result<u64, ExperimentError> {
         batch.push(Payload::advance());
-        self.send_all(client, batch)
+        self.send_all(wire, batch)
             .await?
             .ok_or_else(|| ExperimentError::Incomplete("an Advance was not sent".into()))
     }
@@ -282,8 +489,8 @@ fn describe(batch: &[Payload]) -> String {
 }
 
 /// [`drive`], remembering the last batch sent in `sent`.
-async fn drive_tracked<M: Model, T: Task<M>>(
-    client: &mut SimClient,
+async fn drive_tracked<M: Model, T: Task<M>, W: Wire>(
+    client: &mut W,
     pacing: Pacing,
     driver: &mut Driver<M, T>,
     setup: Vec<Payload>,
@@ -328,8 +535,8 @@ async fn drive_tracked<M: Model, T: Task<M>>(
 /// are handed to the driver without touching the world. The driver's last
 /// commands stay in `pending` for the next job on this link, whose first
 /// state follows them as it would on the socket.
-async fn drive_replaying<M: Model, T: Task<M>>(
-    client: &mut SimClient,
+async fn drive_replaying<M: Model, T: Task<M>, W: Wire>(
+    client: &mut W,
     cursor: &mut Cursor,
     pending: &mut Vec<Payload>,
     driver: &mut Driver<M, T>,
@@ -356,22 +563,22 @@ async fn drive_replaying<M: Model, T: Task<M>>(
 }
 
 /// Sends `batch`, then Advance; the state that covers the Advance.
-async fn send_and_advance(
-    client: &mut SimClient,
+async fn send_and_advance<W: Wire>(
+    client: &mut W,
     cursor: &mut Cursor,
     batch: Vec<Payload>,
     sent: &mut Sent<'_>,
 ) -> Result<pushlearn::wire::pb::WorldState, ExperimentError> {
     cursor.sent(&batch);
     let advance = sent.send_with_advance(client, batch).await?;
-    Ok(client.wait_applied(advance).await?)
+    client.wait_applied(advance).await
 }
 
 /// Brings the world to the end of a recorded path (from its rate and reset
 /// batch, or from the frame the world produced last), each state checked
 /// against the record.
-async fn resync_world(
-    client: &mut SimClient,
+async fn resync_world<W: Wire>(
+    client: &mut W,
     cursor: &mut Cursor,
     path: Path,
     sent: &mut Sent<'_>,

@@ -183,6 +183,9 @@ pub enum ExperimentError {
     /// A job ended without its results (a bug in a handler).
     #[error("{0}")]
     Incomplete(String),
+    /// A world embedded in this process could not be built or stepped.
+    #[error("the embedded world: {0}")]
+    Embedded(String),
     /// A finished job's result could not be kept (`pushlearn sweep`
     /// writes each one as it finishes).
     #[error("cannot write the result of {job}: {why}")]

@@ -17,7 +17,7 @@ use std::sync::{mpsc, Arc, Mutex, Weak};
 use std::time::Duration;
 
 use super::link::{Pacing, WorldLink};
-use super::ExperimentError;
+use super::{ExperimentError, Mode};
 
 /// File name of the world daemon.
 pub const SIM_BIN: &str = "pushlearn-sim";
@@ -211,6 +211,70 @@ impl Drop for SimProcess {
     }
 }
 
+/// Where an experiment's worlds run when it starts them itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Worlds {
+    /// A lock-step world inside this process per worker.
+    Embedded,
+    /// A `pushlearn-sim` process per worker, over localhost TCP.
+    Spawn,
+}
+
+impl pushlearn_core::Named for Worlds {
+    const ALL: &'static [Self] = &[Worlds::Embedded, Worlds::Spawn];
+
+    fn name(self) -> &'static str {
+        match self {
+            Worlds::Embedded => "embedded",
+            Worlds::Spawn => "spawn",
+        }
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Worlds::Embedded => {
+                "A lock-step world inside this process per worker: no round trip per state                  (the default in the lock-step modes)"
+            }
+            Worlds::Spawn => {
+                "A pushlearn-sim process per worker over localhost TCP (the only choice with                  --mode realtime); the same states bit for bit"
+            }
+        }
+    }
+}
+
+impl Worlds {
+    /// The default for `mode`: embedded wherever it can run.
+    #[must_use]
+    pub fn default_for(mode: Mode) -> Self {
+        if mode == Mode::Realtime {
+            Worlds::Spawn
+        } else {
+            Worlds::Embedded
+        }
+    }
+
+    /// The worlds of `scene`, timed as `mode` and `latency_max` say; `bin`
+    /// finds the daemon binary when they are spawned.
+    ///
+    /// # Errors
+    /// Embedded worlds in realtime, or no daemon binary to spawn.
+    pub fn source(
+        self,
+        mode: Mode,
+        scene: &str,
+        latency_max: u32,
+        bin: impl FnOnce() -> Result<PathBuf, ExperimentError>,
+    ) -> Result<WorldSource, ExperimentError> {
+        match self {
+            Worlds::Embedded => WorldSource::embedded(mode, scene, latency_max),
+            Worlds::Spawn => Ok(WorldSource::Spawn {
+                bin: bin()?,
+                args: mode.serve_args(scene, latency_max),
+            }),
+        }
+    }
+}
+
 /// Where workers get their worlds.
 #[derive(Clone, Debug)]
 pub enum WorldSource {
@@ -218,6 +282,15 @@ pub enum WorldSource {
     Spawn { bin: PathBuf, args: Vec<String> },
     /// Use a running world (one worker).
     Connect(String),
+    /// A lock-step world of `scene` in this process per worker, with
+    /// latency emulation up to `latency_max` steps (`None`: none). The
+    /// workers' worlds take turns at ODE (its random generator is one per
+    /// process, `ode::World::step`), so their physics does not run in
+    /// parallel; their learners do.
+    Embedded {
+        scene: String,
+        latency_max: Option<u32>,
+    },
 }
 
 impl WorldSource {
@@ -226,8 +299,28 @@ impl WorldSource {
     pub fn max_workers(&self, wanted: usize) -> usize {
         match self {
             WorldSource::Connect(_) => 1,
-            WorldSource::Spawn { .. } => wanted.max(1),
+            WorldSource::Spawn { .. } | WorldSource::Embedded { .. } => wanted.max(1),
         }
+    }
+
+    /// Worlds of `scene` in this process, timed as `mode` times them.
+    ///
+    /// # Errors
+    /// [`Mode::Realtime`]: a free-running world needs a daemon of its own.
+    pub fn embedded(mode: Mode, scene: &str, latency_max: u32) -> Result<Self, ExperimentError> {
+        let latency_max =
+            match mode {
+                Mode::Realtime => return Err(ExperimentError::Embedded(
+                    "--mode realtime runs a free-running world daemon; use --world spawn or --sim"
+                        .into(),
+                )),
+                Mode::Lockstep => None,
+                Mode::LockstepJitter => Some(latency_max),
+            };
+        Ok(WorldSource::Embedded {
+            scene: scene.to_owned(),
+            latency_max,
+        })
     }
 }
 
@@ -257,6 +350,10 @@ impl Worker {
             }
             WorldSource::Connect(addr) => Ok(Self {
                 link: WorldLink::connect(addr, pacing)?,
+                _process: None,
+            }),
+            WorldSource::Embedded { scene, latency_max } => Ok(Self {
+                link: WorldLink::embedded(scene, *latency_max)?,
                 _process: None,
             }),
         }

@@ -28,7 +28,7 @@ use crate::sweep::summary::Summary;
 use calibration::CalibrationRow;
 use drive::experiment::run::Plan;
 use drive::experiment::run_cache::RunCache;
-use drive::experiment::workers::WorldSource;
+use drive::experiment::workers::Worlds;
 use drive::experiment::Mode;
 use drive::results::run_info::RunTiming;
 use manifest::{Entry, SweepEntry};
@@ -263,8 +263,10 @@ impl Reproduction {
 pub struct Settings {
     /// The `pushlearn-sim` binary.
     pub sim_bin: PathBuf,
-    /// World processes per experiment.
+    /// Worlds (workers) per experiment.
     pub workers: usize,
+    /// Where the experiments' worlds run.
+    pub worlds: Worlds,
 }
 
 /// Progress of a reproduction, for bars.
@@ -298,10 +300,15 @@ pub fn run(
             mode: entry.mode,
             latency_max: entry.latency_max,
             workers: settings.workers,
-            source: WorldSource::Spawn {
-                bin: settings.sim_bin.clone(),
-                args: entry.mode.serve_args(entry.spec.scene(), entry.latency_max),
-            },
+            source: settings
+                .worlds
+                .source(entry.mode, entry.spec.scene(), entry.latency_max, || {
+                    Ok(settings.sim_bin.clone())
+                })
+                .map_err(|source| ReproduceError::Experiment {
+                    name: entry.name.clone(),
+                    source: source.into(),
+                })?,
             seed: entry.seed,
             model: String::new(),
             learner: None,
