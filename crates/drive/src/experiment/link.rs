@@ -161,14 +161,16 @@ impl Wire for Embedded {
             validate(&message).map_err(ClientError::from)?;
             messages.push(message);
         }
+        let mut last = None;
         for mut message in messages {
             self.last_seq += 1;
             message.seq = self.last_seq;
             self.world
                 .send(&message)
                 .map_err(|err| ExperimentError::Embedded(err.to_string()))?;
+            last = Some(message.seq);
         }
-        Ok((self.last_seq > 0).then_some(self.last_seq))
+        Ok(last)
     }
 
     async fn wait_applied(&mut self, seq: u64) -> Result<pb::WorldState, ExperimentError> {
