@@ -233,16 +233,7 @@ impl Physics {
                 ToPhysics::Stop => return Ok(()),
             };
             self.shared.gate.taken(1);
-            let Physics {
-                stepper,
-                shared,
-                wake,
-                unwoken,
-                ..
-            } = self;
-            stepper.take(accepted, &mut |event| {
-                serve(shared, *wake, unwoken, event);
-            })?;
+            self.stepping(|stepper, mut events| stepper.take(accepted, &mut events))?;
         }
     }
 
@@ -260,8 +251,8 @@ impl Physics {
         }
     }
 
-    /// Realtime: applies an accepted command at once.
-    fn apply(&mut self, accepted: Accepted) {
+    /// Runs `f` on the stepper, the clients told of everything it does.
+    fn stepping<R>(&mut self, f: impl FnOnce(&mut Stepper, &mut dyn FnMut(Event)) -> R) -> R {
         let Physics {
             stepper,
             shared,
@@ -269,19 +260,17 @@ impl Physics {
             unwoken,
             ..
         } = self;
-        stepper.apply(accepted, &mut |event| serve(shared, *wake, unwoken, event));
+        f(stepper, &mut |event| serve(shared, *wake, unwoken, event))
+    }
+
+    /// Realtime: applies an accepted command at once.
+    fn apply(&mut self, accepted: Accepted) {
+        self.stepping(|stepper, mut events| stepper.apply(accepted, &mut events));
     }
 
     /// Realtime: one step, publishing if one is due.
     fn step(&mut self) -> Result<bool, StepError> {
-        let Physics {
-            stepper,
-            shared,
-            wake,
-            unwoken,
-            ..
-        } = self;
-        stepper.step(&mut |event| serve(shared, *wake, unwoken, event))
+        self.stepping(|stepper, mut events| stepper.step(&mut events))
     }
 }
 
