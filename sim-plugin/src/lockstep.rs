@@ -5,6 +5,8 @@
 //! Advance runs to the next publish. Both feed it the same accepted
 //! commands in the same order, so both produce the same states.
 
+use std::time::{Duration, Instant};
+
 use rand::rngs::ChaCha8Rng;
 use rand::{RngExt, SeedableRng};
 
@@ -122,6 +124,9 @@ pub(crate) struct Stepper {
     publish_seq: u64,
     applied_seq: u64,
     delays: Option<Delays>,
+    /// Wall time spent in the world's steps (collision, the solver, the
+    /// snapshot): the physics' own cost, measured where it is paid.
+    physics: Duration,
 }
 
 impl Stepper {
@@ -132,7 +137,14 @@ impl Stepper {
             publish_seq: 0,
             applied_seq: 0,
             delays: latency.map(Delays::new),
+            physics: Duration::ZERO,
         }
+    }
+
+    /// The wall time spent stepping the world so far, and the states it
+    /// published in it.
+    pub fn physics(&self) -> (Duration, u64) {
+        (self.physics, self.publish_seq)
     }
 
     pub fn is_paused(&self) -> bool {
@@ -242,7 +254,10 @@ impl Stepper {
     /// A step failed in a way the world cannot recover from (a divergence
     /// it recovers from is an [`Event::Diverged`]).
     pub fn step(&mut self, events: &mut impl FnMut(Event)) -> Result<bool, StepError> {
-        match self.world.step() {
+        let started = Instant::now();
+        let stepped = self.world.step();
+        self.physics += started.elapsed();
+        match stepped {
             Ok(Some(snapshot)) => {
                 self.publish_seq += 1;
                 events(Event::Published {

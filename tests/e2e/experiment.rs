@@ -697,6 +697,8 @@ pub(crate) fn without_run_time(mut report: Value) -> String {
     ] {
         assert!(run.remove(key).is_some(), "no run.{key}");
     }
+    // Only embedded worlds measure their physics.
+    run.remove("physics_us_per_state");
     serde_json::to_string(&report).expect("serialises")
 }
 
@@ -872,14 +874,21 @@ fn embedded_spawned_and_connected_worlds_give_identical_reports() {
                 args.extend_from_slice(&["--mode", mode, "--json", &json]);
                 args.extend_from_slice(worlds);
                 succeeded(&pushlearn(&args));
-                without_run_time(read_json(&json))
+                let report = read_json(&json);
+                let physics = report["run"]["physics_us_per_state"].as_f64();
+                (without_run_time(report), physics)
             };
             // One worker each, as a running world has.
-            let embedded = report(&["--world", "embedded", "--workers", "1"]);
-            let spawned = report(&["--world", "spawn", "--workers", "1", "--sim-bin", sim]);
-            let connected = report(&["--sim", &addr]);
+            let (embedded, physics) = report(&["--world", "embedded", "--workers", "1"]);
+            let (spawned, unmeasured) =
+                report(&["--world", "spawn", "--workers", "1", "--sim-bin", sim]);
+            let (connected, _) = report(&["--sim", &addr]);
             assert_eq!(embedded, spawned, "{mode}: {experiment:?}");
             assert_eq!(embedded, connected, "{mode}: {experiment:?}");
+            // Only the embedded world's physics is measured, and it costs
+            // something.
+            assert!(physics.is_some_and(|us| us > 0.0), "{physics:?}");
+            assert_eq!(unmeasured, None);
         }
     }
 }

@@ -130,6 +130,13 @@ impl EmbeddedWorld {
         })
     }
 
+    /// The wall time this world has spent stepping its physics, and the
+    /// states it published in it: what a state costs, measured.
+    #[must_use]
+    pub fn physics(&self) -> (std::time::Duration, u64) {
+        self.stepper.physics()
+    }
+
     /// The next message the daemon would have written to the client.
     pub fn next_message(&mut self) -> Option<pb::ServerMessage> {
         self.outbox.pop_front()

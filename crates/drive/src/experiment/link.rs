@@ -134,6 +134,11 @@ impl Embedded {
         })
     }
 
+    /// The wall time the world has spent on physics, and its states.
+    fn physics(&self) -> (std::time::Duration, u64) {
+        self.world.physics()
+    }
+
     /// The next answer; none left means the world has said all it will.
     fn next(&mut self, waiting_for: &str) -> Result<server_message::Payload, ExperimentError> {
         loop {
@@ -357,15 +362,22 @@ impl WorldLink {
                 driver,
                 setup,
             ),
-            Conn::Embedded(world) => drive_link(
-                &self.runtime,
-                world.as_mut(),
-                self.pacing,
-                &mut self.replay,
-                &mut self.last_sent,
-                driver,
-                setup,
-            ),
+            Conn::Embedded(world) => {
+                let (seconds, states) = world.physics();
+                let mut timing = drive_link(
+                    &self.runtime,
+                    world.as_mut(),
+                    self.pacing,
+                    &mut self.replay,
+                    &mut self.last_sent,
+                    driver,
+                    setup,
+                )?;
+                let (seconds_after, states_after) = world.physics();
+                timing.physics_seconds = (seconds_after - seconds).as_secs_f64();
+                timing.physics_states = states_after - states;
+                Ok(timing)
+            }
         }
     }
 

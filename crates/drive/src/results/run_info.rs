@@ -43,6 +43,13 @@ pub struct Timing {
     pub busy_seconds: f64,
     /// The longest handling time, seconds.
     pub max_seconds: f64,
+    /// Wall time embedded worlds spent stepping their physics, seconds
+    /// (0 for a world behind a socket, whose cost is not seen here).
+    #[serde(default)]
+    pub physics_seconds: f64,
+    /// The states they published in that time.
+    #[serde(default)]
+    pub physics_states: u64,
     /// All handling times, for percentiles (not serialised).
     #[serde(skip)]
     pub histogram: Latencies,
@@ -77,6 +84,8 @@ impl std::ops::AddAssign for Timing {
         self.too_slow += other.too_slow;
         self.busy_seconds += other.busy_seconds;
         self.max_seconds = self.max_seconds.max(other.max_seconds);
+        self.physics_seconds += other.physics_seconds;
+        self.physics_states += other.physics_states;
         self.histogram += other.histogram;
     }
 }
@@ -120,6 +129,10 @@ pub struct RunTiming {
     /// when lockstep runs were replayed (docs/performance.md).
     #[serde(default)]
     pub simulated_states: u64,
+    /// What one state's physics cost, measured in this run's embedded
+    /// worlds (absent for worlds behind a socket), µs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics_us_per_state: Option<f64>,
 }
 
 impl RunInfo {
@@ -159,6 +172,8 @@ impl RunInfo {
                 p99_handling_us: summary.p99_us,
                 max_handling_ms: timing.max_seconds * 1e3,
                 simulated_states: timing.messages,
+                physics_us_per_state: (timing.physics_states > 0)
+                    .then(|| timing.physics_seconds / timing.physics_states as f64 * 1e6),
             }),
         }
     }

@@ -189,11 +189,14 @@ impl Reproduction {
         if !self.produced.is_empty() {
             let _ = writeln!(
                 page,
-                "| Experiment | Messages | Simulated states | Wall [s] | Handling p50 / p99 [µs] | Max [ms] | Over budget |"
+                "| Experiment | Messages | Simulated states | ODE per state [µs] | Floor [s] | Wall [s] | Wall / floor | Handling p50 / p99 [µs] | Max [ms] | Over budget |"
             );
-            let _ = writeln!(page, "|---|---|---|---|---|---|---|");
+            let _ = writeln!(page, "|---|---|---|---|---|---|---|---|---|---|");
         }
         let (mut messages, mut simulated, mut wall) = (0u64, 0u64, 0.0);
+        // The physics measured in the embedded worlds: states, and the
+        // floor they imply with every worker's core stepping.
+        let (mut measured_states, mut physics_seconds, mut floor) = (0u64, 0.0, 0.0);
         for p in &self.produced {
             let run = p.document.runs();
             let m: u64 = run.iter().map(|r| r.messages).sum();
@@ -215,12 +218,26 @@ impl Reproduction {
                 .map(|t| t.max_handling_ms)
                 .fold(0.0, f64::max);
             let slow: u64 = p.timing.iter().map(|t| t.too_slow).sum();
+            let measured = Floor::of(&p.timing);
             messages += m;
             simulated += sim;
             wall += w;
+            let (cost, its_floor, ratio) = match measured {
+                Some(f) => {
+                    measured_states += f.states;
+                    physics_seconds += f.physics_seconds;
+                    floor += f.floor_seconds;
+                    (
+                        format!("{:.1}", f.physics_seconds / f.states as f64 * 1e6),
+                        format!("{:.1}", f.floor_seconds),
+                        format!("{:.2}", w / f.floor_seconds),
+                    )
+                }
+                None => ("–".into(), "–".into(), "–".into()),
+            };
             let _ = writeln!(
                 page,
-                "| {} | {m} | {sim} | {w:.1} | {p50:.1} / {p99:.1} | {max:.2} | {slow} |",
+                "| {} | {m} | {sim} | {cost} | {its_floor} | {w:.1} | {ratio} | {p50:.1} / {p99:.1} | {max:.2} | {slow} |",
                 p.entry.name
             );
         }
@@ -239,22 +256,74 @@ impl Reproduction {
                 );
             }
         }
-        let floor = simulated as f64 * 85e-6;
-        let _ = writeln!(
+        let _ = write!(
             page,
             "\n{messages} messages handled, {simulated} world states simulated ({:.0} % of them; the rest \
-             replayed from recorded runs). At about 85 µs of ODE per state that is a floor of \
-             {floor:.0} s of world time ({:.0} s on 2 cores); the experiments took {wall:.1} s, \
-             the whole reproduction {:.1} s of wall time.",
+             replayed from recorded runs). ",
             if messages == 0 {
                 0.0
             } else {
                 100.0 * simulated as f64 / messages as f64
             },
-            floor / 2.0,
+        );
+        if measured_states > 0 {
+            let _ = write!(
+                page,
+                "The embedded worlds stepped {measured_states} states at {:.1} µs of physics each \
+                 (measured in this run): {physics_seconds:.1} s of physics, a floor of {floor:.1} s \
+                 with every worker's core stepping. ",
+                physics_seconds / measured_states as f64 * 1e6,
+            );
+        } else {
+            let _ = write!(
+                page,
+                "The worlds ran behind sockets, so their physics was not measured (`--world embedded` measures it). "
+            );
+        }
+        let _ = writeln!(
+            page,
+            "The experiments took {wall:.1} s{}, the whole reproduction {:.1} s of wall time.",
+            if floor > 0.0 {
+                format!(" ({:.2} × the floor)", wall / floor)
+            } else {
+                String::new()
+            },
             self.wall_seconds
         );
         page
+    }
+}
+
+/// The physics an experiment's embedded worlds measured, and the floor it
+/// implies: each state's physics once, spread over the run's workers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Floor {
+    /// Simulated states whose physics was measured.
+    states: u64,
+    /// Their physics, seconds.
+    physics_seconds: f64,
+    /// The wall time that physics needs on the workers' cores, seconds.
+    floor_seconds: f64,
+}
+
+impl Floor {
+    /// `None` if no run measured its physics (worlds behind sockets).
+    fn of(runs: &[RunTiming]) -> Option<Floor> {
+        let mut floor = Floor {
+            states: 0,
+            physics_seconds: 0.0,
+            floor_seconds: 0.0,
+        };
+        for run in runs {
+            let Some(us) = run.physics_us_per_state else {
+                continue;
+            };
+            let seconds = run.simulated_states as f64 * us * 1e-6;
+            floor.states += run.simulated_states;
+            floor.physics_seconds += seconds;
+            floor.floor_seconds += seconds / run.workers.max(1) as f64;
+        }
+        (floor.states > 0 && floor.floor_seconds > 0.0).then_some(floor)
     }
 }
 
@@ -467,4 +536,34 @@ pub fn write_atomically(path: &Path, text: &str) -> Result<(), ReproduceError> {
         path: path.display().to_string(),
         source,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(simulated_states: u64, workers: usize, physics: Option<f64>) -> RunTiming {
+        RunTiming {
+            workers,
+            simulated_states,
+            physics_us_per_state: physics,
+            ..RunTiming::default()
+        }
+    }
+
+    #[test]
+    fn the_floor_is_each_measured_states_physics_spread_over_its_workers() {
+        let floor =
+            Floor::of(&[run(1_000, 2, Some(80.0)), run(500, 1, Some(100.0))]).expect("measured");
+        assert_eq!(floor.states, 1_500);
+        assert!((floor.physics_seconds - 0.13).abs() < 1e-12);
+        assert!((floor.floor_seconds - (0.04 + 0.05)).abs() < 1e-12);
+        // Runs behind sockets measure nothing and add nothing.
+        assert_eq!(
+            Floor::of(&[run(1_000, 2, Some(80.0)), run(9_000, 2, None)]),
+            Floor::of(&[run(1_000, 2, Some(80.0))])
+        );
+        assert_eq!(Floor::of(&[run(1_000, 2, None)]), None);
+        assert_eq!(Floor::of(&[]), None);
+    }
 }
