@@ -125,7 +125,8 @@ pub(crate) struct Stepper {
     applied_seq: u64,
     delays: Option<Delays>,
     /// Wall time spent in the world's steps (collision, the solver, the
-    /// snapshot): the physics' own cost, measured where it is paid.
+    /// snapshot), without the waits for other worlds of the process: the
+    /// physics' own cost, measured where it is paid.
     physics: Duration,
 }
 
@@ -145,6 +146,11 @@ impl Stepper {
     /// published in it.
     pub fn physics(&self) -> (Duration, u64) {
         (self.physics, self.publish_seq)
+    }
+
+    /// How long its steps waited for other worlds of the process.
+    pub fn waited_for_ode(&self) -> Duration {
+        self.world.waited_for_ode()
     }
 
     pub fn is_paused(&self) -> bool {
@@ -254,9 +260,11 @@ impl Stepper {
     /// A step failed in a way the world cannot recover from (a divergence
     /// it recovers from is an [`Event::Diverged`]).
     pub fn step(&mut self, events: &mut impl FnMut(Event)) -> Result<bool, StepError> {
-        let started = Instant::now();
+        let (started, waited) = (Instant::now(), self.world.waited_for_ode());
         let stepped = self.world.step();
-        self.physics += started.elapsed();
+        self.physics += started
+            .elapsed()
+            .saturating_sub(self.world.waited_for_ode() - waited);
         match stepped {
             Ok(Some(snapshot)) => {
                 self.publish_seq += 1;

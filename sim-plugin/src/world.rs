@@ -231,6 +231,9 @@ pub struct World {
     /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
     #[cfg(feature = "testing")]
     blow_up: Option<usize>,
+    /// How long the steps so far waited for other worlds of this process
+    /// to finish theirs (ODE's process-wide lock).
+    waited_for_ode: std::time::Duration,
 }
 
 impl World {
@@ -290,6 +293,7 @@ impl World {
             touching: Vec::new(),
             #[cfg(feature = "testing")]
             blow_up: None,
+            waited_for_ode: std::time::Duration::ZERO,
         };
         // The same routine as every Reset, so that a fresh world and a reset
         // one agree bit for bit (including ODE's internal geom order).
@@ -303,6 +307,12 @@ impl World {
 
     pub fn is_paused(&self) -> bool {
         self.paused
+    }
+
+    /// How long this world's steps have waited for other worlds of the
+    /// process to finish theirs: ODE steps one world at a time per process.
+    pub fn waited_for_ode(&self) -> std::time::Duration {
+        self.waited_for_ode
     }
 
     /// Physics steps since the last reset.
@@ -472,7 +482,7 @@ impl World {
         let surfaces = &self.surfaces;
         let touching = &mut self.touching;
         touching.clear();
-        self.ode.step(|pair| {
+        let report = self.ode.step(|pair| {
             let (a, b) = (pair.first.tag, pair.second.tag);
             let key = (a.min(b), a.max(b));
             if !touching.contains(&key) {
@@ -480,6 +490,7 @@ impl World {
             }
             surfaces.get(a, b)
         })?;
+        self.waited_for_ode += report.waited_for_lock;
         self.step_count += 1;
         #[cfg(feature = "testing")]
         if let Some(i) = self.blow_up.take() {

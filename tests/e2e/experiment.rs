@@ -699,6 +699,7 @@ pub(crate) fn without_run_time(mut report: Value) -> String {
     }
     // Only embedded worlds measure their physics.
     run.remove("physics_us_per_state");
+    run.remove("physics_wait_seconds");
     serde_json::to_string(&report).expect("serialises")
 }
 

@@ -5,6 +5,7 @@ use std::ffi::c_void;
 use std::os::raw::c_int;
 use std::panic::{self, AssertUnwindSafe};
 use std::ptr::NonNull;
+use std::time::{Duration, Instant};
 
 use ode_sys::{dContact, dContactGeom, dGeomID, dJointGroupID, dWorldID};
 
@@ -33,6 +34,9 @@ pub enum SpaceKind {
 pub struct StepReport {
     /// Contact joints created (one per accepted contact point).
     pub contact_joints: usize,
+    /// How long the step waited for ODE's process-wide lock: the time
+    /// other worlds of the process were stepping, not this one's cost.
+    pub waited_for_lock: Duration,
 }
 
 /// An ODE world with its top-level space and contact joint group.
@@ -301,7 +305,9 @@ impl World {
         F: FnMut(&ContactPair<'_>) -> Option<Surface>,
     {
         ensure_thread()?;
+        let asked = Instant::now();
         let guard = global_lock();
+        let waited_for_lock = asked.elapsed();
         rand_set_seed_locked(&guard, self.rand_seed);
         let mut ctx = Collide {
             world: self.raw.as_ptr(),
@@ -339,6 +345,7 @@ impl World {
         if ok {
             Ok(StepReport {
                 contact_joints: joints,
+                waited_for_lock,
             })
         } else {
             Err(OdeError::Ode(

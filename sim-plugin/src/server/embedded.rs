@@ -137,6 +137,13 @@ impl EmbeddedWorld {
         self.stepper.physics()
     }
 
+    /// How long this world's steps waited for other worlds of the process
+    /// to finish theirs: ODE steps one world at a time per process.
+    #[must_use]
+    pub fn waited_for_ode(&self) -> std::time::Duration {
+        self.stepper.waited_for_ode()
+    }
+
     /// The next message the daemon would have written to the client.
     pub fn next_message(&mut self) -> Option<pb::ServerMessage> {
         self.outbox.pop_front()

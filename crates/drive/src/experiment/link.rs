@@ -364,6 +364,7 @@ impl WorldLink {
             ),
             Conn::Embedded(world) => {
                 let (seconds, states) = world.physics();
+                let waited = world.world.waited_for_ode();
                 let mut timing = drive_link(
                     &self.runtime,
                     world.as_mut(),
@@ -376,6 +377,7 @@ impl WorldLink {
                 let (seconds_after, states_after) = world.physics();
                 timing.physics_seconds = (seconds_after - seconds).as_secs_f64();
                 timing.physics_states = states_after - states;
+                timing.physics_wait_seconds = (world.world.waited_for_ode() - waited).as_secs_f64();
                 Ok(timing)
             }
         }

@@ -50,6 +50,10 @@ pub struct Timing {
     /// The states they published in that time.
     #[serde(default)]
     pub physics_states: u64,
+    /// Wall time embedded worlds waited for each other's steps (ODE steps
+    /// one world at a time per process), seconds.
+    #[serde(default)]
+    pub physics_wait_seconds: f64,
     /// All handling times, for percentiles (not serialised).
     #[serde(skip)]
     pub histogram: Latencies,
@@ -86,6 +90,7 @@ impl std::ops::AddAssign for Timing {
         self.max_seconds = self.max_seconds.max(other.max_seconds);
         self.physics_seconds += other.physics_seconds;
         self.physics_states += other.physics_states;
+        self.physics_wait_seconds += other.physics_wait_seconds;
         self.histogram += other.histogram;
     }
 }
@@ -133,6 +138,10 @@ pub struct RunTiming {
     /// worlds (absent for worlds behind a socket), µs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub physics_us_per_state: Option<f64>,
+    /// How long the embedded worlds waited for each other's physics, summed
+    /// over the workers, seconds (absent for worlds behind sockets).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics_wait_seconds: Option<f64>,
 }
 
 impl RunInfo {
@@ -174,6 +183,8 @@ impl RunInfo {
                 simulated_states: timing.messages,
                 physics_us_per_state: (timing.physics_states > 0)
                     .then(|| timing.physics_seconds / timing.physics_states as f64 * 1e6),
+                physics_wait_seconds: (timing.physics_states > 0)
+                    .then_some(timing.physics_wait_seconds),
             }),
         }
     }

@@ -197,6 +197,12 @@ impl Reproduction {
         // The physics measured in the embedded worlds: states, and the
         // floor they imply with every worker's core stepping.
         let (mut measured_states, mut physics_seconds, mut floor) = (0u64, 0.0, 0.0);
+        let waited: f64 = self
+            .produced
+            .iter()
+            .flat_map(|p| &p.timing)
+            .filter_map(|t| t.physics_wait_seconds)
+            .sum();
         for p in &self.produced {
             let run = p.document.runs();
             let m: u64 = run.iter().map(|r| r.messages).sum();
@@ -271,7 +277,8 @@ impl Reproduction {
                 page,
                 "The embedded worlds stepped {measured_states} states at {:.1} µs of physics each \
                  (measured in this run): {physics_seconds:.1} s of physics, a floor of {floor:.1} s \
-                 with every worker's core stepping. ",
+                 with every worker's core stepping. Their steps waited {waited:.1} s in all for each \
+                 other's (ODE steps one world at a time per process). ",
                 physics_seconds / measured_states as f64 * 1e6,
             );
         } else {
