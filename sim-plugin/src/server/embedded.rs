@@ -12,12 +12,19 @@ use pushlearn::wire::pb;
 
 use super::gate::{operation, Admission};
 use super::{convert, state_message, Latency, ServerError, Timing};
-use crate::lockstep::{Accepted, Event, Stepper};
+use crate::lockstep::{Accepted, Event, Op, Stepper};
 use crate::scene::Scene;
 use crate::world::{Command, StepError, World};
 
 /// The client id of the one client.
 const CLIENT: u64 = 1;
+
+/// Held by an embedded world while it runs an interval. ODE steps one world
+/// at a time per process anyway (`ode::World::step` takes a process-wide
+/// lock for each 1 ms step); taking turns per interval instead of per step
+/// spares the workers a lock hand-over at every step while their learners
+/// still run in parallel (`docs/performance.md` §1, "Embedded worlds").
+static INTERVAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// A lock-step world served to one in-process client.
 pub struct EmbeddedWorld {
@@ -28,6 +35,8 @@ pub struct EmbeddedWorld {
     admission: Admission,
     /// What the daemon would have written to the client, oldest first.
     outbox: VecDeque<pb::ServerMessage>,
+    /// How long its Advances waited for other embedded worlds' intervals.
+    waited_for_turn: std::time::Duration,
 }
 
 impl std::fmt::Debug for EmbeddedWorld {
@@ -66,6 +75,7 @@ impl EmbeddedWorld {
             timing: Timing::Lockstep { latency },
             admission: Admission::default(),
             outbox: VecDeque::new(),
+            waited_for_turn: std::time::Duration::ZERO,
         })
     }
 
@@ -99,6 +109,14 @@ impl EmbeddedWorld {
             }
         };
         self.admission.note(&op);
+        let asked = std::time::Instant::now();
+        // A poisoned lock guards nothing but the turn: take it over.
+        let _turn = matches!(op, Op::Advance).then(|| {
+            INTERVAL
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        });
+        self.waited_for_turn += asked.elapsed();
         let Self {
             stepper,
             outbox,
@@ -141,7 +159,7 @@ impl EmbeddedWorld {
     /// to finish theirs: ODE steps one world at a time per process.
     #[must_use]
     pub fn waited_for_ode(&self) -> std::time::Duration {
-        self.stepper.waited_for_ode()
+        self.waited_for_turn + self.stepper.waited_for_ode()
     }
 
     /// The next message the daemon would have written to the client.

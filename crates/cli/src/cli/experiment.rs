@@ -88,7 +88,9 @@ struct WorldArgs {
     world: Option<Worlds>,
 
     /// Number of worlds running jobs in parallel [default: the number of
-    /// CPUs].
+    /// CPUs; one with embedded worlds and a built-in model, whose work is
+    /// too small to overlap a second world's physics, which ODE steps one
+    /// world at a time per process].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 

@@ -68,7 +68,8 @@ pub struct ReproduceArgs {
     #[arg(long, value_name = "DIR", default_value = ".")]
     root: PathBuf,
 
-    /// Worlds (workers) per experiment [default: the number of CPUs].
+    /// Worlds (workers) per experiment [default: the number of CPUs; one
+    /// with embedded worlds and a built-in model].
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 

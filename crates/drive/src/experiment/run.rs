@@ -111,6 +111,13 @@ impl Plan {
     }
 
     fn workers(&self) -> usize {
+        if matches!(self.source, WorldSource::Embedded { .. }) && self.learner.is_none() {
+            // Embedded worlds step one at a time per process, and a built-in
+            // model's work per message is too small to overlap with a second
+            // worker's physics: a second worker only adds hand-overs
+            // (`docs/performance.md` §1, "Embedded worlds").
+            return 1;
+        }
         self.source.max_workers(self.workers)
     }
 

@@ -196,6 +196,7 @@ impl Reproduction {
         let (mut messages, mut simulated, mut wall) = (0u64, 0u64, 0.0);
         // The physics measured in the embedded worlds: states, and the
         // floor they imply with every worker's core stepping.
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
         let (mut measured_states, mut physics_seconds, mut floor) = (0u64, 0.0, 0.0);
         let waited: f64 = self
             .produced
@@ -224,7 +225,7 @@ impl Reproduction {
                 .map(|t| t.max_handling_ms)
                 .fold(0.0, f64::max);
             let slow: u64 = p.timing.iter().map(|t| t.too_slow).sum();
-            let measured = Floor::of(&p.timing);
+            let measured = Floor::of(&p.timing, cores);
             messages += m;
             simulated += sim;
             wall += w;
@@ -277,7 +278,7 @@ impl Reproduction {
                 page,
                 "The embedded worlds stepped {measured_states} states at {:.1} µs of physics each \
                  (measured in this run): {physics_seconds:.1} s of physics, a floor of {floor:.1} s \
-                 with every worker's core stepping. Their steps waited {waited:.1} s in all for each \
+                 on this machine's {cores} cores. Their steps waited {waited:.1} s in all for each \
                  other's (ODE steps one world at a time per process). ",
                 physics_seconds / measured_states as f64 * 1e6,
             );
@@ -302,20 +303,20 @@ impl Reproduction {
 }
 
 /// The physics an experiment's embedded worlds measured, and the floor it
-/// implies: each state's physics once, spread over the run's workers.
+/// implies: each state's physics once, spread over the machine's cores.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Floor {
     /// Simulated states whose physics was measured.
     states: u64,
     /// Their physics, seconds.
     physics_seconds: f64,
-    /// The wall time that physics needs on the workers' cores, seconds.
+    /// The wall time that physics needs on the machine's cores, seconds.
     floor_seconds: f64,
 }
 
 impl Floor {
     /// `None` if no run measured its physics (worlds behind sockets).
-    fn of(runs: &[RunTiming]) -> Option<Floor> {
+    fn of(runs: &[RunTiming], cores: usize) -> Option<Floor> {
         let mut floor = Floor {
             states: 0,
             physics_seconds: 0.0,
@@ -328,7 +329,7 @@ impl Floor {
             let seconds = run.simulated_states as f64 * us * 1e-6;
             floor.states += run.simulated_states;
             floor.physics_seconds += seconds;
-            floor.floor_seconds += seconds / run.workers.max(1) as f64;
+            floor.floor_seconds += seconds / cores.max(1) as f64;
         }
         (floor.states > 0 && floor.floor_seconds > 0.0).then_some(floor)
     }
@@ -559,18 +560,16 @@ mod tests {
     }
 
     #[test]
-    fn the_floor_is_each_measured_states_physics_spread_over_its_workers() {
-        let floor =
-            Floor::of(&[run(1_000, 2, Some(80.0)), run(500, 1, Some(100.0))]).expect("measured");
+    fn the_floor_is_each_measured_states_physics_spread_over_the_cores() {
+        let runs = [run(1_000, 2, Some(80.0)), run(500, 1, Some(100.0))];
+        let floor = Floor::of(&runs, 2).expect("measured");
         assert_eq!(floor.states, 1_500);
         assert!((floor.physics_seconds - 0.13).abs() < 1e-12);
-        assert!((floor.floor_seconds - (0.04 + 0.05)).abs() < 1e-12);
+        assert!((floor.floor_seconds - 0.065).abs() < 1e-12);
         // Runs behind sockets measure nothing and add nothing.
-        assert_eq!(
-            Floor::of(&[run(1_000, 2, Some(80.0)), run(9_000, 2, None)]),
-            Floor::of(&[run(1_000, 2, Some(80.0))])
-        );
-        assert_eq!(Floor::of(&[run(1_000, 2, None)]), None);
-        assert_eq!(Floor::of(&[]), None);
+        let mixed = [run(1_000, 2, Some(80.0)), run(9_000, 2, None)];
+        assert_eq!(Floor::of(&mixed, 2), Floor::of(&mixed[..1], 2));
+        assert_eq!(Floor::of(&[run(1_000, 2, None)], 2), None);
+        assert_eq!(Floor::of(&[], 2), None);
     }
 }
