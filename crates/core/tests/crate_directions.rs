@@ -49,27 +49,29 @@ const DEV_ALLOWED: &[(&str, &[&str])] = &[
     ("pushlearn-cli", &["drive", "learner", "sim-plugin"]),
 ];
 
-/// Every workspace member and its dependencies on other members, by kind.
-fn workspace_graph() -> BTreeMap<String, Vec<(String, String)>> {
+/// What `cargo ARGS --offline` prints, run in this crate; fails the test
+/// if cargo fails.
+fn cargo(args: &[&str]) -> Vec<u8> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
     let output = Command::new(cargo)
-        .args([
-            "metadata",
-            "--format-version",
-            "1",
-            "--no-deps",
-            "--offline",
-        ])
+        .args(args)
+        .arg("--offline")
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
-        .expect("cargo metadata runs");
+        .expect("cargo runs");
     assert!(
         output.status.success(),
-        "cargo metadata failed: {}",
+        "cargo {args:?} failed: {}",
         String::from_utf8_lossy(&output.stderr)
     );
+    output.stdout
+}
+
+/// Every workspace member and its dependencies on other members, by kind.
+fn workspace_graph() -> BTreeMap<String, Vec<(String, String)>> {
+    let output = cargo(&["metadata", "--format-version", "1", "--no-deps"]);
     let metadata: serde_json::Value =
-        serde_json::from_slice(&output.stdout).expect("cargo metadata prints JSON");
+        serde_json::from_slice(&output).expect("cargo metadata prints JSON");
     let packages = metadata["packages"].as_array().expect("a package list");
     let members: BTreeSet<&str> = packages.iter().filter_map(|p| p["name"].as_str()).collect();
     packages
@@ -176,21 +178,11 @@ const NOT_IN_THE_DAEMON: &[&str] = &["lab", "plotters", "tokio-tungstenite", "ht
 
 #[test]
 fn the_daemon_build_links_neither_the_experiments_nor_the_viewer() {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned());
     let tree = |features: &[&str]| {
-        let output = Command::new(&cargo)
-            .args(["tree", "-p", "pushlearn-cli", "--edges", "normal,build"])
-            .args(features)
-            .args(["--prefix", "none", "--format", "{p}", "--offline"])
-            .current_dir(env!("CARGO_MANIFEST_DIR"))
-            .output()
-            .expect("cargo tree runs");
-        assert!(
-            output.status.success(),
-            "cargo tree failed: {}",
-            String::from_utf8_lossy(&output.stderr)
-        );
-        String::from_utf8(output.stdout)
+        let mut args = vec!["tree", "-p", "pushlearn-cli", "--edges", "normal,build"];
+        args.extend_from_slice(features);
+        args.extend_from_slice(&["--prefix", "none", "--format", "{p}"]);
+        String::from_utf8(cargo(&args))
             .expect("cargo tree prints UTF-8")
             .lines()
             .filter_map(|line| line.split_whitespace().next().map(str::to_owned))
