@@ -727,6 +727,8 @@ fn jitter_runs_shared_by_both_models_give_bit_identical_results() {
         model: String::new(),
         learner: None,
         runs: Some(Arc::clone(&cache)),
+        processes: None,
+        recipe: None,
     };
     let (mut states, mut simulated) = (0.0, 0.0);
     for model in [ModelKind::Gate, ModelKind::Interaction] {
@@ -847,9 +849,10 @@ fn new_object_runs_push_the_object_they_are_about() {
 
 /// Worlds embedded in the experiment's process, spawned as `pushlearn-sim`
 /// daemons and already running give the same reports bit for bit (all but
-/// the run-time fields): every kind of experiment, with and without latency
-/// emulation. The embedded world is what the experiments use by default, so
-/// this is what ties their documents to the daemon's physics.
+/// the run-time fields), and so do embedded worlds in two worker processes:
+/// every kind of experiment, with and without latency emulation. The
+/// embedded world is what the experiments use by default, so this is what
+/// ties their documents to the daemon's physics.
 #[test]
 fn embedded_spawned_and_connected_worlds_give_identical_reports() {
     let dir = TempDir::new("worlds");
@@ -875,21 +878,44 @@ fn embedded_spawned_and_connected_worlds_give_identical_reports() {
                 args.extend_from_slice(&["--mode", mode, "--json", &json]);
                 args.extend_from_slice(worlds);
                 succeeded(&pushlearn(&args));
-                let report = read_json(&json);
-                let physics = report["run"]["physics_us_per_state"].as_f64();
-                (without_run_time(report), physics)
+                let mut report = read_json(&json);
+                let run = report["run"].clone();
+                // How many workers ran it is not a result.
+                if let Some(run) = report["run"].as_object_mut() {
+                    run.remove("workers");
+                }
+                (without_run_time(report), run)
             };
             // One worker each, as a running world has.
-            let (embedded, physics) = report(&["--world", "embedded", "--workers", "1"]);
-            let (spawned, unmeasured) =
+            let (embedded, run) = report(&["--world", "embedded", "--workers", "1"]);
+            let (spawned, spawned_run) =
                 report(&["--world", "spawn", "--workers", "1", "--sim-bin", sim]);
             let (connected, _) = report(&["--sim", &addr]);
+            // Two worker processes, each with its own embedded world.
+            let (in_processes, processes_run) = report(&["--world", "embedded", "--workers", "2"]);
             assert_eq!(embedded, spawned, "{mode}: {experiment:?}");
             assert_eq!(embedded, connected, "{mode}: {experiment:?}");
-            // Only the embedded world's physics is measured, and it costs
-            // something.
-            assert!(physics.is_some_and(|us| us > 0.0), "{physics:?}");
-            assert_eq!(unmeasured, None);
+            assert_eq!(embedded, in_processes, "{mode}: {experiment:?}");
+            // Only the embedded worlds' physics is measured, and it costs
+            // something, in this process or in the workers.
+            for run in [&run, &processes_run] {
+                let physics = run["physics_us_per_state"].as_f64();
+                assert!(physics.is_some_and(|us| us > 0.0), "{run}");
+            }
+            assert_eq!(spawned_run["physics_us_per_state"].as_f64(), None);
+            // The push task's jobs ran in both workers; the other
+            // experiments' run in this process, one world at a time.
+            let push_task = i == 0;
+            let workers = if push_task { 2 } else { 1 };
+            assert_eq!(processes_run["workers"], workers, "{processes_run}");
+            // The workers' states are counted: each worker records its own
+            // runs, so they replay no more than one process does.
+            let simulated = |run: &Value| run["simulated_states"].as_u64();
+            assert!(
+                simulated(&processes_run) >= simulated(&run)
+                    && simulated(&processes_run) <= processes_run["messages"].as_u64(),
+                "{processes_run} against {run}"
+            );
         }
     }
 }

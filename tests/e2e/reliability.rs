@@ -1119,6 +1119,8 @@ fn a_learner_over_budget_in_realtime_is_counted_and_the_world_never_waits() {
         model: "sleepy gate".into(),
         learner: None,
         runs: None,
+        processes: None,
+        recipe: None,
     };
     let report = push_task(
         model,

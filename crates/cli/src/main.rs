@@ -44,6 +44,11 @@ enum Command {
     ServeLearner(cli::serve_learner::ServeLearnerArgs),
     #[cfg(feature = "lab")]
     Sweep(cli::sweep::SweepArgs),
+    /// Runs experiment jobs for the experiment that started it (JSON lines
+    /// on stdin and stdout); not for people.
+    #[cfg(feature = "lab")]
+    #[command(hide = true)]
+    ExperimentWorker,
 }
 
 fn main() -> ExitCode {
@@ -70,6 +75,8 @@ fn main() -> ExitCode {
         Command::ServeLearner(args) => cli::serve_learner::run(args),
         #[cfg(feature = "lab")]
         Command::Sweep(args) => cli::sweep::run(args),
+        #[cfg(feature = "lab")]
+        Command::ExperimentWorker => cli::experiment::serve_worker(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -20,7 +20,11 @@ const SUB: u64 = 16;
 const BUCKETS: usize = 16 + 37 * 16;
 
 /// A histogram of durations.
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// Serialised sparsely (the non-empty buckets) so that a worker process can
+/// send a job's histogram back with its result ([`crate::experiment::processes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "SparseLatencies", try_from = "SparseLatencies")]
 pub struct Latencies {
     counts: [u32; BUCKETS],
     count: u64,
@@ -121,6 +125,47 @@ impl std::ops::AddAssign for Latencies {
     }
 }
 
+/// [`Latencies`] as sent: `(bucket, count)` for the non-empty buckets.
+#[derive(Serialize, Deserialize)]
+struct SparseLatencies {
+    count: u64,
+    max_ns: u64,
+    buckets: Vec<(usize, u32)>,
+}
+
+impl From<Latencies> for SparseLatencies {
+    fn from(l: Latencies) -> Self {
+        Self {
+            count: l.count,
+            max_ns: l.max_ns,
+            buckets: l
+                .counts
+                .iter()
+                .enumerate()
+                .filter(|(_, &c)| c > 0)
+                .map(|(i, &c)| (i, c))
+                .collect(),
+        }
+    }
+}
+
+impl TryFrom<SparseLatencies> for Latencies {
+    type Error = String;
+    fn try_from(sparse: SparseLatencies) -> Result<Self, String> {
+        let mut l = Latencies {
+            count: sparse.count,
+            max_ns: sparse.max_ns,
+            ..Latencies::default()
+        };
+        for (i, c) in sparse.buckets {
+            *l.counts
+                .get_mut(i)
+                .ok_or_else(|| format!("latency bucket {i} is out of range (0..{BUCKETS})"))? = c;
+        }
+        Ok(l)
+    }
+}
+
 /// What reports show of a [`Latencies`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct LatencySummary {
@@ -143,6 +188,21 @@ impl std::fmt::Display for LatencySummary {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_histogram_survives_its_journey_to_another_process() {
+        let mut l = Latencies::default();
+        for us in [3, 3, 40, 900, 25_000] {
+            l.record(Duration::from_micros(us));
+        }
+        let text = serde_json::to_string(&l).expect("serialise");
+        let back: Latencies = serde_json::from_str(&text).expect("parse");
+        assert_eq!(back, l);
+        assert_eq!(back.summary(), l.summary());
+        let bad = r#"{"count":1,"max_ns":5,"buckets":[[100000,1]]}"#;
+        let err = serde_json::from_str::<Latencies>(bad).expect_err("out of range");
+        assert!(err.to_string().contains("bucket 100000"), "{err}");
+    }
 
     #[test]
     fn the_budget_is_two_intervals() {

@@ -12,6 +12,7 @@ use crate::experiments::push_task::PushTask;
 use crate::experiments::Experiment;
 use crate::report::layout::Printout;
 use crate::report::plot::PlotError;
+use drive::experiment::processes::Recipe;
 use drive::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use drive::experiment::run::{self, Plan};
 use drive::experiment::ExperimentError;
@@ -385,6 +386,11 @@ fn draft_tables(
         let mut plan = plan.clone();
         row.model.as_str().clone_into(&mut plan.model);
         let protocol = Protocol::new(Variant::Draft, row.options.config_number());
+        plan.recipe = Some(Recipe {
+            kind: row.model,
+            options: row.options.clone(),
+            publish_rate_hz: protocol.rate_hz,
+        });
         let report = row.model.dispatch(
             &row.options,
             protocol.rate_hz,
@@ -601,6 +607,11 @@ impl Ready {
             LearnerChoice::Builtin(kind) => {
                 plan.model = options.report_name(*kind);
                 plan.learner = None;
+                plan.recipe = Some(Recipe {
+                    kind: *kind,
+                    options: options.clone(),
+                    publish_rate_hz,
+                });
                 Ready::Builtin(*kind)
             }
             LearnerChoice::External(spec) => {
@@ -611,6 +622,7 @@ impl Ready {
                     version: model.info().version.clone(),
                     source: spec.source.to_string(),
                 });
+                plan.recipe = None;
                 Ready::External(Box::new(model))
             }
         })

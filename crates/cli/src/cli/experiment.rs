@@ -2,6 +2,7 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
@@ -9,6 +10,7 @@ use clap::{Args, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use learner::ObjectState;
 use pushlearn_cli::experiment::move_to_target::{sampled_targets, MAX_STEPS};
+use pushlearn_cli::experiment::processes::Processes;
 use pushlearn_cli::experiment::push_task::protocol::Variant;
 use pushlearn_cli::experiment::run::Plan;
 use pushlearn_cli::experiment::run_cache::RunCache;
@@ -268,6 +270,40 @@ struct MoveToTargetArgs {
     world: WorldArgs,
 }
 
+/// This program's worker processes for embedded worlds, started when an
+/// experiment first needs them (`drive::experiment::processes`); one set for
+/// the program's life, so that they keep their worlds and recorded runs
+/// from one experiment to the next. `workers` is the most there can be (the
+/// first caller's: a program's experiments share one --workers).
+///
+/// # Errors
+/// This program's path is unknown.
+pub fn worker_processes(workers: usize) -> Result<Arc<Processes>> {
+    static PROCESSES: OnceLock<Arc<Processes>> = OnceLock::new();
+    if let Some(processes) = PROCESSES.get() {
+        return Ok(Arc::clone(processes));
+    }
+    let program = std::env::current_exe()
+        .context("cannot find this program's path to start worker processes")?;
+    Ok(Arc::clone(PROCESSES.get_or_init(|| {
+        Arc::new(Processes::new(
+            program,
+            vec!["experiment-worker".to_owned()],
+            workers,
+        ))
+    })))
+}
+
+/// `pushlearn experiment-worker`: a worker process's loop on stdin and stdout.
+///
+/// # Errors
+/// Its pipes broke.
+pub fn serve_worker() -> Result<()> {
+    let stdout = std::io::stdout();
+    pushlearn_cli::experiment::processes::serve(std::io::stdin().lock(), stdout.lock())
+        .context("the worker process lost its pipes")
+}
+
 impl WorldArgs {
     fn plan(&self, scene: &str) -> Result<Plan> {
         if self.mode != Mode::LockstepJitter && self.latency_max != LATENCY_MAX_STEPS {
@@ -285,16 +321,23 @@ impl WorldArgs {
             })?,
         };
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let workers = self.workers.map_or(cpus, |n| n as usize);
+        let processes = match source {
+            WorldSource::Embedded { .. } => Some(worker_processes(workers)?),
+            _ => None,
+        };
         Ok(Plan {
             mode: self.mode,
             latency_max: self.latency_max,
-            workers: self.workers.map_or(cpus, |n| n as usize),
+            workers,
             source,
             seed: self.seed,
             model: String::new(),
             learner: None,
             runs: (self.mode.reuses_runs() && !self.no_reuse)
                 .then(|| std::sync::Arc::new(RunCache::new())),
+            processes,
+            recipe: None,
         })
     }
 

@@ -160,10 +160,12 @@ pub fn run(args: ReproduceArgs) -> Result<()> {
         reproduce::load(&entries, &sweeps, &dir)?
     } else {
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
+        let workers = args.workers.map_or(cpus, |n| n as usize);
         let settings = Settings {
             sim_bin: find_sim_binary(args.sim_bin.as_deref())?,
-            workers: args.workers.map_or(cpus, |n| n as usize),
+            workers,
             worlds: args.world,
+            processes: Some(super::experiment::worker_processes(workers)?),
         };
         let run_all = |entries: &[manifest::Entry], sweeps: &[manifest::SweepEntry]| {
             let mut ran = run_with_bars(entries, &settings)?;

@@ -18,6 +18,7 @@ pub mod constant_feedback;
 pub mod driver;
 pub mod link;
 pub mod move_to_target;
+pub mod processes;
 pub mod push_task;
 pub mod run;
 pub mod run_cache;
@@ -190,6 +191,12 @@ pub enum ExperimentError {
     /// writes each one as it finishes).
     #[error("cannot write the result of {job}: {why}")]
     Output { job: String, why: String },
+    /// A worker process ([`processes`]) could not run a job; its error.
+    #[error("{0}")]
+    InWorker(String),
+    /// A worker process ([`processes`]) died or stopped answering.
+    #[error("{job}: the worker process {why}")]
+    WorkerDied { job: String, why: String },
 }
 
 #[cfg(test)]

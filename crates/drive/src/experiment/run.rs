@@ -9,6 +9,7 @@ use learner::{Model, ObjectState};
 use super::constant_feedback::FeedbackTask;
 use super::driver::{Driver, Task};
 use super::move_to_target::{MttJob, MttTask};
+use super::processes::{Processes, Recipe};
 use super::push_task::protocol::{Protocol, PushJob, Variant};
 use super::push_task::task::PushTask;
 use super::run_cache::{CacheCounts, RunCache};
@@ -52,6 +53,13 @@ pub struct Plan {
     /// a world's states are a function of the commands since a reset or
     /// latency seed (see [`super::run_cache`]); ignored in the other modes.
     pub runs: Option<Arc<RunCache>>,
+    /// Worker processes for embedded worlds ([`super::processes`]): with
+    /// them, a built-in model's push-task jobs run on up to `workers` of
+    /// them, each stepping its own world; without, embedded worlds run in
+    /// this process, one at a time.
+    pub processes: Option<Arc<Processes>>,
+    /// How a worker process rebuilds the model: set for built-in models.
+    pub recipe: Option<Recipe>,
 }
 
 impl Plan {
@@ -69,8 +77,13 @@ impl Plan {
     }
 
     /// The cache in use, if runs are reused.
-    fn cache(&self) -> Option<&Arc<RunCache>> {
+    pub(crate) fn cache(&self) -> Option<&Arc<RunCache>> {
         self.runs.as_ref().filter(|_| self.mode.reuses_runs())
+    }
+
+    /// Which cache is in use, for worker processes to keep theirs apart.
+    pub(crate) fn cache_id(&self) -> Option<u64> {
+        self.cache().map(|c| c.id())
     }
 
     /// The cache's counts so far, taken when an experiment starts: a shared
@@ -110,15 +123,36 @@ impl Plan {
         run
     }
 
+    /// Workers in this process.
     fn workers(&self) -> usize {
         if matches!(self.source, WorldSource::Embedded { .. }) && self.learner.is_none() {
             // Embedded worlds step one at a time per process, and a built-in
             // model's work per message is too small to overlap with a second
             // worker's physics: a second worker only adds hand-overs
-            // (`docs/performance.md` §1, "Embedded worlds").
+            // (`docs/performance.md` §1, "Embedded worlds"). Worker processes
+            // are the way to more cores.
             return 1;
         }
         self.source.max_workers(self.workers)
+    }
+
+    /// The worker processes push-task jobs run on, the model's recipe and
+    /// how many to use: with embedded worlds and a built-in model, when the
+    /// plan has processes and more than one worker.
+    fn worker_processes(&self) -> Option<(&Processes, &Recipe, usize)> {
+        let (WorldSource::Embedded { .. }, None, Some(processes), Some(recipe)) =
+            (&self.source, &self.learner, &self.processes, &self.recipe)
+        else {
+            return None;
+        };
+        let workers = self.workers.min(processes.size());
+        (workers > 1).then_some((processes.as_ref(), recipe, workers))
+    }
+
+    /// Workers for push-task jobs: processes or threads.
+    fn push_workers(&self) -> usize {
+        self.worker_processes()
+            .map_or_else(|| self.workers(), |(_, _, n)| n)
     }
 
     /// Runs `job` on `worker`, retried once on a new world if the world
@@ -132,7 +166,7 @@ impl Plan {
         retry_if_the_world_dies(worker, || self.start(scene), job)
     }
 
-    fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
+    pub(crate) fn start(&self, scene: &str) -> Result<Worker, ExperimentError> {
         let mut worker = Worker::start(&self.source, self.mode.pacing())?;
         worker.link.require_scene(scene)?;
         if self.mode.pacing() == super::link::Pacing::Lockstep {
@@ -241,7 +275,7 @@ pub fn push_task<M: Model>(
         &started,
         results.iter().map(|r| (r.counters, r.timing)),
         RATE_HZ,
-        plan.workers().min(jobs.len()),
+        plan.push_workers().min(jobs.len()),
     );
     Ok(report)
 }
@@ -264,6 +298,11 @@ pub fn push_jobs<M: Model>(
     let Some(first) = jobs.first() else {
         return Ok(Vec::new());
     };
+    if let Some((processes, recipe, workers)) = plan.worker_processes() {
+        if recipe.publish_rate_hz == rate_hz {
+            return processes.push_jobs(recipe, jobs, plan, workers, done, progress);
+        }
+    }
     let scene = first.protocol.scene();
     let untrained = Mutex::new(untrained);
     run_jobs(
@@ -271,25 +310,38 @@ pub fn push_jobs<M: Model>(
         plan.workers(),
         || plan.start(scene),
         |job, worker| {
-            let (task, timing, counters) = plan.retrying(worker, scene, |worker| {
-                drive(
-                    worker,
-                    &untrained,
-                    PushTask::new(job),
-                    rate_hz,
-                    plan.job_setup(job.latency_seed),
-                    Fold {
-                        seed: job.seed,
-                        name: format!("N_train {} fold {}", job.n_train, job.fold),
-                    },
-                )
-            })?;
-            let result = PushJobResult::from_task(job, task, counters, timing)?;
+            let result = push_job(worker, &untrained, job, rate_hz, plan)?;
             done(&result)?;
             Ok(result)
         },
         progress,
     )
+}
+
+/// Runs one push-task job on `worker`'s world (retried once on a new world
+/// if the world process dies).
+pub(crate) fn push_job<M: Model>(
+    worker: &mut Worker,
+    untrained: &Mutex<M>,
+    job: &PushJob,
+    rate_hz: u32,
+    plan: &Plan,
+) -> Result<PushJobResult, ExperimentError> {
+    let scene = job.protocol.scene();
+    let (task, timing, counters) = plan.retrying(worker, scene, |worker| {
+        drive(
+            worker,
+            untrained,
+            PushTask::new(job),
+            rate_hz,
+            plan.job_setup(job.latency_seed),
+            Fold {
+                seed: job.seed,
+                name: format!("N_train {} fold {}", job.n_train, job.fold),
+            },
+        )
+    })?;
+    PushJobResult::from_task(job, task, counters, timing)
 }
 
 /// The push task's report from its jobs' results (in any order): the

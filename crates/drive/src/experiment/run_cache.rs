@@ -214,16 +214,31 @@ pub(crate) struct Path {
 
 /// Recorded world streams shared by the workers of one experiment (see the
 /// module docs).
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct RunCache {
     tree: Mutex<Tree>,
     replayed: AtomicU64,
     simulated: AtomicU64,
+    /// Unique in this process: worker processes keep one cache of their
+    /// own per cache of the experiment's ([`crate::experiment::processes`]).
+    id: u64,
+}
+
+impl Default for RunCache {
+    fn default() -> Self {
+        static NEXT_ID: AtomicU64 = AtomicU64::new(0);
+        Self {
+            tree: Mutex::default(),
+            replayed: AtomicU64::new(0),
+            simulated: AtomicU64::new(0),
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
+        }
+    }
 }
 
 /// How many world states a cache served from memory and how many the worlds
 /// simulated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct CacheCounts {
     pub replayed: u64,
     pub simulated: u64,
@@ -234,6 +249,21 @@ impl RunCache {
     #[must_use]
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Which cache this is, among this process's.
+    #[must_use]
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Counts what a worker process's copy of this cache did for a job
+    /// ([`crate::experiment::processes`]), so that [`Self::counts`] covers
+    /// the experiment's states wherever they were simulated.
+    pub fn count_elsewhere(&self, counts: CacheCounts) {
+        self.replayed.fetch_add(counts.replayed, Ordering::Relaxed);
+        self.simulated
+            .fetch_add(counts.simulated, Ordering::Relaxed);
     }
 
     /// States served from memory and states simulated so far.

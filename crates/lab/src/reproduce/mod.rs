@@ -26,6 +26,7 @@ use std::time::Instant;
 use crate::spec::{Document, SpecError};
 use crate::sweep::summary::Summary;
 use calibration::CalibrationRow;
+use drive::experiment::processes::Processes;
 use drive::experiment::run::Plan;
 use drive::experiment::run_cache::RunCache;
 use drive::experiment::workers::Worlds;
@@ -344,6 +345,8 @@ pub struct Settings {
     pub workers: usize,
     /// Where the experiments' worlds run.
     pub worlds: Worlds,
+    /// Worker processes for embedded worlds (`drive::experiment::processes`).
+    pub processes: Option<Arc<Processes>>,
 }
 
 /// Progress of a reproduction, for bars.
@@ -390,6 +393,8 @@ pub fn run(
             model: String::new(),
             learner: None,
             runs: entry.mode.reuses_runs().then(|| Arc::clone(cache)),
+            processes: settings.processes.clone(),
+            recipe: None,
         };
         progress(Progress::Started {
             entry,

@@ -64,7 +64,7 @@ pub fn draft_test_positions() -> Vec<f64> {
 /// publishes: the variant's protocol, changed by the driver's
 /// configuration bits (`docs/spec/experiments.md` §1: 2 LOWFREQ, 4 ALLOWMISSPOSITIONS,
 /// 8 FIXFIRSTTHREETRAININGRUNS).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Protocol {
     pub variant: Variant,
     /// Training starts that replace the random ones, run by run.
@@ -236,7 +236,7 @@ impl Variant {
 }
 
 /// One (N_train, fold) of a push-task experiment.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PushJob {
     pub n_train: usize,
     pub fold: usize,
