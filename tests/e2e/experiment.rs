@@ -903,10 +903,9 @@ fn embedded_spawned_and_connected_worlds_give_identical_reports() {
                 assert!(physics.is_some_and(|us| us > 0.0), "{run}");
             }
             assert_eq!(spawned_run["physics_us_per_state"].as_f64(), None);
-            // The push task's jobs ran in both workers; the other
-            // experiments' run in this process, one world at a time.
-            let push_task = i == 0;
-            let workers = if push_task { 2 } else { 1 };
+            // The push task's and Move to Target's jobs ran in both
+            // workers; constant feedback is one job.
+            let workers = if experiment[1] == "--variant" { 1 } else { 2 };
             assert_eq!(processes_run["workers"], workers, "{processes_run}");
             // The workers' states are counted: each worker records its own
             // runs, so they replay no more than one process does.

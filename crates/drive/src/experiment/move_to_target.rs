@@ -67,7 +67,7 @@ fn expected_blocks() -> BTreeMap<u32, ObjectState> {
 }
 
 /// One (target, repetition).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MttJob {
     /// Index into the experiment's target list.
     pub target_index: usize,
@@ -79,6 +79,16 @@ pub struct MttJob {
 }
 
 impl MttJob {
+    /// The job in messages, e.g. `target 2 repetition 0`.
+    #[must_use]
+    pub fn name(&self) -> String {
+        format!(
+            "target {} repetition {}",
+            self.target_index + 1,
+            self.repetition
+        )
+    }
+
     /// All jobs in report order: for each target, for each repetition.
     #[must_use]
     pub fn all(

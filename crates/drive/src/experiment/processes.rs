@@ -28,13 +28,16 @@ use learner::registry::{ModelKind, ModelOptions, WithModel};
 use learner::Model;
 use serde::{Deserialize, Serialize};
 
+use super::move_to_target::MttJob;
 use super::push_task::protocol::PushJob;
-use super::run::{push_job, Plan};
+use super::run::{mtt_job, push_job, Plan};
 use super::run_cache::{CacheCounts, RunCache};
 use super::workers::{Worker, WorldSource};
 use super::{ExperimentError, Mode};
 use crate::latency::Latencies;
+use crate::results::move_to_target::MttJobResult;
 use crate::results::push_task::PushJobResult;
+use crate::results::run_info::Timing;
 
 /// A built-in model as a worker process rebuilds it: its kind, options and
 /// the publish rate its thresholds are for.
@@ -55,19 +58,59 @@ struct WorldRequest {
     cache: Option<u64>,
 }
 
-/// One push-task job for a worker process.
+/// A job a worker process can run.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+enum Job {
+    Push(PushJob),
+    MoveToTarget(MttJob),
+}
+
+impl Job {
+    fn name(&self) -> String {
+        match self {
+            Job::Push(job) => job.name(),
+            Job::MoveToTarget(job) => job.name(),
+        }
+    }
+
+    /// What makes its runs: with the world, which worker may replay them.
+    fn seeds(&self) -> (u64, u64) {
+        match self {
+            Job::Push(job) => (job.seed, job.latency_seed),
+            Job::MoveToTarget(job) => (job.seed, job.latency_seed),
+        }
+    }
+}
+
+/// A finished [`Job`].
+#[derive(Clone, Debug, Serialize, Deserialize)]
+enum Finished {
+    Push(PushJobResult),
+    MoveToTarget(MttJobResult),
+}
+
+impl Finished {
+    fn timing(&mut self) -> &mut Timing {
+        match self {
+            Finished::Push(result) => &mut result.timing,
+            Finished::MoveToTarget(result) => &mut result.timing,
+        }
+    }
+}
+
+/// One job for a worker process.
 #[derive(Debug, Serialize, Deserialize)]
 pub struct JobRequest {
     recipe: Recipe,
     world: WorldRequest,
-    job: PushJob,
+    job: Job,
 }
 
 /// A worker process's answer to a [`JobRequest`].
 #[derive(Debug, Serialize, Deserialize)]
 enum JobResponse {
     Done {
-        result: Box<PushJobResult>,
+        result: Box<Finished>,
         /// The result's handling times, which its own serialisation leaves out.
         histogram: Box<Latencies>,
         /// What the worker's run cache did for the job.
@@ -119,21 +162,86 @@ impl Processes {
         plan: &Plan,
         workers: usize,
         done: impl Fn(&PushJobResult) -> Result<(), ExperimentError> + Sync,
-        mut progress: impl FnMut(usize),
+        progress: impl FnMut(usize),
     ) -> Result<Vec<PushJobResult>, ExperimentError> {
+        let scene = jobs.first().map_or("", |j| j.protocol.scene());
+        let jobs: Vec<Job> = jobs.iter().cloned().map(Job::Push).collect();
+        let finished = self.run(
+            recipe,
+            scene,
+            &jobs,
+            plan,
+            workers,
+            |finished| match finished {
+                Finished::Push(result) => done(result),
+                Finished::MoveToTarget(_) => Ok(()),
+            },
+            progress,
+        )?;
+        finished
+            .into_iter()
+            .zip(&jobs)
+            .map(|(finished, job)| match finished {
+                Finished::Push(result) => Ok(result),
+                Finished::MoveToTarget(_) => Err(mixed_up(job)),
+            })
+            .collect()
+    }
+
+    /// Runs Move to Target `jobs` like [`Self::push_jobs`].
+    pub(crate) fn mtt_jobs(
+        &self,
+        recipe: &Recipe,
+        jobs: &[MttJob],
+        plan: &Plan,
+        workers: usize,
+        progress: impl FnMut(usize),
+    ) -> Result<Vec<MttJobResult>, ExperimentError> {
+        let jobs: Vec<Job> = jobs.iter().cloned().map(Job::MoveToTarget).collect();
+        let finished = self.run(
+            recipe,
+            "one_block",
+            &jobs,
+            plan,
+            workers,
+            |_| Ok(()),
+            progress,
+        )?;
+        finished
+            .into_iter()
+            .zip(&jobs)
+            .map(|(finished, job)| match finished {
+                Finished::MoveToTarget(result) => Ok(result),
+                Finished::Push(_) => Err(mixed_up(job)),
+            })
+            .collect()
+    }
+
+    #[allow(clippy::too_many_arguments)] // `push_jobs`' and `mtt_jobs`' one body
+    fn run(
+        &self,
+        recipe: &Recipe,
+        scene: &str,
+        jobs: &[Job],
+        plan: &Plan,
+        workers: usize,
+        done: impl Fn(&Finished) -> Result<(), ExperimentError> + Sync,
+        mut progress: impl FnMut(usize),
+    ) -> Result<Vec<Finished>, ExperimentError> {
         let workers = workers.clamp(1, self.size()).min(jobs.len().max(1));
         let world = WorldRequest {
-            scene: jobs
-                .first()
-                .map_or_else(String::new, |j| j.protocol.scene().to_owned()),
+            scene: scene.to_owned(),
             mode: plan.mode,
             latency_max: plan.latency_max,
             cache: plan.cache_id(),
         };
-        let key = |job: &PushJob| (world.clone(), job.seed, job.latency_seed);
+        let key = |job: &Job| {
+            let (seed, latency_seed) = job.seeds();
+            (world.clone(), seed, latency_seed)
+        };
         let claimed = Mutex::new(vec![false; jobs.len()]);
         let stop = AtomicBool::new(false);
-        let (sender, results) = mpsc::channel::<Result<(usize, PushJobResult), ExperimentError>>();
+        let (sender, results) = mpsc::channel::<Result<(usize, Finished), ExperimentError>>();
         std::thread::scope(|scope| {
             for id in 0..workers {
                 let sender = sender.clone();
@@ -146,11 +254,10 @@ impl Processes {
                         let Some(index) = self.next_job(id, workers, jobs, claimed, key) else {
                             break;
                         };
-                        let job = &jobs[index];
                         let request = JobRequest {
                             recipe: recipe.clone(),
                             world: world.clone(),
-                            job: job.clone(),
+                            job: jobs[index].clone(),
                         };
                         let result = self.ask(&mut slot, &request).and_then(|(result, counts)| {
                             if let Some(cache) = plan.cache() {
@@ -169,7 +276,7 @@ impl Processes {
                 });
             }
             drop(sender);
-            let mut slots: Vec<Option<PushJobResult>> = vec![None; jobs.len()];
+            let mut slots: Vec<Option<Finished>> = vec![None; jobs.len()];
             let mut first_error = None;
             let mut finished = 0;
             for message in results {
@@ -203,9 +310,9 @@ impl Processes {
         &self,
         id: usize,
         workers: usize,
-        jobs: &[PushJob],
+        jobs: &[Job],
         claimed: &Mutex<Vec<bool>>,
-        key: impl Fn(&PushJob) -> (WorldRequest, u64, u64),
+        key: impl Fn(&Job) -> (WorldRequest, u64, u64),
     ) -> Option<usize> {
         let mut claimed = claimed.lock().unwrap_or_else(PoisonError::into_inner);
         let mut affinity = self.affinity.lock().unwrap_or_else(PoisonError::into_inner);
@@ -231,20 +338,21 @@ impl Processes {
         &self,
         slot: &mut Option<WorkerProcess>,
         request: &JobRequest,
-    ) -> Result<(PushJobResult, CacheCounts), ExperimentError> {
-        let job = format!("N_train {} fold {}", request.job.n_train, request.job.fold);
+    ) -> Result<(Finished, CacheCounts), ExperimentError> {
+        let job = request.job.name();
         let worker = match slot {
             Some(worker) => worker,
             None => slot.insert(WorkerProcess::start(&self.program, &self.args)?),
         };
         match worker.ask(request) {
             Ok(JobResponse::Done {
-                mut result,
+                result,
                 histogram,
                 cache,
             }) => {
-                result.timing.histogram = *histogram;
-                Ok((*result, cache))
+                let mut result = *result;
+                result.timing().histogram = *histogram;
+                Ok((result, cache))
             }
             Ok(JobResponse::Failed { error }) => Err(ExperimentError::InWorker(error)),
             Err(why) => {
@@ -257,6 +365,14 @@ impl Processes {
             }
         }
     }
+}
+
+/// A worker that answered `job` with the other kind's result.
+fn mixed_up(job: &Job) -> ExperimentError {
+    ExperimentError::InWorker(format!(
+        "{}: the worker process answered with another kind of job's result",
+        job.name()
+    ))
 }
 
 /// One running worker process.
@@ -404,7 +520,7 @@ fn run(
         )
         .map_err(|err| ExperimentError::InWorker(err.to_string()))??;
     let after = plan.cache().map(|c| c.counts()).unwrap_or_default();
-    let histogram = std::mem::take(&mut result.timing.histogram);
+    let histogram = std::mem::take(&mut result.timing().histogram);
     Ok(JobResponse::Done {
         result: Box::new(result),
         histogram: Box::new(histogram),
@@ -417,22 +533,28 @@ fn run(
 
 /// One job with the model a [`Recipe`] built.
 struct OneJob<'a> {
-    job: &'a PushJob,
+    job: &'a Job,
     rate_hz: u32,
     plan: &'a Plan,
     worker: &'a mut Worker,
 }
 
 impl WithModel for OneJob<'_> {
-    type Output = Result<PushJobResult, ExperimentError>;
+    type Output = Result<Finished, ExperimentError>;
     fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        push_job(
-            self.worker,
-            &Mutex::new(untrained),
-            self.job,
-            self.rate_hz,
-            self.plan,
-        )
+        let untrained = Mutex::new(untrained);
+        Ok(match self.job {
+            Job::Push(job) => Finished::Push(push_job(
+                self.worker,
+                &untrained,
+                job,
+                self.rate_hz,
+                self.plan,
+            )?),
+            Job::MoveToTarget(job) => {
+                Finished::MoveToTarget(mtt_job(self.worker, &untrained, job, self.plan)?)
+            }
+        })
     }
 }
 

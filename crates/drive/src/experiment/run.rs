@@ -149,10 +149,12 @@ impl Plan {
         (workers > 1).then_some((processes.as_ref(), recipe, workers))
     }
 
-    /// Workers for push-task jobs: processes or threads.
-    fn push_workers(&self) -> usize {
-        self.worker_processes()
-            .map_or_else(|| self.workers(), |(_, _, n)| n)
+    /// Workers for jobs of a model at `rate_hz`: processes or threads.
+    fn job_workers(&self, rate_hz: u32) -> usize {
+        match self.worker_processes() {
+            Some((_, recipe, n)) if recipe.publish_rate_hz == rate_hz => n,
+            _ => self.workers(),
+        }
     }
 
     /// Runs `job` on `worker`, retried once on a new world if the world
@@ -275,7 +277,7 @@ pub fn push_task<M: Model>(
         &started,
         results.iter().map(|r| (r.counters, r.timing)),
         RATE_HZ,
-        plan.push_workers().min(jobs.len()),
+        plan.job_workers(protocol.rate_hz).min(jobs.len()),
     );
     Ok(report)
 }
@@ -337,7 +339,7 @@ pub(crate) fn push_job<M: Model>(
             plan.job_setup(job.latency_seed),
             Fold {
                 seed: job.seed,
-                name: format!("N_train {} fold {}", job.n_train, job.fold),
+                name: job.name(),
             },
         )
     })?;
@@ -440,33 +442,21 @@ pub fn move_to_target<M: Model>(
 ) -> Result<MttReport, ExperimentError> {
     let started = plan.started();
     let jobs = MttJob::all(targets, repetitions, max_steps, plan.seed);
-    let untrained = Mutex::new(untrained);
-    let results = run_jobs(
-        &jobs,
-        plan.workers(),
-        || plan.start("one_block"),
-        |job, worker| {
-            let (task, timing, counters) = plan.retrying(worker, "one_block", |worker| {
-                drive(
-                    worker,
-                    &untrained,
-                    MttTask::new(job),
-                    RATE_HZ,
-                    plan.job_setup(job.latency_seed),
-                    Fold {
-                        seed: job.seed,
-                        name: format!(
-                            "target {} repetition {}",
-                            job.target_index + 1,
-                            job.repetition
-                        ),
-                    },
-                )
-            })?;
-            MttJobResult::from_task(job, task, counters, timing)
-        },
-        progress,
-    )?;
+    let results = match plan.worker_processes() {
+        Some((processes, recipe, workers)) if recipe.publish_rate_hz == RATE_HZ => {
+            processes.mtt_jobs(recipe, &jobs, plan, workers, progress)?
+        }
+        _ => {
+            let untrained = Mutex::new(untrained);
+            run_jobs(
+                &jobs,
+                plan.workers(),
+                || plan.start("one_block"),
+                |job, worker| mtt_job(worker, &untrained, job, plan),
+                progress,
+            )?
+        }
+    };
     let entries = targets
         .iter()
         .enumerate()
@@ -496,7 +486,31 @@ pub fn move_to_target<M: Model>(
             &started,
             results.iter().map(|r| (r.counters, r.timing)),
             RATE_HZ,
-            plan.workers().min(jobs.len()),
+            plan.job_workers(RATE_HZ).min(jobs.len()),
         ),
     })
+}
+
+/// Runs one Move to Target job on `worker`'s world (retried once on a new
+/// world if the world process dies).
+pub(crate) fn mtt_job<M: Model>(
+    worker: &mut Worker,
+    untrained: &Mutex<M>,
+    job: &MttJob,
+    plan: &Plan,
+) -> Result<MttJobResult, ExperimentError> {
+    let (task, timing, counters) = plan.retrying(worker, "one_block", |worker| {
+        drive(
+            worker,
+            untrained,
+            MttTask::new(job),
+            RATE_HZ,
+            plan.job_setup(job.latency_seed),
+            Fold {
+                seed: job.seed,
+                name: job.name(),
+            },
+        )
+    })?;
+    MttJobResult::from_task(job, task, counters, timing)
 }

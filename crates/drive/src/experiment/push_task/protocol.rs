@@ -248,6 +248,12 @@ pub struct PushJob {
 }
 
 impl PushJob {
+    /// The job in messages, e.g. `N_train 10 fold 3`.
+    #[must_use]
+    pub fn name(&self) -> String {
+        format!("N_train {} fold {}", self.n_train, self.fold)
+    }
+
     /// The jobs of one experiment in report order: for each N_train, for each
     /// fold (`docs/spec/experiments.md` §3, outer loops).
     #[must_use]

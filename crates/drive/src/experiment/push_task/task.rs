@@ -224,7 +224,7 @@ impl PushJobResult {
             .enumerate()
             .map(|(i, e)| {
                 e.ok_or(ExperimentError::NoPrediction {
-                    job: format!("N_train {} fold {}", job.n_train, job.fold),
+                    job: job.name(),
                     run: i,
                 })
             })
