@@ -90,9 +90,9 @@ struct WorldArgs {
     world: Option<Worlds>,
 
     /// Number of worlds running jobs in parallel [default: the number of
-    /// CPUs; one with embedded worlds and a built-in model, whose work is
-    /// too small to overlap a second world's physics, which ODE steps one
-    /// world at a time per process].
+    /// CPUs]. With embedded worlds a built-in model's jobs run in as many
+    /// worker processes (ODE steps one world at a time per process); an
+    /// external learner's worlds share this process.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 

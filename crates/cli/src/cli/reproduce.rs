@@ -68,8 +68,9 @@ pub struct ReproduceArgs {
     #[arg(long, value_name = "DIR", default_value = ".")]
     root: PathBuf,
 
-    /// Worlds (workers) per experiment [default: the number of CPUs; one
-    /// with embedded worlds and a built-in model].
+    /// Worlds (workers) in parallel [default: the number of CPUs]; with
+    /// embedded worlds, a built-in model's jobs run in as many worker
+    /// processes.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
 

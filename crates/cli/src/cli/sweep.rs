@@ -83,8 +83,9 @@ struct RunArgs {
     /// The output directory (created if needed).
     #[arg(long, value_name = "DIR")]
     out: PathBuf,
-    /// Worlds (workers) in parallel [default: the number of CPUs; one with
-    /// embedded worlds and a built-in model].
+    /// Worlds (workers) in parallel [default: the number of CPUs]; with
+    /// embedded worlds, a built-in model's jobs run in as many worker
+    /// processes.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     workers: Option<u32>,
     /// Where the jobs' worlds run [default: embedded; spawn with
