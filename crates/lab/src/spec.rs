@@ -386,7 +386,7 @@ fn draft_tables(
         let mut plan = plan.clone();
         row.model.as_str().clone_into(&mut plan.model);
         let protocol = Protocol::new(Variant::Draft, row.options.config_number());
-        plan.recipe = Some(Recipe {
+        plan.recipe = Some(Recipe::Builtin {
             kind: row.model,
             options: row.options.clone(),
             publish_rate_hz: protocol.rate_hz,
@@ -607,7 +607,7 @@ impl Ready {
             LearnerChoice::Builtin(kind) => {
                 plan.model = options.report_name(*kind);
                 plan.learner = None;
-                plan.recipe = Some(Recipe {
+                plan.recipe = Some(Recipe::Builtin {
                     kind: *kind,
                     options: options.clone(),
                     publish_rate_hz,
@@ -622,7 +622,11 @@ impl Ready {
                     version: model.info().version.clone(),
                     source: spec.source.to_string(),
                 });
-                plan.recipe = None;
+                plan.recipe = Some(Recipe::External {
+                    spec: spec.clone(),
+                    task: task.to_owned(),
+                    publish_rate_hz,
+                });
                 Ready::External(Box::new(model))
             }
         })

@@ -34,18 +34,43 @@ use super::run::{mtt_job, push_job, Plan};
 use super::run_cache::{CacheCounts, RunCache};
 use super::workers::{Worker, WorldSource};
 use super::{ExperimentError, Mode};
+use crate::external::{ExternalModel, LearnerSpec};
 use crate::latency::Latencies;
 use crate::results::move_to_target::MttJobResult;
 use crate::results::push_task::PushJobResult;
 use crate::results::run_info::Timing;
 
-/// A built-in model as a worker process rebuilds it: its kind, options and
-/// the publish rate its thresholds are for.
+/// The learner as a worker process makes it: a built-in model from its
+/// kind and options, or an external learner started beside the worker.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Recipe {
-    pub kind: ModelKind,
-    pub options: ModelOptions,
-    pub publish_rate_hz: u32,
+pub enum Recipe {
+    Builtin {
+        kind: ModelKind,
+        options: ModelOptions,
+        /// The rate its thresholds are for.
+        publish_rate_hz: u32,
+    },
+    External {
+        spec: LearnerSpec,
+        /// The task it must be able to run (the protocol's Start).
+        task: String,
+        publish_rate_hz: u32,
+    },
+}
+
+impl Recipe {
+    /// The publish rate the learner is made for.
+    #[must_use]
+    pub fn publish_rate_hz(&self) -> u32 {
+        match self {
+            Recipe::Builtin {
+                publish_rate_hz, ..
+            }
+            | Recipe::External {
+                publish_rate_hz, ..
+            } => *publish_rate_hz,
+        }
+    }
 }
 
 /// The world a job runs on, and which of the experiment process's run
@@ -462,11 +487,11 @@ impl Drop for WorkerProcess {
 /// # Errors
 /// Reading `input` or writing `output` failed.
 pub fn serve(input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
-    let mut worlds: HashMap<WorldRequest, (Plan, Worker)> = HashMap::new();
+    let mut kept = Kept::default();
     for line in input.lines() {
         let line = line?;
         let response = match serde_json::from_str::<JobRequest>(&line) {
-            Ok(request) => run(&mut worlds, request).unwrap_or_else(|err| JobResponse::Failed {
+            Ok(request) => kept.run(request).unwrap_or_else(|err| JobResponse::Failed {
                 error: err.to_string(),
             }),
             Err(err) => JobResponse::Failed {
@@ -480,55 +505,73 @@ pub fn serve(input: impl BufRead, mut output: impl Write) -> std::io::Result<()>
     Ok(())
 }
 
-fn run(
-    worlds: &mut HashMap<WorldRequest, (Plan, Worker)>,
-    request: JobRequest,
-) -> Result<JobResponse, ExperimentError> {
-    let (plan, worker) = match worlds.entry(request.world.clone()) {
-        std::collections::hash_map::Entry::Occupied(entry) => entry.into_mut(),
-        std::collections::hash_map::Entry::Vacant(entry) => {
-            let world = entry.key();
-            let plan = Plan {
-                mode: world.mode,
-                latency_max: world.latency_max,
-                workers: 1,
-                source: WorldSource::embedded(world.mode, &world.scene, world.latency_max)?,
-                seed: 0,
-                model: String::new(),
-                learner: None,
-                runs: world.cache.map(|_| Arc::new(RunCache::new())),
-                processes: None,
-                recipe: None,
-            };
-            let worker = plan.start(&world.scene)?;
-            entry.insert((plan, worker))
-        }
-    };
-    let before = plan.cache().map(|c| c.counts()).unwrap_or_default();
-    let mut result = request
-        .recipe
-        .kind
-        .dispatch(
-            &request.recipe.options,
-            request.recipe.publish_rate_hz,
-            OneJob {
-                job: &request.job,
-                rate_hz: request.recipe.publish_rate_hz,
-                plan,
-                worker,
+/// What a worker process keeps between jobs: its worlds (with their run
+/// caches) and the external learners it started.
+#[derive(Default)]
+struct Kept {
+    worlds: HashMap<WorldRequest, (Plan, Worker)>,
+    /// By their recipe's JSON; each job gets a fresh handle (a clone).
+    learners: HashMap<String, ExternalModel>,
+}
+
+impl Kept {
+    fn run(&mut self, request: JobRequest) -> Result<JobResponse, ExperimentError> {
+        let (plan, worker) = match self.worlds.entry(request.world.clone()) {
+            std::collections::hash_map::Entry::Occupied(entry) => entry.into_mut(),
+            std::collections::hash_map::Entry::Vacant(entry) => {
+                let world = entry.key();
+                let plan = Plan {
+                    mode: world.mode,
+                    latency_max: world.latency_max,
+                    workers: 1,
+                    source: WorldSource::embedded(world.mode, &world.scene, world.latency_max)?,
+                    seed: 0,
+                    model: String::new(),
+                    learner: None,
+                    runs: world.cache.map(|_| Arc::new(RunCache::new())),
+                    processes: None,
+                    recipe: None,
+                };
+                let worker = plan.start(&world.scene)?;
+                entry.insert((plan, worker))
+            }
+        };
+        let before = plan.cache().map(|c| c.counts()).unwrap_or_default();
+        let rate_hz = request.recipe.publish_rate_hz();
+        let job = OneJob {
+            job: &request.job,
+            rate_hz,
+            plan,
+            worker,
+        };
+        let mut result = match &request.recipe {
+            Recipe::Builtin { kind, options, .. } => kind
+                .dispatch(options, rate_hz, job)
+                .map_err(|err| ExperimentError::InWorker(err.to_string()))??,
+            Recipe::External { spec, task, .. } => {
+                let key = serde_json::to_string(&request.recipe)
+                    .map_err(|err| ExperimentError::InWorker(err.to_string()))?;
+                let learner = match self.learners.entry(key) {
+                    std::collections::hash_map::Entry::Occupied(entry) => entry.into_mut(),
+                    std::collections::hash_map::Entry::Vacant(entry) => entry.insert(
+                        ExternalModel::connect(spec, task, rate_hz)
+                            .map_err(|err| ExperimentError::InWorker(err.to_string()))?,
+                    ),
+                };
+                job.run(learner.clone())?
+            }
+        };
+        let after = plan.cache().map(|c| c.counts()).unwrap_or_default();
+        let histogram = std::mem::take(&mut result.timing().histogram);
+        Ok(JobResponse::Done {
+            result: Box::new(result),
+            histogram: Box::new(histogram),
+            cache: CacheCounts {
+                replayed: after.replayed - before.replayed,
+                simulated: after.simulated - before.simulated,
             },
-        )
-        .map_err(|err| ExperimentError::InWorker(err.to_string()))??;
-    let after = plan.cache().map(|c| c.counts()).unwrap_or_default();
-    let histogram = std::mem::take(&mut result.timing().histogram);
-    Ok(JobResponse::Done {
-        result: Box::new(result),
-        histogram: Box::new(histogram),
-        cache: CacheCounts {
-            replayed: after.replayed - before.replayed,
-            simulated: after.simulated - before.simulated,
-        },
-    })
+        })
+    }
 }
 
 /// One job with the model a [`Recipe`] built.
@@ -583,7 +626,7 @@ mod tests {
     fn run_on(script: &str) -> ExperimentError {
         let processes = Processes::new("sh".into(), vec!["-c".into(), script.into()], 2);
         let jobs = PushJob::all(Protocol::from(Variant::Random), &[1], 2, 1);
-        let recipe = Recipe {
+        let recipe = Recipe::Builtin {
             kind: ModelKind::Gate,
             options: ModelOptions::default(),
             publish_rate_hz: 100,

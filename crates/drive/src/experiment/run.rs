@@ -136,12 +136,13 @@ impl Plan {
         self.source.max_workers(self.workers)
     }
 
-    /// The worker processes push-task jobs run on, the model's recipe and
-    /// how many to use: with embedded worlds and a built-in model, when the
-    /// plan has processes and more than one worker.
+    /// The worker processes jobs run on, the learner's recipe and how many
+    /// to use: with embedded worlds, when the plan has processes, a recipe
+    /// and more than one worker. An external learner is then started beside
+    /// each worker's world.
     fn worker_processes(&self) -> Option<(&Processes, &Recipe, usize)> {
-        let (WorldSource::Embedded { .. }, None, Some(processes), Some(recipe)) =
-            (&self.source, &self.learner, &self.processes, &self.recipe)
+        let (WorldSource::Embedded { .. }, Some(processes), Some(recipe)) =
+            (&self.source, &self.processes, &self.recipe)
         else {
             return None;
         };
@@ -152,7 +153,7 @@ impl Plan {
     /// Workers for jobs of a model at `rate_hz`: processes or threads.
     fn job_workers(&self, rate_hz: u32) -> usize {
         match self.worker_processes() {
-            Some((_, recipe, n)) if recipe.publish_rate_hz == rate_hz => n,
+            Some((_, recipe, n)) if recipe.publish_rate_hz() == rate_hz => n,
             _ => self.workers(),
         }
     }
@@ -301,7 +302,7 @@ pub fn push_jobs<M: Model>(
         return Ok(Vec::new());
     };
     if let Some((processes, recipe, workers)) = plan.worker_processes() {
-        if recipe.publish_rate_hz == rate_hz {
+        if recipe.publish_rate_hz() == rate_hz {
             return processes.push_jobs(recipe, jobs, plan, workers, done, progress);
         }
     }
@@ -443,7 +444,7 @@ pub fn move_to_target<M: Model>(
     let started = plan.started();
     let jobs = MttJob::all(targets, repetitions, max_steps, plan.seed);
     let results = match plan.worker_processes() {
-        Some((processes, recipe, workers)) if recipe.publish_rate_hz == RATE_HZ => {
+        Some((processes, recipe, workers)) if recipe.publish_rate_hz() == RATE_HZ => {
             processes.mtt_jobs(recipe, &jobs, plan, workers, progress)?
         }
         _ => {

@@ -37,7 +37,7 @@ pub use session::Source;
 pub const DEFAULT_TIMEOUT: Duration = Duration::from_secs(30);
 
 /// An external learner: where it runs and how long it may take.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LearnerSpec {
     pub source: Source,
     /// Per answered message; also for the hello.

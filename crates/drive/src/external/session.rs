@@ -29,7 +29,7 @@ use super::LearnerError;
 use crate::process::kill_group;
 
 /// Where a learner runs.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Source {
     /// A command line, run by `sh -c`: one child process per connection,
     /// spoken to on its stdin and stdout (its stderr is ours).
