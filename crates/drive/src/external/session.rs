@@ -9,6 +9,14 @@
 //! waits for a reply on its own thread with a deadline. (A reader thread
 //! would give pipes a deadline too, at the price of a second wake-up per
 //! reply, which on an idle machine doubled the protocol's cost.)
+//!
+//! Before it sleeps on the socket, the driver polls it without blocking for
+//! at most [`SPIN`]: a driver asleep when the reply comes is woken on an
+//! idle vCPU, which on the 2-vCPU VM the benchmark runs on (guest halt
+//! polling off) costs about 7 µs of a 23 µs round trip
+//! (`docs/performance.md` §7). A learner slower than that gains nothing from
+//! the spin and would only burn the driver's core, so the driver spins only
+//! while the previous reply came within [`SPIN`] of the request.
 
 use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
@@ -26,6 +34,11 @@ use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request}
 use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
 
 use super::LearnerError;
+
+/// How long the driver polls for a reply before it blocks: a fast learner's
+/// reply (its wake-up and a built-in model's work) comes within it; the
+/// figures behind the choice are in `docs/performance.md` §7.
+pub const SPIN: Duration = Duration::from_micros(50);
 use crate::process::kill_group;
 
 /// Where a learner runs.
@@ -72,6 +85,20 @@ impl Transport {
         }
     }
 
+    /// Reads what is there without waiting; `None`: nothing yet.
+    fn try_read(&mut self, chunk: &mut [u8]) -> std::io::Result<Option<usize>> {
+        let flags = rustix::net::RecvFlags::DONTWAIT;
+        let read = match self {
+            Transport::Child { stream, .. } => rustix::net::recv(&*stream, chunk, flags),
+            Transport::Socket(stream) => rustix::net::recv(&*stream, chunk, flags),
+        };
+        match read {
+            Ok((n, _)) => Ok(Some(n)),
+            Err(e) if e == rustix::io::Errno::AGAIN || e == rustix::io::Errno::INTR => Ok(None),
+            Err(e) => Err(e.into()),
+        }
+    }
+
     /// Reads what is there, waiting at most `timeout` (not zero).
     fn read(&mut self, chunk: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
         match self {
@@ -102,6 +129,8 @@ pub struct Session {
     timeout: Duration,
     /// A call failed: the learner is not to be trusted with another.
     failed: bool,
+    /// The previous reply came within [`SPIN`]: poll for the next one.
+    spin: bool,
 }
 
 impl std::fmt::Debug for Session {
@@ -204,6 +233,7 @@ impl Session {
             unanswered: VecDeque::new(),
             timeout,
             failed: false,
+            spin: true,
         })
     }
 
@@ -211,17 +241,39 @@ impl Session {
     /// (`None`: the deadline passed).
     fn next_event(&mut self, deadline: Instant) -> Option<Event> {
         let mut chunk = [0_u8; 4096];
+        let sent = Instant::now();
+        let mut spinning = self.spin;
         loop {
             match self.decoder.decode(&mut self.buffer) {
                 Ok(Some(reply)) => return Some(Event::Reply(reply)),
                 Ok(None) => {}
                 Err(err) => return Some(Event::Garbage(err)),
             }
-            let left = deadline.saturating_duration_since(Instant::now());
+            let now = Instant::now();
+            let left = deadline.saturating_duration_since(now);
             if left.is_zero() {
                 return None;
             }
-            match self.transport.read(&mut chunk, left) {
+            if spinning && now.duration_since(sent) >= SPIN {
+                spinning = false;
+            }
+            let read = if spinning {
+                match self.transport.try_read(&mut chunk) {
+                    Ok(None) => {
+                        // Lets a learner waiting for this core run.
+                        std::thread::yield_now();
+                        continue;
+                    }
+                    Ok(Some(n)) => Ok(n),
+                    Err(e) => Err(e),
+                }
+            } else {
+                self.transport.read(&mut chunk, left)
+            };
+            if matches!(read, Ok(n) if n > 0) {
+                self.spin = sent.elapsed() < SPIN;
+            }
+            match read {
                 Ok(0) if self.buffer.is_empty() => return Some(Event::Closed),
                 Ok(0) => {
                     return Some(Event::Garbage(WireError::Truncated {
