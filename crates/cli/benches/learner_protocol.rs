@@ -1,4 +1,4 @@
-//! The learner protocol's cost per world message (docs/performance.md §9):
+//! The learner protocol's cost per world message (docs/performance.md §7):
 //! one Update and one Predict, the driver's calls on every training message,
 //! on a trivial learner (the actuator moves by the action, blocks stay), once
 //! in-process and once behind the protocol — a child on stdin/stdout (this

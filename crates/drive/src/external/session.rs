@@ -34,12 +34,12 @@ use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request}
 use pushlearn::wire::{encode_frame, FrameDecoder, WireError};
 
 use super::LearnerError;
+use crate::process::kill_group;
 
 /// How long the driver polls for a reply before it blocks: a fast learner's
 /// reply (its wake-up and a built-in model's work) comes within it; the
 /// figures behind the choice are in `docs/performance.md` §7.
 pub const SPIN: Duration = Duration::from_micros(50);
-use crate::process::kill_group;
 
 /// Where a learner runs.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
