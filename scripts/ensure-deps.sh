@@ -84,9 +84,20 @@ if [ "$want_test" = 1 ]; then
     echo "ensure-deps: creating the Python virtual environment .venv"
     python3 -m venv .venv
   fi
-  if ! .venv/bin/python -c 'import maturin, pytest, numpy, sklearn, google.protobuf, gymnasium, ruff, mypy' >/dev/null 2>&1; then
-    echo "ensure-deps: installing the Python test packages into .venv"
+  # Exactly the versions of python/constraints.txt: the baselines' committed
+  # results turn on numpy's, scipy's and scikit-learn's last bits. A .venv
+  # with other versions (an older checkout's) is brought to them.
+  if ! .venv/bin/python - python/constraints.txt <<'PY' >/dev/null 2>&1
+import sys
+from importlib.metadata import version
+for line in open(sys.argv[1]):
+    name, _, pinned = line.split("#")[0].strip().partition("==")
+    if name and version(name) != pinned:
+        sys.exit(1)
+PY
+  then
+    echo "ensure-deps: installing the Python test packages into .venv (python/constraints.txt)"
     .venv/bin/python -m pip install --quiet --upgrade pip
-    .venv/bin/python -m pip install --quiet -r python/requirements-test.txt
+    .venv/bin/python -m pip install --quiet -c python/constraints.txt -r python/requirements-test.txt
   fi
 fi

@@ -1,8 +1,9 @@
 """Baseline forward models as learners: k-nearest neighbours and a Gaussian process.
 
-Two standard regressors from scikit-learn, :class:`KnnLearner`
-(``KNeighborsRegressor``) and :class:`GpLearner`
-(``GaussianProcessRegressor``), learning the same per-message transition
+Two standard regressors, :class:`KnnLearner` (scikit-learn's
+``KNeighborsRegressor``) and :class:`GpLearner` (scikit-learn's
+``GaussianProcessRegressor``), computed with numpy and scipy directly (see
+"Prediction" and the GP below), learning the same per-message transition
 features, so that the push task's learning curve of the memory-based models
 can be compared with off-the-shelf regression. Capability ``FORWARD`` only.
 Serve them with ``python -m pushlearn.baselines knn`` or ``… gp`` (options:
@@ -68,24 +69,50 @@ on test positions:
 * **GP**: kernel ``C · RBF(ℓ₁ … ℓ₄) + White`` (an anisotropic RBF with one
   length scale per input, an amplitude and a noise level), outputs
   normalised (``normalize_y``), one GP per block for its three outputs
-  (shared kernel), hyper-parameters by maximising the log marginal
-  likelihood on the training samples with scikit-learn's default optimiser
-  (L-BFGS-B) from the kernel's initial values, ``n_restarts_optimizer=0``.
-  Exact GP fitting costs O(n³) time and O(n²) memory, and every prediction
-  O(n), so a GP is fitted on at most ``max_samples`` (default 600) of a
-  block's samples, chosen by a seeded subsample without replacement
-  (seed: the fold's seed from ``new_fold``, and the block id). 600 samples
-  are about four training runs. Each evaluation of the marginal likelihood
-  and its gradient factorises the n × n kernel matrix, and the optimiser
-  needs a hundred or more of them: at n = 600 one evaluation took
-  0.1–0.2 s on a loaded two-core machine, a fit 10–30 s; the 4470 samples of
-  30 training runs would cost (4470 / 600)³ ≈ 400 times as much per
-  evaluation, hours per fit.
+  (shared kernel), a jitter of 1e-10 on the kernel matrix's diagonal,
+  hyper-parameters by maximising the log marginal likelihood on the
+  training samples with L-BFGS-B (``scipy.optimize.minimize``) over their
+  logarithms, from the kernel's initial values (amplitude 1, length scales
+  1, noise 0.01) within its bounds, no restarts: scikit-learn's
+  ``GaussianProcessRegressor(kernel, normalize_y=True)`` and its default
+  optimiser, exactly. The likelihood and its gradient are computed here
+  (:func:`_gp_neg_log_likelihood`, the same formulas), at a third of
+  scikit-learn's cost: it builds ``K⁻¹`` by solving for an identity matrix
+  and contracts an n × n × outputs × parameters product, where LAPACK's
+  ``potri`` and one n × n product per parameter do. Exact GP fitting costs
+  O(n³) time and O(n²) memory, and every prediction O(n), so a GP is fitted
+  on at most ``max_samples`` (default 600) of a block's samples, chosen by a
+  seeded subsample without replacement (seed: the fold's seed from
+  ``new_fold``, and the block id). 600 samples are about four training
+  runs. Each evaluation of the marginal likelihood and its gradient
+  factorises the n × n kernel matrix, and the optimiser needs 40–100 of
+  them: at n = 600, on one core with one BLAS thread (OpenBLAS's Nehalem
+  kernels, as ``pushlearn reproduce`` runs it), one evaluation takes about
+  30 ms and a fit 0.5–2.5 s (scikit-learn's: about 0.17 s and 7–17 s);
+  the 4470 samples of 30 training runs would cost (4470 / 600)³ ≈ 400 times
+  as much per evaluation.
 
-Because of this, a GP fit can take longer than the experiment driver's
-default ``--learner-timeout`` (30 s) for one answer: run the GP with, e.g.,
-``pushlearn experiment push-task --learner-timeout 300 --learner "python -m
-pushlearn.baselines gp"``, or lower ``--max-samples``.
+Prediction
+----------
+Every message's prediction computes what the scikit-learn estimator behind
+a ``StandardScaler`` would predict, without its per-call checks and
+pipelines: the features are standardised with the stored mean and scale,
+then the kNN queries a scipy ``cKDTree`` of the standardised samples (the
+``k`` nearest, their mean or inverse-distance-weighted mean, an exact
+match taking all the weight), and the GP computes its posterior mean
+``k(x*, X) @ α`` with the weights ``α`` stored at the fit (the RBF by
+``cdist``, as scikit-learn does, so that it is the same number).
+
+Reproducibility
+---------------
+A GP's fit and predictions turn on the last bits of OpenBLAS's and libm's
+results, which differ between CPUs unless pinned; ``pushlearn reproduce``
+therefore runs both baselines with the packages of
+``python/constraints.txt`` and the environment its learner command starts
+with (``PYTHON_LEARNER_ENV`` in ``crates/lab/src/reproduce/manifest.rs``:
+OpenBLAS's Nehalem kernels, one thread, numpy's baseline SIMD loops,
+glibc's SSE2 ``exp``). Run by hand with the same assignments in front of
+``python -m pushlearn.baselines gp`` to get the same numbers.
 
 Statistics and logs
 -------------------
@@ -101,7 +128,6 @@ from __future__ import annotations
 
 import math
 import sys
-import warnings
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -271,9 +297,9 @@ class BaselineLearner(Learner):
             if model is None:
                 out[id_] = block
                 continue
-            x = np.asarray([block_features(actuator, block, action)], dtype=np.float64)
-            change = np.asarray(model.predict(x), dtype=np.float64).reshape(-1)
-            out[id_] = apply_change(block, change)
+            out[id_] = apply_change(
+                block, model.predict_one(block_features(actuator, block, action))
+            )
         return Prediction(out)
 
     def stats(self) -> dict[str, Any]:
@@ -358,7 +384,8 @@ class BaselineLearner(Learner):
     def _fit_block(
         self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
     ) -> tuple[Any, int]:
-        """A fitted predictor (``predict(x) -> changes``) and the number of samples it used."""
+        """A fitted predictor (``predict_one(features) -> change``) and the number of
+        samples it used."""
         raise NotImplementedError
 
 
@@ -372,6 +399,38 @@ def _scaler(x: Array) -> Any:
     from sklearn.preprocessing import StandardScaler
 
     return StandardScaler().fit(x)
+
+
+class _KnnPredictor:
+    """A fitted kNN of one block, queried without scikit-learn's per-call checks:
+    the scaler's mean and scale and a scipy ``cKDTree`` over the standardised
+    samples. It computes what ``make_pipeline(StandardScaler(),
+    KNeighborsRegressor(k, weights)).predict`` does, in the same order."""
+
+    def __init__(self, x: Array, y: Array, k: int, weights: str) -> None:
+        from scipy.spatial import cKDTree
+
+        scaler = _scaler(x)
+        self._mean: Array = scaler.mean_
+        self._scale: Array = scaler.scale_
+        self._tree = cKDTree(scaler.transform(x))
+        self._y = y
+        self._y_by_output = np.ascontiguousarray(y.T)
+        self._k = min(k, len(x))
+        self._distance = weights == "distance"
+
+    def predict_one(self, features: list[float]) -> Array:
+        z = (np.asarray(features, dtype=np.float64) - self._mean) / self._scale
+        dist, index = self._tree.query(z, k=self._k)
+        dist, index = np.atleast_1d(dist), np.atleast_1d(index)
+        if not self._distance:
+            return np.asarray(self._y[index].mean(axis=0))
+        with np.errstate(divide="ignore"):
+            w = 1.0 / dist
+        exact = np.isinf(w)
+        if exact.any():  # exact matches take all the weight, as sklearn does
+            w = exact.astype(np.float64)
+        return np.asarray((self._y_by_output[:, index] * w).sum(axis=1) / w.sum())
 
 
 def _neighbour_means(
@@ -392,8 +451,8 @@ def _neighbour_means(
 
 
 class KnnLearner(BaselineLearner):
-    """k-nearest-neighbour regression of each block's change (scikit-learn's
-    ``KNeighborsRegressor``); ``k`` and the weighting chosen by cross-validation
+    """k-nearest-neighbour regression of each block's change (what scikit-learn's
+    ``KNeighborsRegressor`` predicts, queried in a scipy ``cKDTree``); ``k`` and the weighting chosen by cross-validation
     over the training runs (module documentation)."""
 
     name: ClassVar[str] = "knn"
@@ -472,17 +531,9 @@ class KnnLearner(BaselineLearner):
     def _fit_block(
         self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
     ) -> tuple[Any, int]:
-        from sklearn.neighbors import KNeighborsRegressor
-        from sklearn.pipeline import make_pipeline
-        from sklearn.preprocessing import StandardScaler
-
         choice = self.choose(_scaler(x).transform(x), y, runs)
         self.choices[block_id] = choice
-        model = make_pipeline(
-            StandardScaler(),
-            KNeighborsRegressor(n_neighbors=choice.k, weights=choice.weights),
-        ).fit(x, y)
-        return model, len(x)
+        return _KnnPredictor(x, y, choice.k, choice.weights), len(x)
 
     def describe_fit(self) -> list[str]:
         """``block ID: k=… weights=… (method, folds, runs)`` per block of the last fit."""
@@ -493,10 +544,140 @@ class KnnLearner(BaselineLearner):
         ]
 
 
+_GP_JITTER = 1e-10
+"""Added to the kernel matrix's diagonal: ``GaussianProcessRegressor``'s ``alpha``."""
+
+_GP_THETA0 = np.log([1.0, 1.0, 1.0, 1.0, 1.0, 1e-2])
+"""The kernel's initial hyper-parameters (amplitude, four length scales, noise), as logs."""
+
+_GP_BOUNDS = np.log([(1e-3, 1e3)] + [(1e-2, 1e3)] * 4 + [(1e-10, 1e1)])
+"""Their bounds, as logs."""
+
+
+def _gp_neg_log_likelihood(
+    theta: Array, sqdiff: Array, y: Array
+) -> tuple[float, Array]:
+    """Minus the log marginal likelihood of ``C · RBF(ℓ) + White`` (summed over
+    the columns of ``y``) and its gradient, with respect to the logs ``theta``
+    of ``(C, ℓ₁ … ℓ_d, noise)``; ``sqdiff[d]`` holds the inputs' squared
+    differences along input ``d``.
+
+    What scikit-learn's ``GaussianProcessRegressor.log_marginal_likelihood``
+    computes, at a third of its cost: the trace term of the gradient,
+    ``½ tr((ααᵀ − K⁻¹) ∂K)``, takes ``K⁻¹`` from the Cholesky factor by LAPACK's
+    ``potri`` instead of solving for an identity matrix, and sums over the
+    outputs before, not after, multiplying by each ``∂K``.
+    """
+    from scipy.linalg.lapack import dpotrf, dpotri, dpotrs
+
+    amplitude, noise = math.exp(theta[0]), math.exp(theta[-1])
+    inv_sq_scales = np.exp(-2.0 * theta[1:-1])
+    n, outputs = y.shape
+    rbf = amplitude * np.exp(-0.5 * np.tensordot(inv_sq_scales, sqdiff, axes=1))
+    k = rbf.copy()
+    k[np.diag_indices(n)] += noise + _GP_JITTER
+    factor, info = dpotrf(k, lower=1, clean=1, overwrite_a=1)
+    if info != 0:  # not positive definite: as sklearn, the worst likelihood
+        return math.inf, np.zeros_like(theta)
+    alpha, _ = dpotrs(factor, y, lower=1)
+    log_likelihood = (
+        -0.5 * float(np.sum(y * alpha))
+        - outputs * float(np.sum(np.log(np.diag(factor))))
+        - outputs * n / 2 * math.log(2 * math.pi)
+    )
+    k_inv, _ = dpotri(factor, lower=1, overwrite_c=1)
+    k_inv = np.tril(k_inv) + np.tril(k_inv, -1).T
+    w = alpha @ alpha.T - outputs * k_inv  # Σ over outputs of ααᵀ − K⁻¹
+    w_rbf = w * rbf
+    gradient = np.empty_like(theta)
+    gradient[0] = 0.5 * float(np.sum(w_rbf))
+    gradient[1:-1] = 0.5 * inv_sq_scales * np.tensordot(sqdiff, w_rbf, axes=2)
+    gradient[-1] = 0.5 * noise * float(np.trace(w))
+    return -log_likelihood, -gradient
+
+
+def _squared_differences(x: Array) -> Array:
+    """``[d, i, j] = (x[i, d] − x[j, d])²``: what every likelihood evaluation reuses."""
+    return np.stack([(col[:, None] - col[None, :]) ** 2 for col in x.T])
+
+
+class _GpPredictor:
+    """A GP of one block, fitted as ``make_pipeline(StandardScaler(),
+    GaussianProcessRegressor(C · RBF(ℓ) + White, normalize_y=True))`` fits
+    (same likelihood, optimiser, start and bounds), and predicting its
+    posterior mean ``k(x*, X) @ α`` as that pipeline does, without its
+    per-call checks."""
+
+    def __init__(self, x: Array, y: Array) -> None:
+        import scipy.optimize
+        from scipy.linalg import cho_solve, cholesky
+        from scipy.spatial.distance import pdist, squareform
+
+        scaler = _scaler(x)
+        self._mean: Array = scaler.mean_
+        self._scale: Array = scaler.scale_
+        xs = scaler.transform(x)
+        self._y_mean: Array = np.mean(y, axis=0)
+        y_std = np.std(y, axis=0)
+        y_std[y_std < 10 * np.finfo(np.float64).eps] = 1.0  # sklearn's constant outputs
+        self._y_std: Array = y_std
+        yn = (y - self._y_mean) / self._y_std
+        sqdiff = _squared_differences(xs)
+        result = scipy.optimize.minimize(
+            _gp_neg_log_likelihood,
+            _GP_THETA0,
+            args=(sqdiff, yn),
+            method="L-BFGS-B",
+            jac=True,
+            bounds=_GP_BOUNDS,
+        )
+        theta = result.x
+        self.evaluations = int(result.nfev)
+        """How many likelihood evaluations the optimiser made."""
+        self.amplitude = float(np.exp(theta[0]))
+        self.length_scales: Array = np.exp(theta[1:-1])
+        self.noise = float(np.exp(theta[-1]))
+        # The weights as sklearn computes them after its optimisation: the
+        # kernel matrix from pdist, its Cholesky factor, the solve.
+        self._train = xs / self.length_scales
+        k = squareform(np.exp(-0.5 * pdist(self._train, metric="sqeuclidean")))
+        np.fill_diagonal(k, 1)
+        k = self.amplitude * k + self.noise * np.eye(len(xs))
+        k[np.diag_indices_from(k)] += _GP_JITTER
+        self._alpha: Array = cho_solve(
+            (cholesky(k, lower=True, check_finite=False), True),
+            yn,
+            check_finite=False,
+        )
+
+    def predict_one(self, features: list[float]) -> Array:
+        from scipy.spatial.distance import cdist
+
+        z = (np.asarray(features, dtype=np.float64) - self._mean) / self._scale
+        k = self.amplitude * np.exp(
+            -0.5 * cdist((z / self.length_scales)[None, :], self._train, "sqeuclidean")
+        )
+        return np.asarray(self._y_std * (k @ self._alpha)[0] + self._y_mean)
+
+    @property
+    def theta(self) -> Array:
+        """The fitted hyper-parameters as scikit-learn's kernel holds them (logs)."""
+        return np.log([self.amplitude, *self.length_scales, self.noise])
+
+    def kernel_text(self) -> str:
+        """The fitted kernel as scikit-learn prints it."""
+        scales = ", ".join(f"{v:.3g}" for v in self.length_scales)
+        return (
+            f"{math.sqrt(self.amplitude):.3g}**2 * RBF(length_scale=[{scales}]) "
+            f"+ WhiteKernel(noise_level={self.noise:.3g})"
+        )
+
+
 class GpLearner(BaselineLearner):
-    """Gaussian-process regression of each block's change (scikit-learn's
-    ``GaussianProcessRegressor``, ``C · RBF(ARD) + White``, hyper-parameters by
-    marginal likelihood) on at most ``max_samples`` seeded-subsampled samples."""
+    """Gaussian-process regression of each block's change (the model of
+    scikit-learn's ``GaussianProcessRegressor``, ``C · RBF(ARD) + White``,
+    hyper-parameters by marginal likelihood, computed with scipy) on at most
+    ``max_samples`` seeded-subsampled samples."""
 
     name: ClassVar[str] = "gp"
 
@@ -545,34 +726,10 @@ class GpLearner(BaselineLearner):
     def _fit_block(
         self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
     ) -> tuple[Any, int]:
-        from sklearn.exceptions import ConvergenceWarning
-        from sklearn.gaussian_process import GaussianProcessRegressor
-        from sklearn.gaussian_process.kernels import (
-            RBF,
-            ConstantKernel,
-            WhiteKernel,
-        )
-        from sklearn.pipeline import make_pipeline
-        from sklearn.preprocessing import StandardScaler
-
         chosen = self.subsample(block_id, len(x))
         self.subsamples[block_id] = [int(i) for i in chosen]
-        kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(
-            length_scale=np.ones(x.shape[1]), length_scale_bounds=(1e-2, 1e3)
-        ) + WhiteKernel(noise_level=1e-2, noise_level_bounds=(1e-10, 1e1))
-        gp = GaussianProcessRegressor(
-            kernel=kernel,
-            normalize_y=True,
-            n_restarts_optimizer=0,
-            random_state=self.seed % 2**32,
-        )
-        model = make_pipeline(StandardScaler(), gp)
-        with warnings.catch_warnings():
-            # Bounds reached by a length scale (an input that does not matter)
-            # are expected, not a problem.
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            model.fit(x[chosen], y[chosen])
-        self.kernels[block_id] = str(gp.kernel_)
+        model = _GpPredictor(x[chosen], y[chosen])
+        self.kernels[block_id] = model.kernel_text()
         return model, len(chosen)
 
     def describe_fit(self) -> list[str]:

@@ -22,9 +22,14 @@ from driver import (
 from pushlearn import Prediction, State
 from pushlearn._pb import learner_pb2
 from pushlearn.baselines import (
+    _GP_THETA0,
     BaselineLearner,
     GpLearner,
     KnnLearner,
+    _gp_neg_log_likelihood,
+    _GpPredictor,
+    _KnnPredictor,
+    _squared_differences,
     apply_change,
     block_change,
     block_features,
@@ -327,3 +332,98 @@ def test_verbose_fits_log_their_choices(capsys: pytest.CaptureFixture[str]) -> N
     err = capsys.readouterr().err
     assert "knn (seed 7): actuator gain 1.000000" in err
     assert "knn (seed 7): block 15: k=" in err and "GroupKFold, 2 folds, 2 runs" in err
+
+
+def regression_data(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Noisy smooth 4 → 3 samples on inputs of different scales, the last constant
+    (as the action along the push is in a push task)."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(n, 4)) * [0.05, 0.1, 0.3, 0.0] + [0.0, -0.06, 0.0, 0.5]
+    y = np.stack(
+        [
+            np.tanh(20 * x[:, 0]) * x[:, 2],
+            0.005 * np.exp(-((x[:, 1] + 0.06) ** 2) / 0.002),
+            0.1 * np.sin(10 * x[:, 0] * x[:, 1]),
+        ],
+        axis=1,
+    )
+    return x, y + 0.001 * rng.normal(size=y.shape)
+
+
+def sklearn_gp(theta: np.ndarray | None = None) -> object:
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+
+    kernel = ConstantKernel(1.0, (1e-3, 1e3)) * RBF(
+        length_scale=np.ones(4), length_scale_bounds=(1e-2, 1e3)
+    ) + WhiteKernel(noise_level=1e-2, noise_level_bounds=(1e-10, 1e1))
+    if theta is None:
+        return GaussianProcessRegressor(kernel=kernel, normalize_y=True)
+    return GaussianProcessRegressor(
+        kernel=kernel.clone_with_theta(theta), normalize_y=True, optimizer=None
+    )
+
+
+def test_the_gp_likelihood_and_gradient_are_sklearns() -> None:
+    from sklearn.preprocessing import StandardScaler
+
+    x, y = regression_data(90, 1)
+    xs = StandardScaler().fit_transform(x)
+    gp = sklearn_gp(_GP_THETA0).fit(xs, y)  # type: ignore[attr-defined]
+    yn = (y - y.mean(axis=0)) / y.std(axis=0)
+    for theta in (_GP_THETA0, np.log([2.0, 0.5, 3.0, 1.2, 7.0, 0.05])):
+        lml, gradient = gp.log_marginal_likelihood(theta, eval_gradient=True)
+        ours, our_gradient = _gp_neg_log_likelihood(theta, _squared_differences(xs), yn)
+        assert -ours == pytest.approx(lml, rel=1e-9)
+        scale = float(np.max(np.abs(gradient)))
+        assert -our_gradient == pytest.approx(gradient, rel=1e-7, abs=1e-9 * scale)
+
+
+def test_the_gp_fits_and_predicts_as_sklearn_does() -> None:
+    import warnings
+
+    from sklearn.exceptions import ConvergenceWarning
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    x, y = regression_data(120, 2)
+    ours = _GpPredictor(x, y)
+    theirs = make_pipeline(StandardScaler(), sklearn_gp())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        theirs.fit(x, y)
+    gp = theirs[-1]
+    # The same optimiser from the same start reaches the same optimum (its
+    # path may part from scikit-learn's in the last bits of a gradient).
+    assert gp.log_marginal_likelihood(ours.theta) == pytest.approx(
+        gp.log_marginal_likelihood_value_, rel=1e-6
+    )
+    # With these hyper-parameters, scikit-learn predicts what ours does.
+    fixed = make_pipeline(StandardScaler(), sklearn_gp(ours.theta)).fit(x, y)
+    queries, _ = regression_data(20, 3)
+    for q in [*queries, *x[:5]]:
+        expected = fixed.predict(q[None, :])[0]
+        assert ours.predict_one(list(q)) == pytest.approx(expected, rel=1e-9, abs=1e-15)
+
+
+@pytest.mark.parametrize(
+    ("k", "weights"),
+    [(1, "uniform"), (9, "uniform"), (1, "distance"), (12, "distance")],
+)
+def test_knn_predicts_as_sklearn_does(k: int, weights: str) -> None:
+    from sklearn.neighbors import KNeighborsRegressor
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    x, y = regression_data(200, 4)
+    ours = _KnnPredictor(x, y, k, weights)
+    theirs = make_pipeline(
+        StandardScaler(), KNeighborsRegressor(n_neighbors=k, weights=weights)
+    ).fit(x, y)
+    queries, _ = regression_data(30, 5)
+    # Training samples themselves: an exact match takes all the weight.
+    for q in [*queries, *x[:5]]:
+        expected = theirs.predict(q[None, :])[0]
+        assert ours.predict_one(list(q)) == pytest.approx(
+            expected, rel=1e-12, abs=1e-15
+        )
