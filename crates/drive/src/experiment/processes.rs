@@ -32,7 +32,7 @@ use super::move_to_target::MttJob;
 use super::push_task::protocol::PushJob;
 use super::run::{mtt_job, push_job, Plan};
 use super::run_cache::{CacheCounts, RunCache};
-use super::workers::{Worker, WorldSource};
+use super::workers::{in_job_order, Worker, WorldSource};
 use super::{ExperimentError, Mode};
 use crate::external::{ExternalModel, LearnerSpec};
 use crate::latency::Latencies;
@@ -251,7 +251,7 @@ impl Processes {
         plan: &Plan,
         workers: usize,
         done: impl Fn(&Finished) -> Result<(), ExperimentError> + Sync,
-        mut progress: impl FnMut(usize),
+        progress: impl FnMut(usize),
     ) -> Result<Vec<Finished>, ExperimentError> {
         let workers = workers.clamp(1, self.size()).min(jobs.len().max(1));
         let world = WorldRequest {
@@ -301,29 +301,7 @@ impl Processes {
                 });
             }
             drop(sender);
-            let mut slots: Vec<Option<Finished>> = vec![None; jobs.len()];
-            let mut first_error = None;
-            let mut finished = 0;
-            for message in results {
-                match message {
-                    Ok((index, result)) => {
-                        slots[index] = Some(result);
-                        finished += 1;
-                        progress(finished);
-                    }
-                    Err(err) => {
-                        first_error.get_or_insert(err);
-                    }
-                }
-            }
-            if let Some(err) = first_error {
-                return Err(err);
-            }
-            slots
-                .into_iter()
-                .enumerate()
-                .map(|(index, slot)| slot.ok_or(ExperimentError::JobLost { index }))
-                .collect()
+            in_job_order(jobs.len(), results, progress)
         })
     }
 

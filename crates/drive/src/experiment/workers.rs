@@ -448,7 +448,7 @@ pub fn run_jobs<J, W, R>(
     workers: usize,
     start: impl Fn() -> Result<W, ExperimentError> + Sync,
     run: impl Fn(&J, &mut W) -> Result<R, ExperimentError> + Sync,
-    mut progress: impl FnMut(usize),
+    progress: impl FnMut(usize),
 ) -> Result<Vec<R>, ExperimentError>
 where
     J: Sync,
@@ -486,30 +486,45 @@ where
             });
         }
         drop(sender);
-        let mut slots: Vec<Option<R>> = std::iter::repeat_with(|| None).take(jobs.len()).collect();
-        let mut first_error = None;
-        let mut finished = 0;
-        for message in results {
-            match message {
-                Ok((index, result)) => {
-                    slots[index] = Some(result);
-                    finished += 1;
-                    progress(finished);
-                }
-                Err(err) => {
-                    first_error.get_or_insert(err);
-                }
+        in_job_order(jobs.len(), results, progress)
+    })
+}
+
+/// The results of `jobs` jobs as workers send them, `(index, result)` in
+/// any order, put back in job order; `progress` is called with the number
+/// finished after each. Waits until every sender is gone.
+///
+/// # Errors
+/// The first error a worker sent; [`ExperimentError::JobLost`] for a job
+/// without a result.
+pub(crate) fn in_job_order<R>(
+    jobs: usize,
+    results: mpsc::Receiver<Result<(usize, R), ExperimentError>>,
+    mut progress: impl FnMut(usize),
+) -> Result<Vec<R>, ExperimentError> {
+    let mut slots: Vec<Option<R>> = std::iter::repeat_with(|| None).take(jobs).collect();
+    let mut first_error = None;
+    let mut finished = 0;
+    for message in results {
+        match message {
+            Ok((index, result)) => {
+                slots[index] = Some(result);
+                finished += 1;
+                progress(finished);
+            }
+            Err(err) => {
+                first_error.get_or_insert(err);
             }
         }
-        if let Some(err) = first_error {
-            return Err(err);
-        }
-        slots
-            .into_iter()
-            .enumerate()
-            .map(|(index, slot)| slot.ok_or(ExperimentError::JobLost { index }))
-            .collect()
-    })
+    }
+    if let Some(err) = first_error {
+        return Err(err);
+    }
+    slots
+        .into_iter()
+        .enumerate()
+        .map(|(index, slot)| slot.ok_or(ExperimentError::JobLost { index }))
+        .collect()
 }
 
 #[cfg(test)]
