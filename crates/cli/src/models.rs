@@ -5,7 +5,7 @@
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use learner::interaction::SelectorKind;
 pub use learner::registry::{
-    ConfigFlag, Improvement, ModelKind, ModelOptions, ModelOptionsError, Named, WithModel,
+    ConfigFlag, Improvement, ModelKind, ModelOptions, ModelOptionsError, Named, Parts, WithModel,
 };
 
 /// A clap value parser for the names of `T`: `--help` lists each name with
@@ -65,6 +65,13 @@ pub struct ModelArgs {
     /// `gate+CHANGE+…` (docs/models.md, "Beyond the thesis").
     #[arg(long, value_name = "CHANGE,…", value_parser = named::<Improvement>(), value_delimiter = ',')]
     pub improve: Vec<Improvement>,
+
+    /// The hybrid model's parts, for its ablation: mechanics (the shape's
+    /// mechanics alone, learning nothing), identified (their parameters
+    /// identified online) or full (and the memory of their residual).
+    /// Reports name a partial model `hybrid-PARTS`.
+    #[arg(long, value_name = "PARTS", default_value = "full", value_parser = named::<Parts>())]
+    pub parts: Parts,
 }
 
 impl ModelArgs {
@@ -78,6 +85,7 @@ impl ModelArgs {
             selector,
             no_angular_velocity,
             improve,
+            parts,
         } = self.clone();
         ModelOptions {
             config,
@@ -86,6 +94,7 @@ impl ModelArgs {
             selector,
             no_angular_velocity,
             improve,
+            parts,
         }
     }
 }

@@ -29,6 +29,7 @@ pub mod eval;
 pub mod features;
 pub mod flags;
 pub mod gate;
+pub mod hybrid;
 pub mod interaction;
 pub mod keypoints;
 pub mod model;
@@ -44,6 +45,7 @@ pub use memories::{aim, aitm, tree};
 pub use aitm::MapStats;
 pub use features::ParseError;
 pub use gate::{GateConfig, GateModel, GateParams, GateWorld};
+pub use hybrid::{HybridConfig, HybridModel, HybridWorld};
 pub use interaction::{InteractionConfig, InteractionModel, InteractionParams, InteractionWorld};
 pub use model::Model;
 pub use stats::{

@@ -15,8 +15,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::gate::{GateError, Improvements, VelocityFeatures};
+pub use crate::hybrid::Parts;
 use crate::interaction::{InteractionError, SelectorKind};
-use crate::{flags, GateConfig, GateParams, InteractionConfig, InteractionParams};
+use crate::{flags, GateConfig, GateParams, HybridConfig, InteractionConfig, InteractionParams};
 
 /// The publish rate that selects the LOWFREQ thresholds, as bit 2 does
 /// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
@@ -32,10 +33,16 @@ pub enum ModelKind {
     Interaction,
     #[serde(rename = "gate+")]
     GatePlus,
+    Hybrid,
 }
 
 impl Named for ModelKind {
-    const ALL: &'static [Self] = &[ModelKind::Gate, ModelKind::Interaction, ModelKind::GatePlus];
+    const ALL: &'static [Self] = &[
+        ModelKind::Gate,
+        ModelKind::Interaction,
+        ModelKind::GatePlus,
+        ModelKind::Hybrid,
+    ];
 
     fn name(self) -> &'static str {
         self.as_str()
@@ -51,6 +58,10 @@ impl Named for ModelKind {
                 "The gate model with every change beyond the thesis (`--improve`, \
                  `docs/models.md` \"Beyond the thesis\"); not the thesis's model"
             }
+            ModelKind::Hybrid => {
+                "Pushing mechanics identified online plus a memory of their residual \
+                 (`docs/models.md` \"The hybrid model\"); not the thesis's model"
+            }
         }
     }
 }
@@ -63,15 +74,19 @@ impl ModelKind {
             ModelKind::Gate => "gate",
             ModelKind::Interaction => "interaction",
             ModelKind::GatePlus => "gate+",
+            ModelKind::Hybrid => "hybrid",
         }
     }
 
     /// The thesis's model this one is, or is built on: the gate model for
     /// `gate+`. Tables, figures and the thesis's reference numbers follow it.
+    /// The hybrid model, built on neither, stands beside the gate model:
+    /// the thesis's forward model of choice, and like it a model of object
+    /// states that ignores the actuator's yaw.
     #[must_use]
     pub fn family(self) -> ModelKind {
         match self {
-            ModelKind::Gate | ModelKind::GatePlus => ModelKind::Gate,
+            ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => ModelKind::Gate,
             ModelKind::Interaction => ModelKind::Interaction,
         }
     }
@@ -86,6 +101,12 @@ impl ModelKind {
         if let Some(kind) = ModelKind::from_name(name) {
             return Some(kind);
         }
+        if let Some(parts) = name.strip_prefix("hybrid-") {
+            return crate::hybrid::Parts::ALL
+                .iter()
+                .any(|p| *p != crate::hybrid::Parts::Full && p.as_str() == parts)
+                .then_some(ModelKind::Hybrid);
+        }
         let improve = name
             .strip_prefix("gate+")?
             .split('+')
@@ -98,6 +119,24 @@ impl ModelKind {
         // Only the spelling reports use: no repeats, no other order, no
         // `all` or every change spelt out (that is `gate+`).
         (options.report_name(ModelKind::Gate) == name).then_some(ModelKind::GatePlus)
+    }
+
+    /// Whether `options` configure a model of this kind at this publish
+    /// rate, without building one.
+    ///
+    /// # Errors
+    /// As [`ModelKind::dispatch`].
+    pub fn check(
+        self,
+        options: &ModelOptions,
+        publish_rate_hz: u32,
+    ) -> Result<(), ModelOptionsError> {
+        match self {
+            ModelKind::Gate => options.gate(publish_rate_hz).map(drop),
+            ModelKind::Interaction => options.interaction(publish_rate_hz).map(drop),
+            ModelKind::GatePlus => options.gate_plus(publish_rate_hz).map(drop),
+            ModelKind::Hybrid => options.hybrid(publish_rate_hz).map(drop),
+        }
     }
 
     /// Calls `job` with an untrained model of this kind configured by
@@ -120,6 +159,7 @@ impl ModelKind {
             ModelKind::GatePlus => {
                 job.run(crate::GateModel::new(options.gate_plus(publish_rate_hz)?))
             }
+            ModelKind::Hybrid => job.run(crate::HybridModel::new(options.hybrid(publish_rate_hz)?)),
         })
     }
 }
@@ -353,6 +393,24 @@ impl Named for SelectorKind {
     }
 }
 
+impl Named for Parts {
+    const ALL: &'static [Self] = &Parts::ALL;
+
+    fn name(self) -> &'static str {
+        self.as_str()
+    }
+
+    fn description(self) -> &'static str {
+        match self {
+            Parts::Mechanics => {
+                "the mechanics alone, with the parameters the shape suggests; learns nothing"
+            }
+            Parts::Identified => "the mechanics with parameters identified from the messages",
+            Parts::Full => "the identified mechanics and the memory of their residual",
+        }
+    }
+}
+
 /// The interaction model's selector called `name`.
 ///
 /// # Errors
@@ -391,6 +449,8 @@ pub struct ModelOptions {
     pub no_angular_velocity: bool,
     /// Changes beyond the thesis for the gate model.
     pub improve: Vec<Improvement>,
+    /// The hybrid model's parts (its ablation); all of them by default.
+    pub parts: Parts,
 }
 
 /// Why a combination of [`ModelOptions`] cannot configure a model.
@@ -411,6 +471,8 @@ pub enum ModelOptionsError {
     NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
+    #[error("--parts chooses the hybrid model's parts; it does not apply to the {0} model")]
+    PartsNotForModel(ModelKind),
     #[error("--improve adds changes to --model gate; gate+ already has every one")]
     ImproveOnGatePlus,
     #[error("eta {0} is not a finite, non-negative number")]
@@ -446,6 +508,9 @@ impl ModelOptions {
         if !names.is_empty() {
             line.push_str(&format!(", improve {}", names.join("+")));
         }
+        if self.parts != Parts::Full {
+            line.push_str(&format!(", parts {}", self.parts.as_str()));
+        }
         line
     }
 
@@ -476,6 +541,9 @@ impl ModelOptions {
     /// `gate+CHANGE+…` in the order of [`Improvement::EACH`].
     #[must_use]
     pub fn report_name(&self, kind: ModelKind) -> String {
+        if kind == ModelKind::Hybrid && self.parts != Parts::Full {
+            return format!("hybrid-{}", self.parts.as_str());
+        }
         let on = self.improvements();
         if kind != ModelKind::Gate || !on.any() {
             return kind.as_str().to_owned();
@@ -511,6 +579,9 @@ impl ModelOptions {
         if !self.improve.is_empty() {
             return refuse("--improve");
         }
+        if self.parts != Parts::Full {
+            return refuse("--parts");
+        }
         let model_bits = flags::USE_DYNS
             | flags::HARDCODEDACT
             | flags::HARDCODEDGATE
@@ -535,6 +606,7 @@ impl ModelOptions {
     /// Options that do not apply to the gate model or invalid values.
     pub fn gate(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
         self.check_eta()?;
+        self.check_no_parts(ModelKind::Gate)?;
         if self.selector != SelectorKind::Aitm {
             return Err(ModelOptionsError::NotForModel {
                 option: "--selector",
@@ -575,6 +647,7 @@ impl ModelOptions {
         publish_rate_hz: u32,
     ) -> Result<InteractionConfig, ModelOptionsError> {
         self.check_eta()?;
+        self.check_no_parts(ModelKind::Interaction)?;
         if self.no_angular_velocity || !self.improve.is_empty() {
             return Err(ModelOptionsError::NotForModel {
                 option: if self.no_angular_velocity {
@@ -589,6 +662,52 @@ impl ModelOptions {
         params.ac_learning_rate = self.eta;
         params.selector = self.selector;
         Ok(params.check()?)
+    }
+
+    /// The hybrid model's configuration. It has no thesis variants: the
+    /// configuration bits of the model (1, 16, 32, 64), --eta, --selector,
+    /// --no-angular-velocity and --improve are refused.
+    ///
+    /// # Errors
+    /// The first option that does not apply, named.
+    pub fn hybrid(&self, publish_rate_hz: u32) -> Result<HybridConfig, ModelOptionsError> {
+        let not_hybrid = |option: &'static str| {
+            Err(ModelOptionsError::NotForModel {
+                option,
+                model: ModelKind::Hybrid,
+            })
+        };
+        if self.eta != 0.0 {
+            return not_hybrid("--eta");
+        }
+        if self.selector != SelectorKind::Aitm {
+            return not_hybrid("--selector");
+        }
+        if self.no_angular_velocity {
+            return not_hybrid("--no-angular-velocity");
+        }
+        if !self.improve.is_empty() {
+            return not_hybrid("--improve");
+        }
+        let model_bits = flags::USE_DYNS
+            | flags::HARDCODEDACT
+            | flags::HARDCODEDGATE
+            | flags::USINGPREDICTIONBOOST;
+        if self.config_number() & model_bits != 0 {
+            return not_hybrid("the model bits of --config/--flag (1, 16, 32, 64)");
+        }
+        Ok(HybridConfig {
+            parts: self.parts,
+            publish_rate_hz,
+        })
+    }
+
+    fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
+        if self.parts == Parts::Full {
+            Ok(())
+        } else {
+            Err(ModelOptionsError::PartsNotForModel(model))
+        }
     }
 
     /// The command line refuses a bad --eta as it parses it; options built

@@ -524,11 +524,7 @@ impl PushTaskLine {
         let options = &line.args.options.options();
         let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
         match line.args.learner.choice() {
-            LearnerChoice::Builtin(ModelKind::Gate) => options.gate(rate).map(drop)?,
-            LearnerChoice::Builtin(ModelKind::GatePlus) => options.gate_plus(rate).map(drop)?,
-            LearnerChoice::Builtin(ModelKind::Interaction) => {
-                options.interaction(rate).map(drop)?;
-            }
+            LearnerChoice::Builtin(kind) => kind.check(options, rate)?,
             LearnerChoice::External(_) => options.check_external()?,
         }
         Ok(Self {

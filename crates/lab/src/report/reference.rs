@@ -81,7 +81,9 @@ pub struct MttRef {
 #[must_use]
 pub fn curve(model: learner::registry::ModelKind, train_runs: usize) -> Option<&'static CurveRef> {
     let table: &[CurveRef] = match model {
-        learner::registry::ModelKind::Gate | learner::registry::ModelKind::GatePlus => &GATE_CURVE,
+        learner::registry::ModelKind::Gate
+        | learner::registry::ModelKind::GatePlus
+        | learner::registry::ModelKind::Hybrid => &GATE_CURVE,
         learner::registry::ModelKind::Interaction => &INTERACTION_CURVE,
     };
     table.iter().find(|r| r.train_runs == train_runs)
@@ -91,9 +93,9 @@ pub fn curve(model: learner::registry::ModelKind, train_runs: usize) -> Option<&
 #[must_use]
 pub fn fixed_three(model: learner::registry::ModelKind) -> &'static [PositionRef; 21] {
     match model {
-        learner::registry::ModelKind::Gate | learner::registry::ModelKind::GatePlus => {
-            &GATE_FIXED_THREE
-        }
+        learner::registry::ModelKind::Gate
+        | learner::registry::ModelKind::GatePlus
+        | learner::registry::ModelKind::Hybrid => &GATE_FIXED_THREE,
         learner::registry::ModelKind::Interaction => &INTERACTION_FIXED_THREE,
     }
 }
@@ -112,7 +114,9 @@ pub fn two_objects(train_runs: usize) -> Option<&'static [TwoObjectRef; 21]> {
 #[must_use]
 pub fn move_to_target(model: learner::registry::ModelKind) -> &'static [MttRef; 4] {
     match model {
-        learner::registry::ModelKind::Gate | learner::registry::ModelKind::GatePlus => &GATE_MTT,
+        learner::registry::ModelKind::Gate
+        | learner::registry::ModelKind::GatePlus
+        | learner::registry::ModelKind::Hybrid => &GATE_MTT,
         learner::registry::ModelKind::Interaction => &INTERACTION_MTT,
     }
 }

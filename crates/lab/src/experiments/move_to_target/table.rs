@@ -27,7 +27,7 @@ pub fn move_to_target(
 #[must_use]
 pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout {
     let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus => "§8.2",
+        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§8.2",
         ModelKind::Interaction => "§8.1",
     };
     let head = vec![format!(

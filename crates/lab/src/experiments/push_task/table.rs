@@ -63,7 +63,7 @@ pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
 
 fn curve(results: &[CurveEntry], model: ModelKind, thesis: bool) -> Vec<Table> {
     let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus => "§3.4",
+        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§3.4",
         ModelKind::Interaction => "§3.2",
     };
     let mut all = Table::new(
@@ -140,7 +140,9 @@ fn curve(results: &[CurveEntry], model: ModelKind, thesis: bool) -> Vec<Table> {
 
 fn positions(entry: &CurveEntry, model: ModelKind) -> Table {
     let (source, table) = match model {
-        ModelKind::Gate | ModelKind::GatePlus => ("§5.3", reference::fixed_three(model)),
+        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => {
+            ("§5.3", reference::fixed_three(model))
+        }
         ModelKind::Interaction => ("§5.2", reference::fixed_three(model)),
     };
     // The thesis's table is for its three selected runs only.
@@ -254,7 +256,7 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
         thesis,
     };
     match model {
-        ModelKind::Gate | ModelKind::GatePlus => {
+        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => {
             let mut t = Table::new(
                 "nodes",
                 "Node counts when training ended: mean (population std) over folds [§4.2; thesis: random training data]",

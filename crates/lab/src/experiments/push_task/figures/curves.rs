@@ -11,7 +11,7 @@ use learner::registry::ModelKind;
 
 pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: bool) -> Grid {
     let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus => "§3.4",
+        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§3.4",
         ModelKind::Interaction => "§3.2",
     };
     let n_max = results.iter().map(|e| e.train_runs).max().unwrap_or(1) as f64;

@@ -1,0 +1,533 @@
+//! [`HybridModel`]: the [`Model`] built on pushing mechanics.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{Rotation2, Vector2};
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use super::mechanics::{lambda_evidence, Outline, Parameters, Push, Slide, Stepped, Twist};
+use super::residual::{self, Memory};
+use crate::aitm::MapStats;
+use crate::features::{parse_frame_at, ActuatorYaw, ParseError, Precision};
+use crate::features::{Shape, ACTUATOR_SHAPE};
+use crate::model::Model;
+use crate::stats::{ModelStats, OtherStats};
+use crate::types::{Action, Frame, ObjectState, Poses, Target, TargetError};
+
+/// Which of the model's parts are on: the ablation of `docs/models.md`
+/// "The hybrid model".
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Parts {
+    /// The mechanics with the parameters a shape alone suggests: uniform
+    /// pressure, a slider that stops when the push ends, the actuator
+    /// moving exactly as commanded. Learns nothing.
+    Mechanics,
+    /// The mechanics with their parameters identified from the messages.
+    Identified,
+    /// The identified mechanics and the residual memory.
+    #[default]
+    Full,
+}
+
+impl Parts {
+    pub const ALL: [Parts; 3] = [Parts::Mechanics, Parts::Identified, Parts::Full];
+
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Parts::Mechanics => "mechanics",
+            Parts::Identified => "identified",
+            Parts::Full => "full",
+        }
+    }
+
+    fn identifies(self) -> bool {
+        self != Parts::Mechanics
+    }
+
+    fn remembers(self) -> bool {
+        self == Parts::Full
+    }
+}
+
+/// How the hybrid model is set up.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HybridConfig {
+    pub parts: Parts,
+    /// Messages per second: a slider faster than [`MAX_SPEED`] between
+    /// two messages was moved by a reset, not by a push.
+    pub publish_rate_hz: u32,
+}
+
+/// Metres per second no pushed block reaches (the actuator moves at
+/// 0.5 m/s at most): a faster change between messages is a reset.
+pub const MAX_SPEED: f64 = 2.0;
+
+/// A pusher whose surface is within this of a slider is in contact for
+/// the identification and near enough for the residual memory to matter.
+const CONTACT_TOLERANCE: f64 = 0.002;
+const NEAR: f64 = 0.03;
+
+/// Below this motion per message a block is at rest.
+const AT_REST: f64 = 1e-5;
+
+/// The hybrid model's world: the poses, and each block's motion over the
+/// message before, which a free slide continues.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HybridWorld {
+    pub poses: Poses,
+    pub motion: BTreeMap<u32, Twist>,
+}
+
+/// Least squares of the actuator's motion over a message on the action
+/// in force and the one before it (whose last moments the world still
+/// applies, `docs/spec/world.md` §8), shrunk towards moving exactly as
+/// commanded.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ActuatorFit {
+    /// Σ x xᵀ and Σ x y over (action, previous action) → displacement,
+    /// both axes pooled.
+    xx: [[f64; 2]; 2],
+    xy: [f64; 2],
+    prior: [f64; 2],
+}
+
+/// Pseudo-observations of the prior: about one message at full speed.
+const ACTUATOR_PRIOR_WEIGHT: f64 = 0.25;
+
+impl ActuatorFit {
+    fn new(publish_rate_hz: u32) -> Self {
+        Self {
+            xx: [[0.0; 2]; 2],
+            xy: [0.0; 2],
+            prior: [1.0 / f64::from(publish_rate_hz.max(1)), 0.0],
+        }
+    }
+
+    fn learn(&mut self, action: Action, previous: Action, moved: Vector2<f64>) {
+        for (x, y) in [
+            ([action.vx, previous.vx], moved.x),
+            ([action.vy, previous.vy], moved.y),
+        ] {
+            for i in 0..2 {
+                for j in 0..2 {
+                    self.xx[i][j] += x[i] * x[j];
+                }
+                self.xy[i] += x[i] * y;
+            }
+        }
+    }
+
+    fn weights(&self, identified: bool) -> [f64; 2] {
+        if !identified {
+            return self.prior;
+        }
+        let r = ACTUATOR_PRIOR_WEIGHT;
+        let a = [
+            [self.xx[0][0] + r, self.xx[0][1]],
+            [self.xx[1][0], self.xx[1][1] + r],
+        ];
+        let b = [
+            self.xy[0] + r * self.prior[0],
+            self.xy[1] + r * self.prior[1],
+        ];
+        let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+        [
+            (b[0] * a[1][1] - a[0][1] * b[1]) / det,
+            (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+        ]
+    }
+
+    fn path(&self, action: Action, previous: Action, identified: bool) -> Vector2<f64> {
+        let w = self.weights(identified);
+        w[0] * action.to_vector() + w[1] * previous.to_vector()
+    }
+}
+
+/// What the model knows of one block.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct BlockKnowledge {
+    outline: Outline,
+    /// λ by least squares, shrunk towards the uniform-pressure prior.
+    lambda_xx: f64,
+    lambda_xy: f64,
+    lambda_prior: f64,
+    /// Decelerations seen while sliding freely: sums and counts.
+    slide_linear: (f64, u32),
+    slide_angular: (f64, u32),
+    memory: Memory,
+    updates: u64,
+}
+
+/// Pseudo-observations of the λ prior: one message of a push at 0.1 m
+/// off centre (k·(q × n) ≈ 5e-4).
+const LAMBDA_PRIOR_WEIGHT: f64 = 2.5e-7;
+
+/// Without a free slide seen, a block stops the moment the push ends:
+/// the quasi-static assumption.
+const STOPS_AT_ONCE: f64 = 1.0;
+
+impl BlockKnowledge {
+    fn new(outline: Outline) -> Self {
+        let c = outline.uniform_pressure_length();
+        Self {
+            outline,
+            lambda_xx: 0.0,
+            lambda_xy: 0.0,
+            lambda_prior: 1.0 / (c * c),
+            slide_linear: (0.0, 0),
+            slide_angular: (0.0, 0),
+            memory: Memory::default(),
+            updates: 0,
+        }
+    }
+
+    fn parameters(&self, identified: bool) -> Parameters {
+        let stops = Parameters {
+            lambda: self.lambda_prior,
+            slide: Slide {
+                linear: STOPS_AT_ONCE,
+                angular: STOPS_AT_ONCE,
+            },
+        };
+        if !identified {
+            return stops;
+        }
+        let mean = |(sum, n): (f64, u32)| {
+            if n == 0 {
+                STOPS_AT_ONCE
+            } else {
+                sum / f64::from(n)
+            }
+        };
+        Parameters {
+            lambda: (self.lambda_xy + LAMBDA_PRIOR_WEIGHT * self.lambda_prior)
+                / (self.lambda_xx + LAMBDA_PRIOR_WEIGHT),
+            slide: Slide {
+                linear: mean(self.slide_linear),
+                angular: mean(self.slide_angular),
+            },
+        }
+    }
+}
+
+/// The hybrid model (`docs/models.md` "The hybrid model").
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct HybridModel {
+    config: HybridConfig,
+    training: bool,
+    /// The stored state: the latest world `update` or `reset_objects` saw.
+    current: Option<HybridWorld>,
+    /// The action in force while the world moved into `current`.
+    last_action: Action,
+    actuator: ActuatorFit,
+    blocks: BTreeMap<u32, BlockKnowledge>,
+    pub(super) target: Option<Target>,
+}
+
+/// The pusher's radius, from the shape table.
+pub(super) fn pusher_radius() -> f64 {
+    ACTUATOR_SHAPE.radius
+}
+
+impl HybridModel {
+    #[must_use]
+    pub fn new(config: HybridConfig) -> Self {
+        Self {
+            config,
+            training: true,
+            current: None,
+            last_action: Action::ZERO,
+            actuator: ActuatorFit::new(config.publish_rate_hz),
+            blocks: BTreeMap::new(),
+            target: None,
+        }
+    }
+
+    #[must_use]
+    pub fn config(&self) -> &HybridConfig {
+        &self.config
+    }
+
+    pub(super) fn current(&self) -> Option<&HybridWorld> {
+        self.current.as_ref()
+    }
+
+    pub(super) fn outline(id: u32) -> Outline {
+        Shape::of(id).map_or(Outline::Disc { radius: 0.0 }, Outline::of_shape)
+    }
+
+    /// The actuator's path over the next message under `action`.
+    pub(super) fn actuator_path(&self, action: Action) -> Vector2<f64> {
+        self.actuator
+            .path(action, self.last_action, self.config.parts.identifies())
+    }
+
+    /// Where the block `id` at `pose`, having moved by `motion`, is after
+    /// the pusher moved from `from` along `path`: the mechanics, and the
+    /// residual memory if the pusher is near or the block moving.
+    pub(super) fn block_after(
+        &self,
+        id: u32,
+        pose: ObjectState,
+        motion: Twist,
+        from: Vector2<f64>,
+        path: Vector2<f64>,
+    ) -> (ObjectState, Twist) {
+        let fallback;
+        let knowledge = match self.blocks.get(&id) {
+            Some(k) => k,
+            None => {
+                fallback = BlockKnowledge::new(Self::outline(id));
+                &fallback
+            }
+        };
+        let parameters = knowledge.parameters(self.config.parts.identifies());
+        let push = Push {
+            outline: &knowledge.outline,
+            parameters: &parameters,
+            pusher_radius: pusher_radius(),
+        };
+        let stepped = push.step(pose, motion, from, path);
+        if !self.config.parts.remembers() || knowledge.memory.is_empty() {
+            return (stepped.slider, stepped.motion);
+        }
+        let Some(key) = residual_key(&knowledge.outline, &pose, &motion, from, path, &stepped)
+        else {
+            return (stepped.slider, stepped.motion);
+        };
+        let r = knowledge.memory.query(&key);
+        let correction = Twist::from_frame(r, pose.theta);
+        let slider = correction.applied_to(&stepped.slider);
+        (slider, Twist::between(&pose, &slider))
+    }
+
+    fn learn(&mut self, from: &HybridWorld, to: &HybridWorld, action: Action) {
+        let previous = self.last_action;
+        let pusher_from = from.poses.actuator.position();
+        let pusher_to = to.poses.actuator.position();
+        let moved = pusher_to - pusher_from;
+        self.actuator.learn(action, previous, moved);
+        let identifies = self.config.parts.identifies();
+        let remembers = self.config.parts.remembers();
+        for (&id, before) in &from.poses.blocks {
+            let Some(after) = to.poses.blocks.get(&id) else {
+                continue;
+            };
+            let motion_before = from.motion.get(&id).copied().unwrap_or_default();
+            let knowledge = self
+                .blocks
+                .entry(id)
+                .or_insert_with(|| BlockKnowledge::new(Self::outline(id)));
+            knowledge.updates += 1;
+            let outline = knowledge.outline;
+            if let Some((x, y)) = lambda_evidence(
+                &outline,
+                pusher_radius(),
+                before,
+                after,
+                pusher_to,
+                CONTACT_TOLERANCE,
+            ) {
+                knowledge.lambda_xx += x * x;
+                knowledge.lambda_xy += x * y;
+            }
+            let motion = Twist::between(before, after);
+            let apart = |pusher: Vector2<f64>, block: &ObjectState| {
+                let local = Rotation2::new(-block.theta) * (pusher - block.position());
+                outline.closest(local).distance - pusher_radius() > NEAR
+            };
+            if apart(pusher_from, before) && apart(pusher_to, after) {
+                let (v0, v1) = (motion_before.speed(), motion.speed());
+                if v0 > AT_REST && v1 > AT_REST {
+                    knowledge.slide_linear.0 += (v0 - v1).max(0.0);
+                    knowledge.slide_linear.1 += 1;
+                }
+                let (w0, w1) = (motion_before.dtheta.abs(), motion.dtheta.abs());
+                if w0 > AT_REST && w1 > AT_REST {
+                    knowledge.slide_angular.0 += (w0 - w1).max(0.0);
+                    knowledge.slide_angular.1 += 1;
+                }
+            }
+            if !remembers {
+                continue;
+            }
+            let parameters = knowledge.parameters(identifies);
+            let push = Push {
+                outline: &outline,
+                parameters: &parameters,
+                pusher_radius: pusher_radius(),
+            };
+            let stepped = push.step(*before, motion_before, pusher_from, moved);
+            if let Some(key) = residual_key(
+                &outline,
+                before,
+                &motion_before,
+                pusher_from,
+                moved,
+                &stepped,
+            ) {
+                let seen = motion.in_frame(before.theta);
+                let predicted = stepped.motion.in_frame(before.theta);
+                knowledge.memory.insert(
+                    key,
+                    [
+                        seen[0] - predicted[0],
+                        seen[1] - predicted[1],
+                        seen[2] - predicted[2],
+                    ],
+                );
+            }
+        }
+    }
+
+    fn parse_world(&self, frame: &Frame) -> Result<HybridWorld, ParseError> {
+        let poses = parse_frame_at(frame, ActuatorYaw::ForceZero, Precision::Full)?;
+        let limit = MAX_SPEED / f64::from(self.config.publish_rate_hz.max(1));
+        let motion = poses
+            .blocks
+            .iter()
+            .map(|(&id, pose)| {
+                let before = self.current.as_ref().and_then(|c| c.poses.blocks.get(&id));
+                let motion = before
+                    .map(|b| Twist::between(b, pose))
+                    .filter(|m| m.speed() < limit)
+                    .unwrap_or_default();
+                (id, motion)
+            })
+            .collect();
+        Ok(HybridWorld { poses, motion })
+    }
+}
+
+/// The residual memory's key for one message, if the pusher comes near
+/// the block or the block moves: otherwise nothing happens that a memory
+/// could add to.
+fn residual_key(
+    outline: &Outline,
+    pose: &ObjectState,
+    motion: &Twist,
+    from: Vector2<f64>,
+    path: Vector2<f64>,
+    stepped: &Stepped,
+) -> Option<[f64; residual::FEATURES]> {
+    let to_frame = Rotation2::new(-pose.theta);
+    let pusher = to_frame * (from - pose.position());
+    let near = outline.closest(pusher).distance - pusher_radius() < NEAR;
+    let moving = motion.speed() > AT_REST || motion.dtheta.abs() > AT_REST;
+    if !(near || moving || stepped.touched) {
+        return None;
+    }
+    let local_path = to_frame * path;
+    Some(residual::features(
+        [pusher.x, pusher.y],
+        [local_path.x, local_path.y],
+        motion.in_frame(pose.theta),
+    ))
+}
+
+impl Model for HybridModel {
+    type World = HybridWorld;
+
+    fn parse(&self, frame: &Frame) -> Result<HybridWorld, ParseError> {
+        self.parse_world(frame)
+    }
+
+    fn poses(world: &HybridWorld) -> Poses {
+        world.poses.clone()
+    }
+
+    fn reset_objects(&mut self, world: &HybridWorld) {
+        let mut world = world.clone();
+        // A run starts from a reset world: nothing is sliding.
+        for m in world.motion.values_mut() {
+            *m = Twist::default();
+        }
+        self.current = Some(world);
+        self.last_action = Action::ZERO;
+    }
+
+    fn update(&mut self, world: &HybridWorld, action: Action) {
+        if self.training {
+            if let Some(from) = self.current.take() {
+                self.learn(&from, world, action);
+            }
+        }
+        self.current = Some(world.clone());
+        self.last_action = action;
+    }
+
+    fn predict(&self, world: &HybridWorld, action: Action) -> HybridWorld {
+        let from = world.poses.actuator.position();
+        let path = self.actuator_path(action);
+        let mut next = world.clone();
+        let to = from + path;
+        next.poses.actuator = ObjectState::new(to.x, to.y, 0.0);
+        for (&id, pose) in &world.poses.blocks {
+            let motion = world.motion.get(&id).copied().unwrap_or_default();
+            let (after, moved) = self.block_after(id, *pose, motion, from, path);
+            next.poses.blocks.insert(id, after);
+            next.motion.insert(id, moved);
+        }
+        next
+    }
+
+    fn set_training(&mut self, on: bool) {
+        self.training = on;
+    }
+
+    fn is_training(&self) -> bool {
+        self.training
+    }
+
+    fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
+        if let Some(t) = &target {
+            t.check()?;
+            if Shape::of(t.id).is_none() {
+                return Err(TargetError::UnknownObject { id: t.id });
+            }
+        }
+        self.target = target;
+        Ok(())
+    }
+
+    fn has_target(&self) -> bool {
+        self.target.is_some()
+    }
+
+    fn act(&mut self, rng: &mut dyn Rng) -> Action {
+        self.plan(rng)
+    }
+
+    fn stats(&self) -> ModelStats {
+        let mut stats = OtherStats::default();
+        let w = self.actuator.weights(self.config.parts.identifies());
+        stats.extra.insert("actuator_action_weight".into(), w[0]);
+        stats.extra.insert("actuator_previous_weight".into(), w[1]);
+        for (id, k) in &self.blocks {
+            let p = k.parameters(self.config.parts.identifies());
+            stats.extra.insert(format!("lambda/{id}"), p.lambda);
+            stats
+                .extra
+                .insert(format!("slide_linear/{id}"), p.slide.linear);
+            stats
+                .extra
+                .insert(format!("slide_angular/{id}"), p.slide.angular);
+            let n = k.memory.len();
+            stats.maps.insert(
+                format!("residual/{id}"),
+                MapStats {
+                    update_calls: k.updates,
+                    inserts: n as u64,
+                    nodes: n,
+                },
+            );
+        }
+        stats
+            .labels
+            .insert("parts".into(), self.config.parts.as_str().into());
+        ModelStats::Other(stats)
+    }
+}
