@@ -973,11 +973,12 @@ mod tests {
             selector: SelectorKind::Tree,
             no_angular_velocity: true,
             improve: vec![Improvement::AverageOutputs],
+            parts: Parts::Identified,
         };
         let json = serde_json::to_string(&o).unwrap();
         assert_eq!(
             json,
-            r#"{"config":8,"flags":["use-dyns"],"eta":0.1,"selector":"tree","no-angular-velocity":true,"improve":["average-outputs"]}"#
+            r#"{"config":8,"flags":["use-dyns"],"eta":0.1,"selector":"tree","no-angular-velocity":true,"improve":["average-outputs"],"parts":"identified"}"#
         );
         assert_eq!(serde_json::from_str::<ModelOptions>(&json).unwrap(), o);
         assert_eq!(

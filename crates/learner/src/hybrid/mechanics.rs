@@ -5,14 +5,16 @@
 //! against the blocks, so the force it exerts is (almost) along the contact
 //! normal. The blocks slide on the ground with a friction of 0.9, which makes
 //! their motion under a steady push nearly quasi-static: inertia matters
-//! only in the first and last moments of a contact. The slider's motion
-//! then follows from its limit surface (Goyal, Ruina & Papadopoulos 1991),
-//! approximated by an ellipsoid (Lynch, Maekawa & Tanie 1992): the twist
-//! `(v, ω)` about the centre of mass is parallel to
-//! `(F, λ·m)` for a force `F` and its moment `m`, with one parameter
-//! `λ = 1/c²` per slider. A frictionless pusher pushes along the contact
-//! normal `n`, so the twist is `k·(n, λ·(q × n))` for the contact point `q`,
-//! and `k` follows from the pusher not passing through the slider.
+//! only in the first and last moments of a contact. A quasi-static slider
+//! moves so as to dissipate the least power in friction among the motions
+//! the pusher allows (the maximum-dissipation principle behind the limit
+//! surface, Goyal, Ruina & Papadopoulos 1991; Mason 1986). Here the
+//! friction acts at the slider's support points and is bounded along each
+//! world axis separately (the world's friction pyramid), so the
+//! dissipation is a weighted sum of absolute values and the motion is the
+//! solution of a small linear programme ([`least_dissipation`]). Its one
+//! free parameter, how far the push tips the weight onto the far supports,
+//! is identified online by the model.
 //!
 //! The pusher's path over one message is cut into [`SUBSTEPS`] pieces, and
 //! each piece pushes the slider out of the pusher's way; that keeps contact
@@ -109,30 +111,212 @@ impl Outline {
         }
     }
 
-    /// The characteristic length `c` of the limit-surface ellipsoid for a
-    /// uniform pressure over the outline: the mean distance of its area
-    /// from the centre (Lynch, Maekawa & Tanie 1992 take `c = m_max /
-    /// f_max`, which is this for uniform pressure). The model's prior
-    /// before it has identified anything.
-    #[must_use]
-    pub fn uniform_pressure_length(&self) -> f64 {
+    /// Where the slider rests on the ground (slider frame), written to the
+    /// start of `out`; returns how many: a box on its four corners, as a
+    /// rigid box on a plane does; a disc on points around its rim.
+    pub fn supports_into(&self, out: &mut [Vector2<f64>; MAX_SUPPORTS]) -> usize {
         match *self {
-            Outline::Disc { radius } => 2.0 * radius / 3.0,
             Outline::Box { half } => {
-                // A midpoint rule on a 64 × 64 grid: exact to well under 1 %.
-                const N: usize = 64;
-                let mut sum = 0.0;
-                for i in 0..N {
-                    for j in 0..N {
-                        let x = half[0] * (2.0 * (i as f64 + 0.5) / N as f64 - 1.0);
-                        let y = half[1] * (2.0 * (j as f64 + 0.5) / N as f64 - 1.0);
-                        sum += x.hypot(y);
-                    }
+                out[0] = Vector2::new(-half[0], -half[1]);
+                out[1] = Vector2::new(half[0], -half[1]);
+                out[2] = Vector2::new(half[0], half[1]);
+                out[3] = Vector2::new(-half[0], half[1]);
+                4
+            }
+            Outline::Disc { radius } => {
+                for (i, p) in out.iter_mut().enumerate().take(RIM_SUPPORTS) {
+                    let a = std::f64::consts::TAU * (i as f64 + 0.5) / RIM_SUPPORTS as f64;
+                    *p = Vector2::new(radius * a.cos(), radius * a.sin());
                 }
-                sum / (N * N) as f64
+                RIM_SUPPORTS
             }
         }
     }
+}
+
+impl Outline {
+    /// A length that makes a turn comparable with a displacement: the
+    /// largest distance of the outline from its centre.
+    #[must_use]
+    pub fn size(&self) -> f64 {
+        match *self {
+            Outline::Box { half } => half[0].hypot(half[1]),
+            Outline::Disc { radius } => radius,
+        }
+    }
+}
+
+/// Support points of a disc.
+const RIM_SUPPORTS: usize = 8;
+
+/// The twist (slider frame) that moves the contact point `depth` along the
+/// inward normal while dissipating the least power in friction at the
+/// supports: the maximum-dissipation principle for a quasi-static slider,
+/// here a linear programme (friction bounded per world axis makes the
+/// dissipation a weighted sum of absolute values). Its optimum lies where
+/// two of the absolute values vanish, so every such pair is solved and the
+/// cheapest kept; equally cheap solutions are averaged, which is
+/// optimal too (the optimal set is convex) and keeps the answer
+/// continuous where the optimum is not unique.
+fn least_dissipation(
+    outline: &Outline,
+    contact: &Contact,
+    depth: f64,
+    theta: f64,
+    tipping: f64,
+    hint: &mut Option<(usize, usize)>,
+) -> [f64; 3] {
+    // Work in the world's axes, about the slider's centre.
+    let to_world = Rotation2::new(theta);
+    let n = to_world * -contact.normal;
+    let q = to_world * contact.point;
+    let constraint = [n.x, n.y, q.x * n.y - q.y * n.x];
+    let mut supports = [Vector2::zeros(); MAX_SUPPORTS];
+    let count = outline.supports_into(&mut supports);
+    let supports = &mut supports[..count];
+    for p in supports.iter_mut() {
+        *p = to_world * *p;
+    }
+    // The push's moment about the ground tips the weight to the far side,
+    // linearly in the distance along the push (clamped at zero).
+    let spread: f64 = supports.iter().map(|p| p.dot(&n).powi(2)).sum();
+    let gradient = if spread > 0.0 {
+        tipping * count as f64 / spread
+    } else {
+        0.0
+    };
+    let mut terms = [([0.0; 3], 0.0); 2 * MAX_SUPPORTS];
+    for (i, p) in supports.iter().enumerate() {
+        let weight = (1.0 + gradient * p.dot(&n)).max(0.0);
+        // Velocity of the support: (v_x − ω p_y, v_y + ω p_x).
+        terms[2 * i] = ([1.0, 0.0, -p.y], weight);
+        terms[2 * i + 1] = ([0.0, 1.0, p.x], weight);
+    }
+    let terms = &terms[..2 * count];
+    let to_slider = |world: [f64; 3]| {
+        let v = to_world.inverse() * Vector2::new(world[0], world[1]);
+        [v.x, v.y, world[2]]
+    };
+    if let Some((j, k)) = *hint {
+        if let Some(v) = vertex(terms, constraint, depth, j, k) {
+            if is_optimal(terms, constraint, &v, j, k) {
+                return to_slider(v);
+            }
+        }
+    }
+    let cost = |v: &[f64; 3]| -> f64 { terms.iter().map(|(a, w)| w * dot3(a, v).abs()).sum() };
+    let mut best = f64::INFINITY;
+    let mut sum = [0.0; 3];
+    let mut ties = 0.0;
+    for j in 0..terms.len() {
+        for k in j + 1..terms.len() {
+            let Some(v) = vertex(terms, constraint, depth, j, k) else {
+                continue;
+            };
+            let c = cost(&v);
+            let tolerance = if best.is_finite() { 1e-9 * best } else { 0.0 };
+            if c < best - tolerance {
+                best = c;
+                sum = v;
+                ties = 1.0;
+                *hint = Some((j, k));
+            } else if c <= best + tolerance {
+                for (s, x) in sum.iter_mut().zip(v) {
+                    *s += x;
+                }
+                ties += 1.0;
+            }
+        }
+    }
+    if ties == 0.0 {
+        *hint = None;
+        return [0.0; 3];
+    }
+    to_slider(sum.map(|s| s / ties))
+}
+
+/// Most support points an outline has.
+const MAX_SUPPORTS: usize = RIM_SUPPORTS;
+
+fn dot3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// The motion that meets the push's constraint with terms `j` and `k`
+/// at zero.
+fn vertex(
+    terms: &[([f64; 3], f64)],
+    constraint: [f64; 3],
+    depth: f64,
+    j: usize,
+    k: usize,
+) -> Option<[f64; 3]> {
+    solve3([constraint, terms[j].0, terms[k].0], [depth, 0.0, 0.0])
+}
+
+/// Whether the vertex `v` of terms `j`, `k` is optimal: the
+/// Karush–Kuhn–Tucker condition with the two vanishing terms' subgradients
+/// within [−1, 1] (any other vanishing term taken at 0, which makes this a
+/// sufficient test, not a necessary one: a failure only costs the full
+/// search).
+fn is_optimal(
+    terms: &[([f64; 3], f64)],
+    constraint: [f64; 3],
+    v: &[f64; 3],
+    j: usize,
+    k: usize,
+) -> bool {
+    let mut gradient = [0.0; 3];
+    for (i, (a, w)) in terms.iter().enumerate() {
+        if i == j || i == k {
+            continue;
+        }
+        let speed = dot3(a, v);
+        let sign = if speed > 1e-15 {
+            1.0
+        } else if speed < -1e-15 {
+            -1.0
+        } else {
+            0.0
+        };
+        for (g, x) in gradient.iter_mut().zip(a) {
+            *g += w * sign * x;
+        }
+    }
+    let (aj, wj) = terms[j];
+    let (ak, wk) = terms[k];
+    // Columns: w_j a_j, w_k a_k, −c; unknowns: s_j, s_k, μ.
+    let rows = [
+        [wj * aj[0], wk * ak[0], -constraint[0]],
+        [wj * aj[1], wk * ak[1], -constraint[1]],
+        [wj * aj[2], wk * ak[2], -constraint[2]],
+    ];
+    match solve3(rows, gradient.map(|g| -g)) {
+        Some([sj, sk, _]) => sj.abs() <= 1.0 + 1e-9 && sk.abs() <= 1.0 + 1e-9,
+        None => false,
+    }
+}
+
+/// `x` with `rows · x = rhs`, by Cramer's rule; `None` if singular.
+fn solve3(rows: [[f64; 3]; 3], rhs: [f64; 3]) -> Option<[f64; 3]> {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(rows);
+    if d.abs() < 1e-12 {
+        return None;
+    }
+    let mut x = [0.0; 3];
+    for (c, out) in x.iter_mut().enumerate() {
+        let mut m = rows;
+        for r in 0..3 {
+            m[r][c] = rhs[r];
+        }
+        *out = det(m) / d;
+    }
+    Some(x)
 }
 
 trait SignumOrOne {
@@ -221,8 +405,10 @@ pub struct Slide {
 /// The parameters of the mechanics that the model identifies.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Parameters {
-    /// `λ = 1/c²` of the limit-surface ellipsoid, 1/m².
-    pub lambda: f64,
+    /// How far the push tips the slider's weight towards its far side,
+    /// in metres: μ times the height at which the pusher meets it (see
+    /// [`least_dissipation`]).
+    pub tipping: f64,
     pub slide: Slide,
 }
 
@@ -257,20 +443,44 @@ impl Push<'_> {
         from: Vector2<f64>,
         path: Vector2<f64>,
     ) -> Stepped {
+        // The optimum of one piece is almost always the next one's.
+        self.step_in(slider, motion, from, path, SUBSTEPS, &mut None)
+    }
+
+    /// [`Push::step`] in `pieces` pieces, starting the search for the
+    /// least dissipation at `hint` (and leaving the last optimum there).
+    #[must_use]
+    pub fn step_in(
+        &self,
+        slider: ObjectState,
+        motion: Twist,
+        from: Vector2<f64>,
+        path: Vector2<f64>,
+        pieces: usize,
+        hint: &mut Option<(usize, usize)>,
+    ) -> Stepped {
         let mut s = slider;
         let mut velocity = motion;
         let mut touched = false;
-        let piece = path / SUBSTEPS as f64;
+        let pieces = pieces.max(1);
+        let piece = path / pieces as f64;
         let mut pusher = from;
-        let fraction = 1.0 / SUBSTEPS as f64;
-        for _ in 0..SUBSTEPS {
+        let fraction = 1.0 / pieces as f64;
+        for _ in 0..pieces {
             pusher += piece;
             let local = Rotation2::new(-s.theta) * (pusher - s.position());
             let contact = self.outline.closest(local);
             let depth = self.pusher_radius - contact.distance;
             if depth > 0.0 {
                 touched = true;
-                let twist = self.resolve(&contact, depth);
+                let twist = least_dissipation(
+                    self.outline,
+                    &contact,
+                    depth,
+                    s.theta,
+                    self.parameters.tipping,
+                    hint,
+                );
                 let moved = Twist::from_frame(twist, s.theta);
                 s = moved.applied_to(&s);
                 velocity = Twist {
@@ -295,17 +505,6 @@ impl Push<'_> {
         }
     }
 
-    /// The twist (slider frame) that moves the contact point `depth` along
-    /// the inward normal, on the limit-surface ellipsoid.
-    fn resolve(&self, contact: &Contact, depth: f64) -> [f64; 3] {
-        let n = -contact.normal;
-        let q = contact.point;
-        let moment = q.x * n.y - q.y * n.x;
-        let lambda = self.parameters.lambda;
-        let k = depth / (1.0 + lambda * moment * moment);
-        [k * n.x, k * n.y, k * lambda * moment]
-    }
-
     /// A velocity (per message) after a `fraction` of a message of sliding
     /// freely.
     fn slide(&self, v: Twist, fraction: f64) -> Twist {
@@ -328,35 +527,6 @@ impl Push<'_> {
             dtheta: v.dtheta * angular,
         }
     }
-}
-
-/// What one observed message says about `λ`: with the pusher in contact
-/// at its end, the rotation `dθ` against `k·(q × n)`, `k` being the
-/// slider's advance along the inward normal. `None` when the message says
-/// nothing (no contact, or a push without lever arm and without rotation).
-#[must_use]
-pub fn lambda_evidence(
-    outline: &Outline,
-    pusher_radius: f64,
-    before: &ObjectState,
-    after: &ObjectState,
-    pusher_after: Vector2<f64>,
-    contact_tolerance: f64,
-) -> Option<(f64, f64)> {
-    let local = Rotation2::new(-after.theta) * (pusher_after - after.position());
-    let contact = outline.closest(local);
-    if contact.distance - pusher_radius > contact_tolerance {
-        return None;
-    }
-    let n = -contact.normal;
-    let q = contact.point;
-    let moment = q.x * n.y - q.y * n.x;
-    let local_motion = Twist::between(before, after).in_frame(after.theta);
-    let k = local_motion[0] * n.x + local_motion[1] * n.y;
-    if k <= 0.0 {
-        return None;
-    }
-    Some((k * moment, local_motion[2]))
 }
 
 #[cfg(test)]
@@ -394,16 +564,6 @@ mod tests {
         assert_eq!(disc.point, Vector2::new(0.0, -0.1));
     }
 
-    #[test]
-    fn the_uniform_pressure_length_matches_closed_forms() {
-        // A square of side 2a: c = a·(√2 + ln(1 + √2))/3 ≈ 0.7652·a.
-        let square = Outline::Box { half: [1.0, 1.0] }.uniform_pressure_length();
-        let exact = (2.0_f64.sqrt() + (1.0 + 2.0_f64.sqrt()).ln()) / 3.0;
-        assert!((square - exact).abs() < 1e-3, "{square} vs {exact}");
-        let disc = Outline::Disc { radius: 0.3 }.uniform_pressure_length();
-        assert!((disc - 0.2).abs() < 1e-12);
-    }
-
     fn push(parameters: &Parameters) -> Push<'_> {
         static BLUE: Outline = Outline::Box { half: [0.25, 0.05] };
         Push {
@@ -414,7 +574,7 @@ mod tests {
     }
 
     const STOPS: Parameters = Parameters {
-        lambda: 30.0,
+        tipping: 0.0,
         slide: Slide {
             linear: 1.0,
             angular: 1.0,
@@ -445,7 +605,7 @@ mod tests {
         let block = ObjectState::new(0.0, 0.25, 0.0);
         let far = Vector2::new(1.0, 1.0);
         let gentle = Parameters {
-            lambda: 30.0,
+            tipping: 0.0,
             slide: Slide {
                 linear: 0.001,
                 angular: 0.01,
@@ -464,23 +624,36 @@ mod tests {
     }
 
     #[test]
-    fn lambda_evidence_reads_the_rotation_against_the_lever_arm() {
-        let before = ObjectState::new(0.0, 0.25, 0.0);
-        let from = Vector2::new(0.2, 0.25 - 0.05 - 0.025 - 0.001);
-        let path = Vector2::new(0.0, 0.005);
-        let s = push(&STOPS).step(before, Twist::default(), from, path);
-        let (x, y) =
-            lambda_evidence(&blue(), 0.025, &before, &s.slider, from + path, 0.002).unwrap();
-        // One message of the mechanics with λ = 30 reads back as about 30.
-        assert!((y / x - 30.0).abs() < 1.5, "{}", y / x);
-        assert!(lambda_evidence(
-            &blue(),
-            0.025,
-            &before,
-            &before,
-            Vector2::new(1.0, 1.0),
-            0.002
+    fn the_dead_zone_of_an_offset_push_narrows_as_the_push_tips_the_block() {
+        let outline = blue();
+        // A push along +y at 3.5 cm off centre, on the long face.
+        let contact = outline.closest(Vector2::new(0.035, -0.074));
+        let flat = least_dissipation(&outline, &contact, 0.001, 0.0, 0.0, &mut None);
+        // Level weight: turning costs the x-friction of all four corners,
+        // more than it saves below 5 cm off centre: a pure translation.
+        assert!(
+            flat[2].abs() < 1e-12 && (flat[1] - 0.001).abs() < 1e-12,
+            "{flat:?}"
+        );
+        // Weight tipped to the far corners: the near ones swing cheaply.
+        let tipped = least_dissipation(&outline, &contact, 0.001, 0.0, 0.027, &mut None);
+        assert!(tipped[2] > 0.0, "{tipped:?}");
+        // The contact point advances by exactly the depth.
+        assert!((tipped[1] + tipped[2] * 0.035 - 0.001).abs() < 1e-12);
+        // Mirror image, mirror motion.
+        let mirrored = outline.closest(Vector2::new(-0.035, -0.074));
+        let m = least_dissipation(&outline, &mirrored, 0.001, 0.0, 0.027, &mut None);
+        assert!((m[2] + tipped[2]).abs() < 1e-12 && (m[1] - tipped[1]).abs() < 1e-12);
+    }
+
+    #[test]
+    fn solve3_refuses_singular_systems() {
+        assert_eq!(solve3([[1.0, 0.0, 0.0]; 3], [1.0, 0.0, 0.0]), None);
+        let x = solve3(
+            [[2.0, 0.0, 0.0], [0.0, 4.0, 0.0], [1.0, 0.0, 1.0]],
+            [2.0, 4.0, 3.0],
         )
-        .is_none());
+        .unwrap();
+        assert_eq!(x, [1.0, 1.0, 2.0]);
     }
 }

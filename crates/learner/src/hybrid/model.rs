@@ -6,7 +6,7 @@ use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::mechanics::{lambda_evidence, Outline, Parameters, Push, Slide, Stepped, Twist};
+use super::mechanics::{Outline, Parameters, Push, Slide, Stepped, Twist};
 use super::residual::{self, Memory};
 use crate::aitm::MapStats;
 use crate::features::{parse_frame_at, ActuatorYaw, ParseError, Precision};
@@ -146,14 +146,22 @@ impl ActuatorFit {
     }
 }
 
+/// The tipping values the identification chooses among, metres (see
+/// [`Parameters::tipping`]): from a level weight to far more than a push
+/// at the world's actuator height (μ·h = 0.9 · 0.03 m) could tip.
+pub const TIPPING_GRID: [f64; 11] = [
+    0.0, 0.005, 0.01, 0.015, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05,
+];
+
 /// What the model knows of one block.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct BlockKnowledge {
     outline: Outline,
-    /// λ by least squares, shrunk towards the uniform-pressure prior.
-    lambda_xx: f64,
-    lambda_xy: f64,
-    lambda_prior: f64,
+    /// Per value of [`TIPPING_GRID`], the summed squared one-message error
+    /// of the mechanics over the pushes seen (position, and turn times the
+    /// outline's size).
+    tipping_errors: [f64; TIPPING_GRID.len()],
+    pushes: u64,
     /// Decelerations seen while sliding freely: sums and counts.
     slide_linear: (f64, u32),
     slide_angular: (f64, u32),
@@ -161,22 +169,16 @@ struct BlockKnowledge {
     updates: u64,
 }
 
-/// Pseudo-observations of the λ prior: one message of a push at 0.1 m
-/// off centre (k·(q × n) ≈ 5e-4).
-const LAMBDA_PRIOR_WEIGHT: f64 = 2.5e-7;
-
 /// Without a free slide seen, a block stops the moment the push ends:
 /// the quasi-static assumption.
 const STOPS_AT_ONCE: f64 = 1.0;
 
 impl BlockKnowledge {
     fn new(outline: Outline) -> Self {
-        let c = outline.uniform_pressure_length();
         Self {
             outline,
-            lambda_xx: 0.0,
-            lambda_xy: 0.0,
-            lambda_prior: 1.0 / (c * c),
+            tipping_errors: [0.0; TIPPING_GRID.len()],
+            pushes: 0,
             slide_linear: (0.0, 0),
             slide_angular: (0.0, 0),
             memory: Memory::default(),
@@ -184,16 +186,30 @@ impl BlockKnowledge {
         }
     }
 
+    /// The identified tipping: the grid value with the least error, the
+    /// smallest on a tie; level weight before any push was seen.
+    fn tipping(&self) -> f64 {
+        let mut best = (f64::INFINITY, 0.0);
+        if self.pushes == 0 {
+            return 0.0;
+        }
+        for (&e, &t) in self.tipping_errors.iter().zip(&TIPPING_GRID) {
+            if e < best.0 {
+                best = (e, t);
+            }
+        }
+        best.1
+    }
+
     fn parameters(&self, identified: bool) -> Parameters {
-        let stops = Parameters {
-            lambda: self.lambda_prior,
-            slide: Slide {
-                linear: STOPS_AT_ONCE,
-                angular: STOPS_AT_ONCE,
-            },
-        };
         if !identified {
-            return stops;
+            return Parameters {
+                tipping: 0.0,
+                slide: Slide {
+                    linear: STOPS_AT_ONCE,
+                    angular: STOPS_AT_ONCE,
+                },
+            };
         }
         let mean = |(sum, n): (f64, u32)| {
             if n == 0 {
@@ -203,13 +219,45 @@ impl BlockKnowledge {
             }
         };
         Parameters {
-            lambda: (self.lambda_xy + LAMBDA_PRIOR_WEIGHT * self.lambda_prior)
-                / (self.lambda_xx + LAMBDA_PRIOR_WEIGHT),
+            tipping: self.tipping(),
             slide: Slide {
                 linear: mean(self.slide_linear),
                 angular: mean(self.slide_angular),
             },
         }
+    }
+
+    /// Weighs every tipping value by how well the mechanics with it
+    /// predict one observed message with the pusher at the block.
+    fn weigh_tipping(
+        &mut self,
+        before: &ObjectState,
+        motion_before: Twist,
+        after: &ObjectState,
+        from: Vector2<f64>,
+        path: Vector2<f64>,
+        slide: Slide,
+    ) {
+        let size = self.outline.size();
+        // One piece per message: the values are weighed against each
+        // other, not against the world, and ten pieces each would make
+        // identifying cost eleven predictions a message.
+        let mut hint = None;
+        for (error, &tipping) in self.tipping_errors.iter_mut().zip(&TIPPING_GRID) {
+            let parameters = Parameters { tipping, slide };
+            let push = Push {
+                outline: &self.outline,
+                parameters: &parameters,
+                pusher_radius: pusher_radius(),
+            };
+            let predicted = push
+                .step_in(*before, motion_before, from, path, 1, &mut hint)
+                .slider;
+            let turn = size * (predicted.theta - after.theta);
+            *error +=
+                (predicted.x - after.x).powi(2) + (predicted.y - after.y).powi(2) + turn * turn;
+        }
+        self.pushes += 1;
     }
 }
 
@@ -323,17 +371,6 @@ impl HybridModel {
                 .or_insert_with(|| BlockKnowledge::new(Self::outline(id)));
             knowledge.updates += 1;
             let outline = knowledge.outline;
-            if let Some((x, y)) = lambda_evidence(
-                &outline,
-                pusher_radius(),
-                before,
-                after,
-                pusher_to,
-                CONTACT_TOLERANCE,
-            ) {
-                knowledge.lambda_xx += x * x;
-                knowledge.lambda_xy += x * y;
-            }
             let motion = Twist::between(before, after);
             let apart = |pusher: Vector2<f64>, block: &ObjectState| {
                 let local = Rotation2::new(-block.theta) * (pusher - block.position());
@@ -349,6 +386,23 @@ impl HybridModel {
                 if w0 > AT_REST && w1 > AT_REST {
                     knowledge.slide_angular.0 += (w0 - w1).max(0.0);
                     knowledge.slide_angular.1 += 1;
+                }
+            }
+            if identifies {
+                let touching = |pusher: Vector2<f64>, block: &ObjectState| {
+                    let local = Rotation2::new(-block.theta) * (pusher - block.position());
+                    outline.closest(local).distance - pusher_radius() < CONTACT_TOLERANCE
+                };
+                if touching(pusher_from, before) || touching(pusher_to, after) {
+                    let slide = knowledge.parameters(true).slide;
+                    knowledge.weigh_tipping(
+                        before,
+                        motion_before,
+                        after,
+                        pusher_from,
+                        moved,
+                        slide,
+                    );
                 }
             }
             if !remembers {
@@ -508,7 +562,7 @@ impl Model for HybridModel {
         stats.extra.insert("actuator_previous_weight".into(), w[1]);
         for (id, k) in &self.blocks {
             let p = k.parameters(self.config.parts.identifies());
-            stats.extra.insert(format!("lambda/{id}"), p.lambda);
+            stats.extra.insert(format!("tipping/{id}"), p.tipping);
             stats
                 .extra
                 .insert(format!("slide_linear/{id}"), p.slide.linear);
