@@ -14,5 +14,7 @@ pub mod mechanics;
 mod model;
 mod planner;
 pub mod residual;
+#[cfg(test)]
+mod tests;
 
 pub use model::{HybridConfig, HybridModel, HybridWorld, Parts};

@@ -6,7 +6,7 @@ use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use super::mechanics::{Outline, Parameters, Push, Slide, Stepped, Twist};
+use super::mechanics::{Outline, Parameters, Push, Slide, Stepped, Twist, SUBSTEPS};
 use super::residual::{self, Memory};
 use crate::aitm::MapStats;
 use crate::features::{parse_frame_at, ActuatorYaw, ParseError, Precision};
@@ -162,11 +162,27 @@ struct BlockKnowledge {
     /// outline's size).
     tipping_errors: [f64; TIPPING_GRID.len()],
     pushes: u64,
+    weighing: std::collections::VecDeque<Weighing>,
     /// Decelerations seen while sliding freely: sums and counts.
     slide_linear: (f64, u32),
     slide_angular: (f64, u32),
     memory: Memory,
+    /// What each residual was computed from, in the memory's order.
+    remembered: Vec<Remembered>,
+    /// The tipping the stored residuals are the residual of.
+    residual_tipping: f64,
     updates: u64,
+}
+
+/// A remembered message: the mechanics' inputs and the block's motion seen
+/// (its own frame at the start).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Remembered {
+    before: ObjectState,
+    motion_before: Twist,
+    from: Vector2<f64>,
+    path: Vector2<f64>,
+    seen: [f64; 3],
 }
 
 /// Without a free slide seen, a block stops the moment the push ends:
@@ -179,22 +195,28 @@ impl BlockKnowledge {
             outline,
             tipping_errors: [0.0; TIPPING_GRID.len()],
             pushes: 0,
+            weighing: std::collections::VecDeque::new(),
             slide_linear: (0.0, 0),
             slide_angular: (0.0, 0),
             memory: Memory::default(),
+            remembered: Vec::new(),
+            residual_tipping: 0.0,
             updates: 0,
         }
     }
 
     /// The identified tipping: the grid value with the least error, the
-    /// smallest on a tie; level weight before any push was seen.
+    /// smallest on a tie (the data cannot tell them apart, and the least
+    /// tipping is the plainest assumption); level weight before any push
+    /// was weighed.
     fn tipping(&self) -> f64 {
-        let mut best = (f64::INFINITY, 0.0);
         if self.pushes == 0 {
             return 0.0;
         }
-        for (&e, &t) in self.tipping_errors.iter().zip(&TIPPING_GRID) {
-            if e < best.0 {
+        let mut best = (self.tipping_errors[0], TIPPING_GRID[0]);
+        for (&e, &t) in self.tipping_errors.iter().zip(&TIPPING_GRID).skip(1) {
+            // Rounding noise is no evidence: equal within it is a tie.
+            if e < best.0 - (1e-9 * best.0 + 1e-24) {
                 best = (e, t);
             }
         }
@@ -227,38 +249,105 @@ impl BlockKnowledge {
         }
     }
 
-    /// Weighs every tipping value by how well the mechanics with it
-    /// predict one observed message with the pusher at the block.
-    fn weigh_tipping(
-        &mut self,
-        before: &ObjectState,
-        motion_before: Twist,
-        after: &ObjectState,
-        from: Vector2<f64>,
-        path: Vector2<f64>,
-        slide: Slide,
-    ) {
+    /// Makes every stored residual the residual of the mechanics with
+    /// `parameters`: a residual of mechanics the model no longer uses
+    /// would correct an error it no longer makes. Only a new tipping
+    /// calls for this (rarely, once the first pushes are weighed); the
+    /// slide changes only the residuals of free slides, which are left.
+    fn recompute_residuals(&mut self, parameters: &Parameters) {
+        let push = Push {
+            outline: &self.outline,
+            parameters,
+            pusher_radius: pusher_radius(),
+        };
+        for (value, r) in self.memory.values_mut().iter_mut().zip(&self.remembered) {
+            let predicted = push
+                .step(r.before, r.motion_before, r.from, r.path)
+                .motion
+                .in_frame(r.before.theta);
+            *value = [
+                r.seen[0] - predicted[0],
+                r.seen[1] - predicted[1],
+                r.seen[2] - predicted[2],
+            ];
+        }
+        self.residual_tipping = parameters.tipping;
+    }
+
+    /// Keeps a message with the pusher at the block for weighing the
+    /// tipping values, if the queue has room.
+    fn keep_for_weighing(&mut self, sample: Weighing) {
+        if self.weighing.len() < WEIGHING_QUEUE {
+            self.weighing.push_back(sample);
+        }
+    }
+
+    /// Weighs up to [`WEIGHINGS_PER_MESSAGE`] tipping values on the queued
+    /// messages: how well the mechanics with each predict the message. A
+    /// message counts once every value has been weighed on it, so that
+    /// all values are compared on the same messages.
+    fn weigh_tipping(&mut self, slide: Slide) {
         let size = self.outline.size();
-        // One piece per message: the values are weighed against each
-        // other, not against the world, and ten pieces each would make
-        // identifying cost eleven predictions a message.
-        let mut hint = None;
-        for (error, &tipping) in self.tipping_errors.iter_mut().zip(&TIPPING_GRID) {
-            let parameters = Parameters { tipping, slide };
+        for _ in 0..WEIGHINGS_PER_MESSAGE {
+            let Some(w) = self.weighing.front_mut() else {
+                return;
+            };
+            let parameters = Parameters {
+                tipping: TIPPING_GRID[w.next],
+                slide,
+            };
             let push = Push {
                 outline: &self.outline,
                 parameters: &parameters,
                 pusher_radius: pusher_radius(),
             };
+            // As finely as the model predicts: a coarser step biases the
+            // choice. Each value starts its search where the last ended.
             let predicted = push
-                .step_in(*before, motion_before, from, path, 1, &mut hint)
+                .step_in(
+                    w.before,
+                    w.motion_before,
+                    w.from,
+                    w.path,
+                    SUBSTEPS,
+                    &mut w.hint,
+                )
                 .slider;
-            let turn = size * (predicted.theta - after.theta);
-            *error +=
-                (predicted.x - after.x).powi(2) + (predicted.y - after.y).powi(2) + turn * turn;
+            let turn = size * (predicted.theta - w.after.theta);
+            w.errors[w.next] =
+                (predicted.x - w.after.x).powi(2) + (predicted.y - w.after.y).powi(2) + turn * turn;
+            w.next += 1;
+            if w.next == TIPPING_GRID.len() {
+                for (sum, e) in self.tipping_errors.iter_mut().zip(w.errors) {
+                    *sum += e;
+                }
+                self.pushes += 1;
+                self.weighing.pop_front();
+            }
         }
-        self.pushes += 1;
     }
+}
+
+/// Weighings of a tipping value per message: with the grid's eleven
+/// values, one message in four is weighed, at a cost of three predictions
+/// a message rather than eleven every fourth.
+const WEIGHINGS_PER_MESSAGE: usize = 3;
+
+/// Messages waiting to be weighed; later ones are not kept meanwhile.
+const WEIGHING_QUEUE: usize = 1;
+
+/// A message with the pusher at the block, being weighed.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Weighing {
+    before: ObjectState,
+    motion_before: Twist,
+    after: ObjectState,
+    from: Vector2<f64>,
+    path: Vector2<f64>,
+    /// The next value of [`TIPPING_GRID`] to weigh, and the errors so far.
+    next: usize,
+    errors: [f64; TIPPING_GRID.len()],
+    hint: Option<(usize, usize)>,
 }
 
 /// The hybrid model (`docs/models.md` "The hybrid model").
@@ -273,6 +362,10 @@ pub struct HybridModel {
     actuator: ActuatorFit,
     blocks: BTreeMap<u32, BlockKnowledge>,
     pub(super) target: Option<Target>,
+    /// The push the planner is carrying out: contact point and outward
+    /// normal, slider frame.
+    #[serde(skip)]
+    pub(super) push_plan: Option<(Vector2<f64>, Vector2<f64>)>,
 }
 
 /// The pusher's radius, from the shape table.
@@ -291,6 +384,7 @@ impl HybridModel {
             actuator: ActuatorFit::new(config.publish_rate_hz),
             blocks: BTreeMap::new(),
             target: None,
+            push_plan: None,
         }
     }
 
@@ -394,21 +488,27 @@ impl HybridModel {
                     outline.closest(local).distance - pusher_radius() < CONTACT_TOLERANCE
                 };
                 if touching(pusher_from, before) || touching(pusher_to, after) {
-                    let slide = knowledge.parameters(true).slide;
-                    knowledge.weigh_tipping(
-                        before,
+                    knowledge.keep_for_weighing(Weighing {
+                        before: *before,
                         motion_before,
-                        after,
-                        pusher_from,
-                        moved,
-                        slide,
-                    );
+                        after: *after,
+                        from: pusher_from,
+                        path: moved,
+                        next: 0,
+                        errors: [0.0; TIPPING_GRID.len()],
+                        hint: None,
+                    });
                 }
+                let slide = knowledge.parameters(true).slide;
+                knowledge.weigh_tipping(slide);
             }
             if !remembers {
                 continue;
             }
             let parameters = knowledge.parameters(identifies);
+            if parameters.tipping != knowledge.residual_tipping {
+                knowledge.recompute_residuals(&parameters);
+            }
             let push = Push {
                 outline: &outline,
                 parameters: &parameters,
@@ -433,6 +533,13 @@ impl HybridModel {
                         seen[2] - predicted[2],
                     ],
                 );
+                knowledge.remembered.push(Remembered {
+                    before: *before,
+                    motion_before,
+                    from: pusher_from,
+                    path: moved,
+                    seen,
+                });
             }
         }
     }
@@ -544,6 +651,7 @@ impl Model for HybridModel {
             }
         }
         self.target = target;
+        self.push_plan = None;
         Ok(())
     }
 

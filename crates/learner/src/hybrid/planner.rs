@@ -49,13 +49,34 @@ impl HybridModel {
             return Action::ZERO;
         }
         let outline = Self::outline(target.id);
-        let Some((contact, normal, reached)) = self.best_push(target.id, block, &goal, &outline)
-        else {
-            return exploration(block.position() - pusher, rng);
+        // Keep the chosen push while it still brings the block nearer:
+        // choosing afresh at every message makes the actuator chase a
+        // contact that moves as it moves.
+        let kept = self.push_plan.filter(|&(contact, normal)| {
+            let direction = -(Rotation2::new(block.theta) * normal);
+            let u = Action::from_vector(direction * APPROACH_SPEED);
+            let at = block.position()
+                + Rotation2::new(block.theta) * (contact + normal * (pusher_radius() + STANDOFF));
+            norm2(at - pusher) > EPS_CLOSE_ENOUGH
+                || self.one_step(target.id, block, u).distance_to(&goal) < now
+        });
+        let (contact, normal) = match kept {
+            Some(plan) => plan,
+            None => {
+                let Some((contact, normal, reached)) =
+                    self.best_push(target.id, block, &goal, &outline)
+                else {
+                    self.push_plan = None;
+                    return exploration(block.position() - pusher, rng);
+                };
+                if reached >= now {
+                    self.push_plan = None;
+                    return exploration(block.position() - pusher, rng);
+                }
+                self.push_plan = Some((contact, normal));
+                (contact, normal)
+            }
         };
-        if reached >= now {
-            return exploration(block.position() - pusher, rng);
-        }
         let to_world = Rotation2::new(block.theta);
         let wait = contact + normal * (pusher_radius() + STANDOFF);
         let wait_world = block.position() + to_world * wait;
