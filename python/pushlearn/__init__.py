@@ -18,8 +18,8 @@ baselines, ``numpy`` and ``scikit-learn``):
   (``pushlearn/PushBlock-v0``, ``pushlearn/PushTwoBlocks-v0``), registered
   on import when Gymnasium is installed.
 
-``GateModel``, ``InteractionModel`` and ``Aitm`` are the Rust models
-themselves, from the native extension ``pushlearn._native``; they are
+``GateModel``, ``InteractionModel``, ``HybridModel`` and ``Aitm`` are the
+Rust models themselves, from the native extension ``pushlearn._native``; they are
 imported only when first used, so everything else works without it.
 """
 
@@ -58,7 +58,7 @@ from .learner import (
 from .sim import SimClient, SimError, WorldHello
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ._native import Aitm, GateModel, InteractionModel
+    from ._native import Aitm, GateModel, HybridModel, InteractionModel
 
 __version__ = "0.1.0"
 """The package's version."""
@@ -74,6 +74,7 @@ __all__ = [
     "Body",
     "Capability",
     "GateModel",
+    "HybridModel",
     "InteractionModel",
     "Learner",
     "LearnerFactory",
@@ -96,7 +97,7 @@ __all__ = [
     "serve_tcp",
 ]
 
-_NATIVE = ("GateModel", "InteractionModel", "Aitm")
+_NATIVE = ("GateModel", "InteractionModel", "HybridModel", "Aitm")
 
 
 def native() -> Any:

@@ -1,9 +1,10 @@
 """The pushlearn models, implemented in Rust (crates/python, PyO3).
 
-GateModel and InteractionModel are the two learners, one method per method of
-the Rust ``learner::Model`` trait; GateWorld and InteractionWorld are their
-world states, returned by ``parse`` and ``predict``. Aitm is the memory-based
-regressor and classifier both learners are built from.
+GateModel, InteractionModel and HybridModel are the learners, one method
+per method of the Rust ``learner::Model`` trait; GateWorld, InteractionWorld
+and HybridWorld are their world states, returned by ``parse`` and
+``predict``. Aitm is the memory-based regressor and classifier the thesis's
+learners are built from.
 
 Every class may be used from any thread. No method releases the GIL, so calls
 on one object from several threads run one after another.
@@ -286,6 +287,102 @@ class InteractionModel:
         model's maps are "acs" and "ac/<k>"; "extra" has "ac_count" and the
         largest AC's numbers."""
     def copy(self) -> InteractionModel:
+        """A deep copy: the learned memory, the stored state, the target and
+        the generator's state, shared with nothing."""
+
+class HybridWorld:
+    """A world state of the hybrid model, parsed or predicted (returned by
+    HybridModel.parse and HybridModel.predict; not constructible): the
+    poses and each block's motion over the message before."""
+
+    def poses(self) -> npt.NDArray[np.float64]:
+        """The world's bodies as a float64 array of shape (n, 4), one row
+        ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
+        blocks in ascending id order (``Model::poses``)."""
+
+class HybridModel:
+    """Pushing mechanics identified online plus a memory of their residual
+    (docs/models.md, "The hybrid model"); not a model of the thesis.
+
+    ``publish_rate_hz`` is the world's rate; ``parts`` chooses the model's
+    parts for its ablation, as ``--parts`` does: "mechanics" (the shape's
+    mechanics alone, learning nothing), "identified" (their parameters
+    identified online) or "full" (and the memory of their residual). The
+    checks and the texts of the ValueError they raise are the command
+    line's (``pushlearn learn --model hybrid``).
+
+    Thread safety: a HybridModel may be used from any thread (it is Send and
+    Sync in Rust); every method holds the GIL throughout, so calls from
+    several threads on one model run one after another.
+    """
+
+    def __init__(self, publish_rate_hz: int = 100, parts: str = "full") -> None:
+        """Raises ValueError for unknown parts (the message lists the valid
+        names) or an integer out of range."""
+    @property
+    def name(self) -> str:
+        """The name reports give this model: "hybrid", or "hybrid-PARTS"
+        with fewer parts."""
+    def parse(self, bodies: Sequence[_Body]) -> HybridWorld:
+        """Parse one world-state message into a world of this model
+        (``Model::parse``); ``bodies`` as for GateModel.parse. A block's
+        motion is read against the model's stored state.
+
+        Raises ValueError with the parser's reason when the message has no
+        actuator, an unknown or duplicate id, or a non-finite number.
+        """
+    def reset_objects(self, world: HybridWorld) -> None:
+        """Re-synchronise with ``world`` at the first message of a run,
+        without learning (``Model::reset_objects``)."""
+    def update(self, world: HybridWorld, vx: float, vy: float) -> None:
+        """Learn from the transition from the model's stored state into
+        ``world`` under the action (vx, vy) in m/s that was in force
+        meanwhile, then store ``world`` (``Model::update``). With training off
+        only the stored state moves on.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def predict(self, world: HybridWorld, vx: float, vy: float) -> HybridWorld:
+        """The predicted world one message after ``world`` (parsed or itself a
+        prediction) if the action (vx, vy) is in force (``Model::predict``).
+        Learns nothing.
+
+        Raises ValueError if vx or vy is not finite.
+        """
+    def set_training(self, on: bool) -> None:
+        """Turn training on (a new model's default) or off
+        (``Model::set_training``)."""
+    @property
+    def is_training(self) -> bool:
+        """Whether ``update`` currently trains (``Model::is_training``)."""
+    def set_target(self, id: int, x: float, y: float, theta: float) -> None:
+        """Set the Move-to-Target goal: block ``id`` at (x, y) m with yaw
+        ``theta`` rad (``Model::set_target``).
+
+        Raises ValueError with the model's reason (the actuator, a non-finite
+        pose, an object the model cannot plan for); the previous target then
+        stays in place.
+        """
+    def clear_target(self) -> None:
+        """Clear the Move-to-Target goal (``Model::set_target(None)``)."""
+    @property
+    def has_target(self) -> bool:
+        """Whether a target is set; ``act`` clears it once it finds the target
+        reached (``Model::has_target``)."""
+    def seed(self, seed: int) -> None:
+        """Seed the exploration generator that ``act`` draws from, as for
+        GateModel.seed."""
+    def act(self) -> tuple[float, float]:
+        """The next action (vx, vy) in m/s towards the target from the model's
+        stored state (``Model::act``); (0.0, 0.0) without a target or once it
+        is reached, when the target is cleared."""
+    def stats(self) -> dict[str, Any]:
+        """The model's statistics (``Model::stats``) in their serialised form:
+        ``{"maps": {"residual/<id>": {...}}, "extra": {"tipping/<id>": float,
+        "slide_linear/<id>": float, "slide_angular/<id>": float,
+        "actuator_action_weight": float, "actuator_previous_weight": float},
+        "labels": {"parts": str}}``."""
+    def copy(self) -> HybridModel:
         """A deep copy: the learned memory, the stored state, the target and
         the generator's state, shared with nothing."""
 

@@ -1,7 +1,9 @@
-"""The Rust models as learners: :class:`GateLearner` and :class:`InteractionLearner`.
+"""The Rust models as learners: :class:`GateLearner`, :class:`InteractionLearner`
+and :class:`HybridLearner`.
 
-Both serve a model of the native extension (``pushlearn._native``,
-``GateModel`` / ``InteractionModel``) over the learner protocol, forward
+Each serves a model of the native extension (``pushlearn._native``,
+``GateModel`` / ``InteractionModel`` / ``HybridModel``) over the learner
+protocol, forward
 *and* inverse (Move to Target), so that ``pushlearn experiment … --learner
 "python -m pushlearn.serve pushlearn.models:GateLearner"`` runs the very
 model the built-in ``--model gate`` runs, through the external-learner path,
@@ -319,3 +321,31 @@ class InteractionLearner(NativeLearner):
             return cls(config=args.config, eta=args.eta, selector=args.selector)
         except ValueError as err:
             raise UsageError(f"interaction: {err}") from None
+
+
+class HybridLearner(NativeLearner):
+    """The hybrid model (``docs/models.md``, "The hybrid model") as a learner."""
+
+    name: ClassVar[str] = "hybrid"
+    version: ClassVar[str] = _version()
+
+    def __init__(self, *, parts: str = "full", publish_rate_hz: int = 100) -> None:
+        self.parts = parts
+        """The model's parts (``"mechanics"``, ``"identified"`` or ``"full"``)."""
+        super().__init__(publish_rate_hz=publish_rate_hz)
+
+    def _build(self, publish_rate_hz: int) -> Any:
+        return _native().HybridModel(publish_rate_hz=publish_rate_hz, parts=self.parts)
+
+    @classmethod
+    def from_args(cls, argv: list[str]) -> HybridLearner:
+        """``[--parts mechanics|identified|full]``."""
+        parser = ArgumentParser(prog="hybrid", description="the hybrid model")
+        parser.add_argument(
+            "--parts", default="full", help="the model's parts (default full)"
+        )
+        args = parser.parse_args(argv)
+        try:
+            return cls(parts=args.parts)
+        except ValueError as err:
+            raise UsageError(f"hybrid: {err}") from None

@@ -19,6 +19,8 @@ from pushlearn._native import (
     Aitm,
     GateModel,
     GateWorld,
+    HybridModel,
+    HybridWorld,
     InteractionModel,
     InteractionWorld,
 )
@@ -271,6 +273,27 @@ def test_parsed_poses_are_rounded_and_the_actuator_comes_first() -> None:
     assert repr(GateModel().parse(bodies)).startswith(
         "GateWorld(actuator=(0.0, 0.1, 0.0), blocks={15: "
     )
+
+
+def test_the_hybrid_model_is_the_registrys() -> None:
+    assert repr(HybridModel()) == "HybridModel(publish_rate_hz=100, parts='full')"
+    assert HybridModel().name == "hybrid"
+    assert HybridModel(parts="mechanics").name == "hybrid-mechanics"
+    with pytest.raises(ValueError, match="unknown parts 'most'; one of: mechanics"):
+        HybridModel(parts="most")
+
+
+def test_the_hybrid_model_pushes_the_block_it_meets() -> None:
+    m = HybridModel(parts="mechanics")
+    # The actuator's surface 1 mm below the block's, moving 5 mm a message.
+    world = m.parse(frame(0.174))
+    m.reset_objects(world)
+    assert isinstance(world, HybridWorld)
+    p = m.predict(world, *ACTION).poses()
+    np.testing.assert_allclose(p[0, 1:3], [0.0, 0.174 + STEP], atol=1e-12)
+    # Pushed centrally, the block advances the 4 mm the actuator overlaps it.
+    np.testing.assert_allclose(p[1, 1:], [0.0, 0.254, 0.0], atol=1e-9)
+    assert m.stats()["labels"] == {"parts": "mechanics"}
 
 
 # --- the driver's calling pattern ------------------------------------------

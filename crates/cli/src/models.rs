@@ -155,6 +155,8 @@ mod tests {
             "--no-angular-velocity",
             "--improve",
             "forward-check,unrounded",
+            "--parts",
+            "identified",
         ]);
         assert_eq!(
             o,
@@ -165,6 +167,7 @@ mod tests {
                 selector: SelectorKind::Tree,
                 no_angular_velocity: true,
                 improve: vec![Improvement::ForwardCheck, Improvement::Unrounded],
+                parts: Parts::Identified,
             }
         );
         for kind in ModelKind::ALL {

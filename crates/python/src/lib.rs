@@ -3,8 +3,9 @@
 //! it lives in `python/pushlearn/`, its type stubs in
 //! `python/pushlearn/_native.pyi`).
 //!
-//! * `GateModel` / `GateWorld`, `InteractionModel` / `InteractionWorld`:
-//!   the two learners, one method per [`learner::Model`] method
+//! * `GateModel` / `GateWorld`, `InteractionModel` / `InteractionWorld`,
+//!   `HybridModel` / `HybridWorld`: the learners, one method per
+//!   [`learner::Model`] method
 //!   (`models.rs`), configured by the model registry
 //!   (`learner::registry`) as the command line's models are;
 //! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`).
@@ -77,14 +78,17 @@ fn is_skipped(name: &str) -> bool {
     pushlearn_core::is_skipped(name)
 }
 
-/// The pushlearn models, implemented in Rust: GateModel, InteractionModel
-/// (with their worlds GateWorld and InteractionWorld) and Aitm.
+/// The pushlearn models, implemented in Rust: GateModel, InteractionModel,
+/// HybridModel (with their worlds GateWorld, InteractionWorld and
+/// HybridWorld) and Aitm.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyGateModel>()?;
     m.add_class::<models::PyGateWorld>()?;
     m.add_class::<models::PyInteractionModel>()?;
+    m.add_class::<models::PyHybridModel>()?;
     m.add_class::<models::PyInteractionWorld>()?;
+    m.add_class::<models::PyHybridWorld>()?;
     m.add_class::<aitm::PyAitm>()?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;

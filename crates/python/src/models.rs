@@ -68,6 +68,26 @@ impl Options {
     }
 }
 
+impl Options {
+    /// The hybrid model's arguments, `parts` by the names of `--parts`.
+    fn hybrid(publish_rate_hz: u32, parts: &str) -> PyResult<Self> {
+        let parts = <registry::Parts as registry::Named>::from_name(parts).ok_or_else(|| {
+            value_error(format!(
+                "unknown parts '{parts}'; one of: {}",
+                <registry::Parts as registry::Named>::names()
+            ))
+        })?;
+        Ok(Self {
+            model: ModelOptions {
+                parts,
+                ..ModelOptions::default()
+            },
+            publish_rate_hz,
+            improve: Vec::new(),
+        })
+    }
+}
+
 /// The rows `[id, x, y, theta]` of `poses`: the actuator first, then the
 /// blocks in ascending id order.
 fn pose_rows<'py>(py: Python<'py>, poses: &Poses) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -443,6 +463,54 @@ object states and the interaction states computed from them.",
                 o.model.eta,
                 o.publish_rate_hz,
                 o.model.selector.as_str()
+            )
+        }
+    }
+}
+
+model_class! {
+    model: learner::HybridModel,
+    world: learner::HybridWorld,
+    py_model: PyHybridModel,
+    py_world: PyHybridWorld,
+    model_name: "HybridModel",
+    world_name: "HybridWorld",
+    model_doc: "Pushing mechanics identified online plus a memory of their residual
+(docs/models.md, \"The hybrid model\"); not a model of the thesis.
+
+HybridModel(publish_rate_hz=100, parts=\"full\")
+
+publish_rate_hz is the world's rate; parts chooses the model's parts for its
+ablation, as --parts does: \"mechanics\" (the shape's mechanics alone,
+learning nothing), \"identified\" (their parameters identified online) or
+\"full\" (and the memory of their residual). The checks and the texts of the
+ValueError they raise are the command line's (`pushlearn learn --model
+hybrid`).
+
+Thread safety: a HybridModel may be used from any thread (it is Send and
+Sync in Rust); every method holds the GIL throughout, so calls from several
+threads on one model run one after another.",
+    world_doc: "A world state of the hybrid model, parsed or predicted (returned by
+HybridModel.parse and HybridModel.predict; not constructible): the poses and
+each block's motion over the message before.",
+    kind: ModelKind::Hybrid,
+    config: hybrid,
+    constructor: {
+        #[new]
+        #[pyo3(
+            signature = (publish_rate_hz = Unsigned(100), parts = "full"),
+            text_signature = "(publish_rate_hz=100, parts='full')"
+        )]
+        fn new(publish_rate_hz: Unsigned<u32>, parts: &str) -> PyResult<Self> {
+            Self::with_options(Options::hybrid(publish_rate_hz.0, parts)?)
+        }
+
+        fn __repr__(&self) -> String {
+            let o = &self.options;
+            format!(
+                "HybridModel(publish_rate_hz={}, parts='{}')",
+                o.publish_rate_hz,
+                o.model.parts.as_str()
             )
         }
     }

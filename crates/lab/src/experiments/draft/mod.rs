@@ -445,11 +445,7 @@ mod tests {
         assert_eq!(names[7], "Gate HG HA 10 Train NoDyns");
         // Every row's options configure its model.
         for r in &rows {
-            let ok = match r.model {
-                ModelKind::Gate | ModelKind::GatePlus => r.options.gate(100).is_ok(),
-                ModelKind::Interaction => r.options.interaction(100).is_ok(),
-            };
-            assert!(ok, "{}", r.name);
+            assert!(r.model.check(&r.options, 100).is_ok(), "{}", r.name);
         }
         // HG HA is bits 16 and 32; the base rows add USE_DYNS, NoDyns not.
         assert_eq!(rows[2].options.config_number(), 1 | 16 | 32);
