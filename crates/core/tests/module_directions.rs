@@ -98,8 +98,10 @@ const CRATES: &[(&str, Table)] = &[
                 "interaction",
                 &["features", "flags", "model", "planning", "stats", "types"],
             ),
+            // Not a thesis model: no configuration bits.
+            ("hybrid", &["features", "model", "planning", "stats", "types"]),
             // The models by name, their options and building them.
-            ("registry", &["flags", "gate", "interaction"]),
+            ("registry", &["flags", "gate", "hybrid", "interaction"]),
             ("eval", &["features", "keypoints", "model", "types"]),
             ("testing", &["features", "model", "stats", "types"]),
         ],
