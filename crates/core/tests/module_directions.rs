@@ -99,7 +99,10 @@ const CRATES: &[(&str, Table)] = &[
                 &["features", "flags", "model", "planning", "stats", "types"],
             ),
             // Not a thesis model: no configuration bits.
-            ("hybrid", &["features", "model", "planning", "stats", "types"]),
+            (
+                "hybrid",
+                &["features", "model", "planning", "stats", "types"],
+            ),
             // The models by name, their options and building them.
             ("registry", &["flags", "gate", "hybrid", "interaction"]),
             ("eval", &["features", "keypoints", "model", "types"]),
