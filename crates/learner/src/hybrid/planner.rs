@@ -52,13 +52,20 @@ impl HybridModel {
         // Keep the chosen push while it still brings the block nearer:
         // choosing afresh at every message makes the actuator chase a
         // contact that moves as it moves.
+        // Once at the block, a push is kept only while the model says it
+        // still helps (the pusher slides along the face as the block
+        // turns, so where it is says nothing then).
+        let at_block = {
+            let local = Rotation2::new(-block.theta) * (pusher - block.position());
+            outline.closest(local).distance - pusher_radius() <= STANDOFF
+        };
         let kept = self.push_plan.filter(|&(contact, normal)| {
-            let direction = -(Rotation2::new(block.theta) * normal);
-            let u = Action::from_vector(direction * APPROACH_SPEED);
-            let at = block.position()
-                + Rotation2::new(block.theta) * (contact + normal * (pusher_radius() + STANDOFF));
-            norm2(at - pusher) > EPS_CLOSE_ENOUGH
-                || self.one_step(target.id, block, u).distance_to(&goal) < now
+            let to_world = Rotation2::new(block.theta);
+            let wait =
+                block.position() + to_world * (contact + normal * (pusher_radius() + STANDOFF));
+            let approaching = !at_block && norm2(wait - pusher) > EPS_CLOSE_ENOUGH;
+            let u = Action::from_vector(-(to_world * normal) * APPROACH_SPEED);
+            approaching || self.one_step(target.id, block, u).distance_to(&goal) < now
         });
         let (contact, normal) = match kept {
             Some(plan) => plan,
