@@ -471,6 +471,8 @@ pub enum ModelOptionsError {
     NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
+    #[error("{option} configures the thesis's models; the hybrid model has none of it")]
+    ThesisOptionOnHybrid { option: String },
     #[error("--parts chooses the hybrid model's parts; it does not apply to the {0} model")]
     PartsNotForModel(ModelKind),
     #[error("--improve adds changes to --model gate; gate+ already has every one")]
@@ -554,41 +556,19 @@ impl ModelOptions {
         format!("gate+{}", self.improvement_names().join("+"))
     }
 
-    /// Refuses what only configures a built-in model: --eta, --selector,
-    /// --no-angular-velocity and the model bits of --config (1, 16, 32, 64).
-    /// The driver's bits (2, 4, 8: rate and training starts) apply to any
-    /// learner.
+    /// Refuses what only configures a built-in model: the options of the
+    /// thesis's models (see `thesis_model_option`) and --parts.
     ///
     /// # Errors
     /// The first option that does not apply, named.
     pub fn check_external(&self) -> Result<(), ModelOptionsError> {
-        let refuse = |option: &str| {
-            Err(ModelOptionsError::NotForExternal {
-                option: option.to_owned(),
-            })
-        };
-        if self.eta != 0.0 {
-            return refuse("--eta");
-        }
-        if self.selector != SelectorKind::Aitm {
-            return refuse("--selector");
-        }
-        if self.no_angular_velocity {
-            return refuse("--no-angular-velocity");
-        }
-        if !self.improve.is_empty() {
-            return refuse("--improve");
+        if let Some(option) = self.thesis_model_option() {
+            return Err(ModelOptionsError::NotForExternal { option });
         }
         if self.parts != Parts::Full {
-            return refuse("--parts");
-        }
-        let model_bits = flags::USE_DYNS
-            | flags::HARDCODEDACT
-            | flags::HARDCODEDGATE
-            | flags::USINGPREDICTIONBOOST;
-        let bits = self.config_number() & model_bits;
-        if bits != 0 {
-            return refuse(&format!("configuration bits {bits} (of --config/--flag)"));
+            return Err(ModelOptionsError::NotForExternal {
+                option: "--parts".to_owned(),
+            });
         }
         Ok(())
     }
@@ -671,35 +651,39 @@ impl ModelOptions {
     /// # Errors
     /// The first option that does not apply, named.
     pub fn hybrid(&self, publish_rate_hz: u32) -> Result<HybridConfig, ModelOptionsError> {
-        let not_hybrid = |option: &'static str| {
-            Err(ModelOptionsError::NotForModel {
-                option,
-                model: ModelKind::Hybrid,
-            })
-        };
-        if self.eta != 0.0 {
-            return not_hybrid("--eta");
-        }
-        if self.selector != SelectorKind::Aitm {
-            return not_hybrid("--selector");
-        }
-        if self.no_angular_velocity {
-            return not_hybrid("--no-angular-velocity");
-        }
-        if !self.improve.is_empty() {
-            return not_hybrid("--improve");
-        }
-        let model_bits = flags::USE_DYNS
-            | flags::HARDCODEDACT
-            | flags::HARDCODEDGATE
-            | flags::USINGPREDICTIONBOOST;
-        if self.config_number() & model_bits != 0 {
-            return not_hybrid("the model bits of --config/--flag (1, 16, 32, 64)");
+        if let Some(option) = self.thesis_model_option() {
+            return Err(ModelOptionsError::ThesisOptionOnHybrid { option });
         }
         Ok(HybridConfig {
             parts: self.parts,
             publish_rate_hz,
         })
+    }
+
+    /// The first option set that configures only the thesis's models
+    /// (--eta, --selector, --no-angular-velocity, --improve, the model bits
+    /// of --config/--flag: 1, 16, 32, 64), named as the refusals name it.
+    /// The driver's bits (2, 4, 8: rate and training starts) apply to any
+    /// learner.
+    fn thesis_model_option(&self) -> Option<String> {
+        if self.eta != 0.0 {
+            return Some("--eta".to_owned());
+        }
+        if self.selector != SelectorKind::Aitm {
+            return Some("--selector".to_owned());
+        }
+        if self.no_angular_velocity {
+            return Some("--no-angular-velocity".to_owned());
+        }
+        if !self.improve.is_empty() {
+            return Some("--improve".to_owned());
+        }
+        let model_bits = flags::USE_DYNS
+            | flags::HARDCODEDACT
+            | flags::HARDCODEDGATE
+            | flags::USINGPREDICTIONBOOST;
+        let bits = self.config_number() & model_bits;
+        (bits != 0).then(|| format!("configuration bits {bits} (of --config/--flag)"))
     }
 
     fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
@@ -962,6 +946,51 @@ mod tests {
                 format!("\"{}\"", f.name())
             );
         }
+    }
+
+    #[test]
+    fn the_hybrid_model_refuses_the_thesis_models_options_and_only_it_takes_parts() {
+        let parts = ModelOptions {
+            parts: Parts::Mechanics,
+            ..ModelOptions::default()
+        };
+        assert_eq!(parts.hybrid(100).unwrap().parts, Parts::Mechanics);
+        assert_eq!(parts.report_name(ModelKind::Hybrid), "hybrid-mechanics");
+        assert_eq!(
+            ModelKind::of_report_name("hybrid-mechanics"),
+            Some(ModelKind::Hybrid)
+        );
+        assert_eq!(ModelKind::of_report_name("hybrid-full"), None);
+        assert!(matches!(
+            parts.gate(100),
+            Err(ModelOptionsError::PartsNotForModel(ModelKind::Gate))
+        ));
+        assert!(parts.check_external().is_err());
+        let eta = ModelOptions {
+            eta: 0.1,
+            ..ModelOptions::default()
+        };
+        let bits = ModelOptions {
+            config: 16 | 8,
+            ..ModelOptions::default()
+        };
+        for (options, named) in [
+            (eta, "--eta"),
+            (bits, "configuration bits 16 (of --config/--flag)"),
+        ] {
+            match options.hybrid(100) {
+                Err(ModelOptionsError::ThesisOptionOnHybrid { option }) => {
+                    assert_eq!(option, named);
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        // The driver's bits apply to any learner.
+        let driver = ModelOptions {
+            config: 2 | 4 | 8,
+            ..ModelOptions::default()
+        };
+        assert!(driver.hybrid(10).is_ok() && driver.check_external().is_ok());
     }
 
     #[test]
