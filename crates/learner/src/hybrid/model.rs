@@ -373,6 +373,13 @@ pub(super) fn pusher_radius() -> f64 {
     ACTUATOR_SHAPE.radius
 }
 
+/// How far the pusher's surface is from the outline of a block at `block`
+/// (negative when they overlap).
+pub(super) fn surface_gap(outline: &Outline, block: &ObjectState, pusher: Vector2<f64>) -> f64 {
+    let local = Rotation2::new(-block.theta) * (pusher - block.position());
+    outline.closest(local).distance - pusher_radius()
+}
+
 impl HybridModel {
     #[must_use]
     pub fn new(config: HybridConfig) -> Self {
@@ -466,11 +473,9 @@ impl HybridModel {
             knowledge.updates += 1;
             let outline = knowledge.outline;
             let motion = Twist::between(before, after);
-            let apart = |pusher: Vector2<f64>, block: &ObjectState| {
-                let local = Rotation2::new(-block.theta) * (pusher - block.position());
-                outline.closest(local).distance - pusher_radius() > NEAR
-            };
-            if apart(pusher_from, before) && apart(pusher_to, after) {
+            if surface_gap(&outline, before, pusher_from) > NEAR
+                && surface_gap(&outline, after, pusher_to) > NEAR
+            {
                 let (v0, v1) = (motion_before.speed(), motion.speed());
                 if v0 > AT_REST && v1 > AT_REST {
                     knowledge.slide_linear.0 += (v0 - v1).max(0.0);
@@ -483,11 +488,9 @@ impl HybridModel {
                 }
             }
             if identifies {
-                let touching = |pusher: Vector2<f64>, block: &ObjectState| {
-                    let local = Rotation2::new(-block.theta) * (pusher - block.position());
-                    outline.closest(local).distance - pusher_radius() < CONTACT_TOLERANCE
-                };
-                if touching(pusher_from, before) || touching(pusher_to, after) {
+                if surface_gap(&outline, before, pusher_from) < CONTACT_TOLERANCE
+                    || surface_gap(&outline, after, pusher_to) < CONTACT_TOLERANCE
+                {
                     knowledge.keep_for_weighing(Weighing {
                         before: *before,
                         motion_before,
@@ -574,13 +577,13 @@ fn residual_key(
     path: Vector2<f64>,
     stepped: &Stepped,
 ) -> Option<[f64; residual::FEATURES]> {
-    let to_frame = Rotation2::new(-pose.theta);
-    let pusher = to_frame * (from - pose.position());
-    let near = outline.closest(pusher).distance - pusher_radius() < NEAR;
+    let near = surface_gap(outline, pose, from) < NEAR;
     let moving = motion.speed() > AT_REST || motion.dtheta.abs() > AT_REST;
     if !(near || moving || stepped.touched) {
         return None;
     }
+    let to_frame = Rotation2::new(-pose.theta);
+    let pusher = to_frame * (from - pose.position());
     let local_path = to_frame * path;
     Some(residual::features(
         [pusher.x, pusher.y],

@@ -15,7 +15,7 @@ use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 
 use super::mechanics::{Outline, Twist};
-use super::model::{pusher_radius, HybridModel};
+use super::model::{pusher_radius, surface_gap, HybridModel};
 use crate::planning::{
     circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
@@ -51,14 +51,12 @@ impl HybridModel {
         let outline = Self::outline(target.id);
         // Keep the chosen push while it still brings the block nearer:
         // choosing afresh at every message makes the actuator chase a
-        // contact that moves as it moves.
-        // Once at the block, a push is kept only while the model says it
-        // still helps (the pusher slides along the face as the block
-        // turns, so where it is says nothing then).
-        let at_block = {
-            let local = Rotation2::new(-block.theta) * (pusher - block.position());
-            outline.closest(local).distance - pusher_radius() <= STANDOFF
-        };
+        // contact that moves as it moves. Once at the block, a push is
+        // kept only while the model says it still helps (the pusher slides
+        // along the face as the block turns, so where it is says nothing
+        // then).
+        let distance = surface_gap(&outline, &block, pusher);
+        let at_block = distance <= STANDOFF;
         let kept = self.push_plan.filter(|&(contact, normal)| {
             let to_world = Rotation2::new(block.theta);
             let wait =
@@ -90,7 +88,6 @@ impl HybridModel {
         let delta = wait_world - pusher;
         let gap = norm2(delta);
         let local_pusher = to_world.inverse() * (pusher - block.position());
-        let distance = outline.closest(local_pusher).distance - pusher_radius();
         let r = pusher - block.position();
         if gap > EPS_CLOSE {
             return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
