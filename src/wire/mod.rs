@@ -33,7 +33,7 @@ pub use codec::{
 };
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
-pub use observation::frame;
+pub use observation::{frame, Footprints};
 pub use speed::clamp_speed;
 pub use validate::{validate, InvalidCommand};
 

@@ -3,11 +3,12 @@
 //! [`Observation`]: every driver of a learner, in process or behind
 //! `pushlearn serve-learner`, goes through [`frame`], so both refuse the
 //! same states. The rule for a missing pose is the vocabulary's
-//! ([`Observation::published`]).
+//! ([`Observation::published`]). A driver that knows the world's Hello
+//! passes each body's outline on with it ([`Footprints`]).
 
-use pushlearn_core::{Frame, Observation};
+use pushlearn_core::{Footprint, Frame, Observation};
 
-use super::pb;
+use super::pb::{self, shape::Geometry};
 
 impl pb::ModelState {
     /// The learner's view of this body: NaN where the pose was not published.
@@ -30,8 +31,66 @@ impl pb::ModelState {
 /// `docs/spec/features.md` §1).
 #[must_use]
 pub fn frame(bodies: &[pb::ModelState]) -> Frame {
-    Frame {
-        objects: bodies.iter().map(pb::ModelState::observation).collect(),
+    Footprints::default().frame(bodies)
+}
+
+impl pb::Shape {
+    /// The outline seen from above: a box's rectangle, a sphere's or an
+    /// upright cylinder's circle. `None` for a shape without geometry or
+    /// with sizes that are not finite and positive (no outline rather
+    /// than a wrong one).
+    #[must_use]
+    pub fn footprint(&self) -> Option<Footprint> {
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        match self.geometry.as_ref()? {
+            Geometry::SphereRadius(r) => positive(*r).then_some(Footprint::Disc { radius: *r }),
+            Geometry::Cylinder(c) => {
+                positive(c.radius).then_some(Footprint::Disc { radius: c.radius })
+            }
+            Geometry::BoxSize(v) => (positive(v.x) && positive(v.y)).then_some(Footprint::Box {
+                half_extents: [v.x / 2.0, v.y / 2.0],
+            }),
+        }
+    }
+}
+
+/// Each body's outline by name, from the world's Hello (`Hello.shapes`;
+/// empty from a world older than them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Footprints(Vec<(String, Footprint)>);
+
+impl Footprints {
+    #[must_use]
+    pub fn from_hello(hello: &pb::Hello) -> Self {
+        Self(
+            hello
+                .shapes
+                .iter()
+                .filter_map(|shape| Some((shape.name.clone(), shape.footprint()?)))
+                .collect(),
+        )
+    }
+
+    /// The outline of the body `name`, if the world gave one.
+    #[must_use]
+    pub fn of(&self, name: &str) -> Option<Footprint> {
+        // A handful of bodies: a scan beats a map's hashing.
+        self.0.iter().find(|(n, _)| n == name).map(|&(_, f)| f)
+    }
+
+    /// The learner's view of a world state's `bodies` (as [`frame`]), each
+    /// with its outline.
+    #[must_use]
+    pub fn frame(&self, bodies: &[pb::ModelState]) -> Frame {
+        Frame {
+            objects: bodies
+                .iter()
+                .map(|body| Observation {
+                    footprint: self.of(&body.name),
+                    ..body.observation()
+                })
+                .collect(),
+        }
     }
 }
 
@@ -96,5 +155,55 @@ mod tests {
         .map(|o| o.name)
         .collect();
         assert_eq!(names, ["b", "aShadow", "a"]);
+    }
+
+    #[test]
+    fn outlines_come_from_the_hello_by_body_name() {
+        let shape = |name: &str, geometry| pb::Shape {
+            name: name.into(),
+            geometry: Some(geometry),
+        };
+        let hello = pb::Hello {
+            shapes: vec![
+                shape(
+                    "blockA",
+                    Geometry::BoxSize(pb::Vector3d::new(0.5, 0.1, 0.1)),
+                ),
+                shape(
+                    "cylinder",
+                    Geometry::Cylinder(pb::Cylinder {
+                        radius: 0.1,
+                        length: 0.1,
+                    }),
+                ),
+                shape("actuator", Geometry::SphereRadius(0.025)),
+                shape("broken", Geometry::SphereRadius(f64::NAN)),
+            ],
+            ..Default::default()
+        };
+        let footprints = Footprints::from_hello(&hello);
+        let seen = footprints.frame(&[
+            body("cylinder", 3, None),
+            body("blockA", 15, None),
+            body("actuator", 8, None),
+            body("broken", 9, None),
+            body("wall", 4, None),
+        ]);
+        let outlines: Vec<_> = seen.objects.iter().map(|o| o.footprint).collect();
+        assert_eq!(
+            outlines,
+            [
+                Some(Footprint::Disc { radius: 0.1 }),
+                Some(Footprint::Box {
+                    half_extents: [0.25, 0.05]
+                }),
+                Some(Footprint::Disc { radius: 0.025 }),
+                None,
+                None,
+            ]
+        );
+        assert!(frame(&[body("blockA", 15, None)]).objects[0]
+            .footprint
+            .is_none());
     }
 }

@@ -28,4 +28,4 @@ pub use body::{
 pub use limits::{MAX_ACTION_SPEED, MAX_POSITION};
 pub use motion::{Action, ObjectState};
 pub use named::Named;
-pub use observation::{Frame, Observation};
+pub use observation::{Footprint, Frame, Observation};

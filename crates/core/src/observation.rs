@@ -15,6 +15,24 @@ pub struct Observation {
     pub position: [f64; 3],
     /// Orientation quaternion in the order (x, y, z, w), as in the wire schema.
     pub orientation: [f64; 4],
+    /// The body's outline seen from above, where the driver knows it from
+    /// the world's Hello (as a camera would see it): a learner that
+    /// reasons about contact needs the shape of what it pushes, and the
+    /// new-object experiments show another object under the blue block's
+    /// id. `None` from a driver that does not pass shapes on (the learner
+    /// protocol); the faithful models never read it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub footprint: Option<Footprint>,
+}
+
+/// A body's outline in its own frame, centred on its pose.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Footprint {
+    /// A rectangle with these half-lengths along the body's x and y.
+    Box { half_extents: [f64; 2] },
+    /// A circle (a sphere's or an upright cylinder's outline).
+    Disc { radius: f64 },
 }
 
 /// The raw content of one world-state message: every body it lists, in
@@ -44,6 +62,7 @@ impl Observation {
             id,
             position: position.unwrap_or([f64::NAN; 3]),
             orientation: orientation.unwrap_or([f64::NAN; 4]),
+            footprint: None,
         }
     }
 }
@@ -67,6 +86,7 @@ mod tests {
                 id: 15,
                 position: [0.1, 0.2, 0.05],
                 orientation: [0.0, 0.0, 0.6, 0.8],
+                footprint: None,
             }
         );
     }
@@ -84,5 +104,26 @@ mod tests {
         let obs = Observation::published("actuator", 8, None, Some([0.0, 0.0, 0.0, 1.0]));
         assert!(obs.position.iter().all(|c| c.is_nan()));
         assert_eq!(obs.orientation, [0.0, 0.0, 0.0, 1.0]);
+    }
+}
+
+#[cfg(test)]
+mod footprint_tests {
+    use super::*;
+
+    #[test]
+    fn an_observation_without_a_footprint_reads_and_writes_as_before() {
+        let obs = Observation::published("blockA", 15, Some([0.0; 3]), Some([0.0, 0.0, 0.0, 1.0]));
+        let json = serde_json::to_string(&obs).unwrap();
+        assert!(!json.contains("footprint"), "{json}");
+        let old = r#"{"name":"blockA","id":15,"position":[0,0,0],"orientation":[0,0,0,1]}"#;
+        assert_eq!(serde_json::from_str::<Observation>(old).unwrap(), obs);
+        let with = Observation {
+            footprint: Some(Footprint::Disc { radius: 0.1 }),
+            ..obs
+        };
+        let back: Observation =
+            serde_json::from_str(&serde_json::to_string(&with).unwrap()).unwrap();
+        assert_eq!(back, with);
     }
 }

@@ -182,6 +182,7 @@ mod tests {
             id,
             position: [x, y, 0.03],
             orientation: [0.0, 0.0, 0.0, 1.0],
+            footprint: None,
         };
         Frame {
             objects: vec![

@@ -78,6 +78,7 @@ pub fn frame(bodies: Vec<Body>) -> Frame {
                 id,
                 position,
                 orientation,
+                footprint: None,
             })
             .collect(),
     }

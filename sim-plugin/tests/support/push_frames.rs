@@ -20,6 +20,7 @@ pub fn frame(s: &Snapshot) -> Frame {
                 id: b.id,
                 position: b.position,
                 orientation: b.orientation,
+                footprint: None,
             })
             .collect(),
     }

@@ -324,6 +324,7 @@ pub mod test_support {
             id,
             position: [x, y, z],
             orientation: learner::features::yaw_to_quaternion(yaw),
+            footprint: None,
         };
         let mut objects = vec![obs("actuator", 8, actuator.0, actuator.1, 0.0, 0.03)];
         for (id, s) in blocks {

@@ -340,12 +340,15 @@ mod tests {
             let body = state.bodies.iter_mut().find(|b| b.name == name).unwrap();
             body.pose = pose;
             let in_process = learner::features::parse_frame(
-                &crate::frame::frame_from_state(&pb::WorldState {
-                    model_v: Some(pb::ModelStateV {
-                        models: state.bodies.clone(),
-                    }),
-                    ..pb::WorldState::default()
-                }),
+                &crate::frame::frame_from_state(
+                    &pb::WorldState {
+                        model_v: Some(pb::ModelStateV {
+                            models: state.bodies.clone(),
+                        }),
+                        ..pb::WorldState::default()
+                    },
+                    &crate::frame::Footprints::default(),
+                ),
                 learner::features::ActuatorYaw::ForceZero,
             )
             .unwrap_err()

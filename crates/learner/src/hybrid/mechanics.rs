@@ -26,7 +26,7 @@ use nalgebra::{Rotation2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::features::Shape;
-use crate::types::ObjectState;
+use crate::types::{Footprint, ObjectState};
 
 /// Pieces of the pusher's path per message. Five resolve contact changes
 /// to a fifth of a message (1 mm at the push task's speed); ten gave the
@@ -57,6 +57,15 @@ impl Outline {
             [h[0].max(c[0].abs()), h[1].max(c[1].abs())]
         });
         Outline::Box { half }
+    }
+
+    /// The outline of a footprint the world gave.
+    #[must_use]
+    pub fn of_footprint(footprint: Footprint) -> Self {
+        match footprint {
+            Footprint::Box { half_extents } => Outline::Box { half: half_extents },
+            Footprint::Disc { radius } => Outline::Disc { radius },
+        }
     }
 
     /// The closest point of the outline to `p` (slider frame), the

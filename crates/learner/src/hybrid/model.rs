@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::mechanics::{Outline, Parameters, Push, Slide, Stepped, Twist, SUBSTEPS};
 use super::residual::{self, Memory};
 use crate::aitm::MapStats;
-use crate::features::{parse_frame_at, ActuatorYaw, ParseError, Precision};
+use crate::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
 use crate::features::{Shape, ACTUATOR_SHAPE};
 use crate::model::Model;
 use crate::stats::{ModelStats, OtherStats};
@@ -73,12 +73,27 @@ const NEAR: f64 = 0.03;
 /// Below this motion per message a block is at rest.
 const AT_REST: f64 = 1e-5;
 
-/// The hybrid model's world: the poses, and each block's motion over the
-/// message before, which a free slide continues.
+/// The hybrid model's world: the poses, each block's motion over the
+/// message before, which a free slide continues, and each block's outline
+/// where the observation carried one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HybridWorld {
     pub poses: Poses,
     pub motion: BTreeMap<u32, Twist>,
+    #[serde(default)]
+    pub outlines: BTreeMap<u32, Outline>,
+}
+
+impl HybridWorld {
+    /// The outline of block `id`: as observed, or else the shape table's
+    /// for its id (a driver that passes no shapes on).
+    #[must_use]
+    pub fn outline(&self, id: u32) -> Outline {
+        self.outlines
+            .get(&id)
+            .copied()
+            .unwrap_or_else(|| HybridModel::outline(id))
+    }
 }
 
 /// Least squares of the actuator's motion over a message on the action
@@ -156,7 +171,6 @@ pub const TIPPING_GRID: [f64; 11] = [
 /// What the model knows of one block.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct BlockKnowledge {
-    outline: Outline,
     /// Per value of [`TIPPING_GRID`], the summed squared one-message error
     /// of the mechanics over the pushes seen (position, and turn times the
     /// outline's size).
@@ -178,6 +192,7 @@ struct BlockKnowledge {
 /// (its own frame at the start).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Remembered {
+    outline: Outline,
     before: ObjectState,
     motion_before: Twist,
     from: Vector2<f64>,
@@ -190,9 +205,8 @@ struct Remembered {
 const STOPS_AT_ONCE: f64 = 1.0;
 
 impl BlockKnowledge {
-    fn new(outline: Outline) -> Self {
+    fn new() -> Self {
         Self {
-            outline,
             tipping_errors: [0.0; TIPPING_GRID.len()],
             pushes: 0,
             weighing: std::collections::VecDeque::new(),
@@ -255,12 +269,12 @@ impl BlockKnowledge {
     /// calls for this (rarely, once the first pushes are weighed); the
     /// slide changes only the residuals of free slides, which are left.
     fn recompute_residuals(&mut self, parameters: &Parameters) {
-        let push = Push {
-            outline: &self.outline,
-            parameters,
-            pusher_radius: pusher_radius(),
-        };
         for (value, r) in self.memory.values_mut().iter_mut().zip(&self.remembered) {
+            let push = Push {
+                outline: &r.outline,
+                parameters,
+                pusher_radius: pusher_radius(),
+            };
             let predicted = push
                 .step(r.before, r.motion_before, r.from, r.path)
                 .motion
@@ -287,7 +301,6 @@ impl BlockKnowledge {
     /// message counts once every value has been weighed on it, so that
     /// all values are compared on the same messages.
     fn weigh_tipping(&mut self, slide: Slide) {
-        let size = self.outline.size();
         for _ in 0..WEIGHINGS_PER_MESSAGE {
             let Some(w) = self.weighing.front_mut() else {
                 return;
@@ -297,7 +310,7 @@ impl BlockKnowledge {
                 slide,
             };
             let push = Push {
-                outline: &self.outline,
+                outline: &w.outline,
                 parameters: &parameters,
                 pusher_radius: pusher_radius(),
             };
@@ -313,7 +326,7 @@ impl BlockKnowledge {
                     &mut w.hint,
                 )
                 .slider;
-            let turn = size * (predicted.theta - w.after.theta);
+            let turn = w.outline.size() * (predicted.theta - w.after.theta);
             w.errors[w.next] =
                 (predicted.x - w.after.x).powi(2) + (predicted.y - w.after.y).powi(2) + turn * turn;
             w.next += 1;
@@ -339,6 +352,7 @@ const WEIGHING_QUEUE: usize = 1;
 /// A message with the pusher at the block, being weighed.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Weighing {
+    outline: Outline,
     before: ObjectState,
     motion_before: Twist,
     after: ObjectState,
@@ -414,12 +428,14 @@ impl HybridModel {
             .path(action, self.last_action, self.config.parts.identifies())
     }
 
-    /// Where the block `id` at `pose`, having moved by `motion`, is after
-    /// the pusher moved from `from` along `path`: the mechanics, and the
-    /// residual memory if the pusher is near or the block moving.
+    /// Where the block `id` of `outline` at `pose`, having moved by
+    /// `motion`, is after the pusher moved from `from` along `path`: the
+    /// mechanics, and the residual memory if the pusher is near or the
+    /// block moving.
     pub(super) fn block_after(
         &self,
         id: u32,
+        outline: &Outline,
         pose: ObjectState,
         motion: Twist,
         from: Vector2<f64>,
@@ -429,13 +445,13 @@ impl HybridModel {
         let knowledge = match self.blocks.get(&id) {
             Some(k) => k,
             None => {
-                fallback = BlockKnowledge::new(Self::outline(id));
+                fallback = BlockKnowledge::new();
                 &fallback
             }
         };
         let parameters = knowledge.parameters(self.config.parts.identifies());
         let push = Push {
-            outline: &knowledge.outline,
+            outline,
             parameters: &parameters,
             pusher_radius: pusher_radius(),
         };
@@ -443,8 +459,7 @@ impl HybridModel {
         if !self.config.parts.remembers() || knowledge.memory.is_empty() {
             return (stepped.slider, stepped.motion);
         }
-        let Some(key) = residual_key(&knowledge.outline, &pose, &motion, from, path, &stepped)
-        else {
+        let Some(key) = residual_key(outline, &pose, &motion, from, path, &stepped) else {
             return (stepped.slider, stepped.motion);
         };
         let r = knowledge.memory.query(&key);
@@ -466,12 +481,9 @@ impl HybridModel {
                 continue;
             };
             let motion_before = from.motion.get(&id).copied().unwrap_or_default();
-            let knowledge = self
-                .blocks
-                .entry(id)
-                .or_insert_with(|| BlockKnowledge::new(Self::outline(id)));
+            let knowledge = self.blocks.entry(id).or_insert_with(BlockKnowledge::new);
             knowledge.updates += 1;
-            let outline = knowledge.outline;
+            let outline = from.outline(id);
             let motion = Twist::between(before, after);
             if surface_gap(&outline, before, pusher_from) > NEAR
                 && surface_gap(&outline, after, pusher_to) > NEAR
@@ -492,6 +504,7 @@ impl HybridModel {
                     || surface_gap(&outline, after, pusher_to) < CONTACT_TOLERANCE
                 {
                     knowledge.keep_for_weighing(Weighing {
+                        outline,
                         before: *before,
                         motion_before,
                         after: *after,
@@ -537,6 +550,7 @@ impl HybridModel {
                     ],
                 );
                 knowledge.remembered.push(Remembered {
+                    outline,
                     before: *before,
                     motion_before,
                     from: pusher_from,
@@ -562,7 +576,17 @@ impl HybridModel {
                 (id, motion)
             })
             .collect();
-        Ok(HybridWorld { poses, motion })
+        let outlines = frame
+            .objects
+            .iter()
+            .filter(|o| poses.blocks.contains_key(&o.id) && !is_skipped(&o.name))
+            .filter_map(|o| Some((o.id, Outline::of_footprint(o.footprint?))))
+            .collect();
+        Ok(HybridWorld {
+            poses,
+            motion,
+            outlines,
+        })
     }
 }
 
@@ -631,7 +655,8 @@ impl Model for HybridModel {
         next.poses.actuator = ObjectState::new(to.x, to.y, 0.0);
         for (&id, pose) in &world.poses.blocks {
             let motion = world.motion.get(&id).copied().unwrap_or_default();
-            let (after, moved) = self.block_after(id, *pose, motion, from, path);
+            let (after, moved) =
+                self.block_after(id, &world.outline(id), *pose, motion, from, path);
             next.poses.blocks.insert(id, after);
             next.motion.insert(id, moved);
         }

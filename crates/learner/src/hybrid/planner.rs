@@ -48,7 +48,7 @@ impl HybridModel {
             self.target = None;
             return Action::ZERO;
         }
-        let outline = Self::outline(target.id);
+        let outline = world.outline(target.id);
         // Keep the chosen push while it still brings the block nearer:
         // choosing afresh at every message makes the actuator chase a
         // contact that moves as it moves. Once at the block, a push is
@@ -63,7 +63,11 @@ impl HybridModel {
                 block.position() + to_world * (contact + normal * (pusher_radius() + STANDOFF));
             let approaching = !at_block && norm2(wait - pusher) > EPS_CLOSE_ENOUGH;
             let u = Action::from_vector(-(to_world * normal) * APPROACH_SPEED);
-            approaching || self.one_step(target.id, block, u).distance_to(&goal) < now
+            approaching
+                || self
+                    .one_step(target.id, &outline, block, u)
+                    .distance_to(&goal)
+                    < now
         });
         let (contact, normal) = match kept {
             Some(plan) => plan,
@@ -94,7 +98,11 @@ impl HybridModel {
         }
         if gap > EPS_CLOSE_ENOUGH && distance > STANDOFF / 2.0 {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
-            if self.one_step(target.id, block, u).distance_to(&goal) > now {
+            if self
+                .one_step(target.id, &outline, block, u)
+                .distance_to(&goal)
+                > now
+            {
                 return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
             }
             return u;
@@ -103,7 +111,9 @@ impl HybridModel {
         let mut best = (f64::INFINITY, Action::ZERO);
         for speed in SPEEDS {
             let u = Action::from_vector(direction * speed);
-            let d = self.one_step(target.id, block, u).distance_to(&goal);
+            let d = self
+                .one_step(target.id, &outline, block, u)
+                .distance_to(&goal);
             if d < best.0 {
                 best = (d, u);
             }
@@ -112,13 +122,13 @@ impl HybridModel {
     }
 
     /// The block one message after `u`, by the model.
-    fn one_step(&self, id: u32, block: ObjectState, u: Action) -> ObjectState {
+    fn one_step(&self, id: u32, outline: &Outline, block: ObjectState, u: Action) -> ObjectState {
         let Some(world) = self.current() else {
             return block;
         };
         let motion = world.motion.get(&id).copied().unwrap_or_default();
         let from = world.poses.actuator.position();
-        self.block_after(id, block, motion, from, self.actuator_path(u))
+        self.block_after(id, outline, block, motion, from, self.actuator_path(u))
             .0
     }
 
@@ -142,7 +152,7 @@ impl HybridModel {
             let mut motion = Twist::default();
             let mut nearest = f64::INFINITY;
             for _ in 0..HORIZON {
-                let (next, moved) = self.block_after(id, pose, motion, pusher, path);
+                let (next, moved) = self.block_after(id, outline, pose, motion, pusher, path);
                 pusher += path;
                 pose = next;
                 motion = moved;
