@@ -23,6 +23,7 @@
 
 pub mod experiment;
 pub mod external;
+pub mod floor;
 pub mod frame;
 pub mod latency;
 pub mod output;

@@ -187,6 +187,26 @@ impl Spec {
                 )));
             }
         }
+        if self.model() == Some(&LearnerChoice::Floor) {
+            // The floor steps the scene's own bodies by the names it is
+            // shown; the new-object view shows another object under the
+            // blue block's name, and it has no planner.
+            match self {
+                Spec::PushTask {
+                    transfer: Some(_), ..
+                } => {
+                    return Err(SpecError::Invalid(
+                        "the floor (--floor) does not run the new-object experiments yet: it is shown the object under the blue block's name".into(),
+                    ))
+                }
+                Spec::MoveToTarget { .. } => {
+                    return Err(SpecError::Invalid(
+                        "the floor (--floor) predicts but does not plan: it has no Move to Target".into(),
+                    ))
+                }
+                _ => {}
+            }
+        }
         Ok(())
     }
 
@@ -209,7 +229,13 @@ impl Spec {
                 let protocol = self
                     .push_protocol()
                     .ok_or_else(|| SpecError::Invalid("a push task has a protocol".into()))?;
-                let model = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
+                let model = Ready::new(
+                    model,
+                    options,
+                    (self.task(), self.scene()),
+                    protocol.rate_hz,
+                    &mut plan,
+                )?;
                 Document::Push(model.dispatch(
                     options,
                     protocol.rate_hz,
@@ -224,7 +250,13 @@ impl Spec {
             }
             Spec::ConstantFeedback { model, options } => {
                 progress(0);
-                let model = Ready::new(model, options, self.task(), LOW_RATE_HZ, &mut plan)?;
+                let model = Ready::new(
+                    model,
+                    options,
+                    (self.task(), self.scene()),
+                    LOW_RATE_HZ,
+                    &mut plan,
+                )?;
                 let report = model.dispatch(options, LOW_RATE_HZ, Feedback { plan: &plan })??;
                 progress(1);
                 Document::Feedback(report)
@@ -236,7 +268,14 @@ impl Spec {
                 repetitions,
                 max_steps,
             } => Document::MoveToTarget(
-                Ready::new(model, options, self.task(), RATE_HZ, &mut plan)?.dispatch(
+                Ready::new(
+                    model,
+                    options,
+                    (self.task(), self.scene()),
+                    RATE_HZ,
+                    &mut plan,
+                )?
+                .dispatch(
                     options,
                     RATE_HZ,
                     MoveToTarget {
@@ -296,7 +335,13 @@ impl Spec {
             )));
         };
         let mut plan = plan.clone();
-        let ready = Ready::new(model, options, self.task(), protocol.rate_hz, &mut plan)?;
+        let ready = Ready::new(
+            model,
+            options,
+            (self.task(), self.scene()),
+            protocol.rate_hz,
+            &mut plan,
+        )?;
         let setup = plan.setup(drive::results::push_task::EXPERIMENT);
         let mut all = PushJob::all(protocol.clone(), &[], 0, plan.seed);
         for &(n_train, fold) in wanted {
@@ -593,17 +638,30 @@ impl From<AnyReport> for Document {
 enum Ready {
     Builtin(ModelKind),
     External(Box<ExternalModel>),
+    Floor(drive::floor::Floor),
 }
 
 impl Ready {
     fn new(
         choice: &LearnerChoice,
         options: &ModelOptions,
-        task: &str,
+        (task, scene): (&str, &str),
         publish_rate_hz: u32,
         plan: &mut Plan,
     ) -> Result<Self, SpecError> {
         Ok(match choice {
+            LearnerChoice::Floor => {
+                options.check_external()?;
+                let floor = drive::floor::Floor::new(scene, publish_rate_hz)
+                    .map_err(|err| SpecError::Invalid(err.to_string()))?;
+                drive::floor::NAME.clone_into(&mut plan.model);
+                plan.learner = None;
+                plan.recipe = Some(Recipe::Floor {
+                    scene: scene.to_owned(),
+                    publish_rate_hz,
+                });
+                Ready::Floor(floor)
+            }
             LearnerChoice::Builtin(kind) => {
                 plan.model = options.report_name(*kind);
                 plan.learner = None;
@@ -641,6 +699,7 @@ impl Ready {
         match self {
             Ready::Builtin(kind) => kind.dispatch(options, publish_rate_hz, job),
             Ready::External(model) => Ok(job.run(*model)),
+            Ready::Floor(floor) => Ok(job.run(floor)),
         }
     }
 }

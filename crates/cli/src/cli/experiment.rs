@@ -154,6 +154,14 @@ struct LearnerArgs {
     #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["model", "learner"])]
     learner_connect: Option<String>,
 
+    /// Run the floor instead of a learner: the world predicting itself (a
+    /// latency-free copy of the experiment's world stepped under the same
+    /// actions, docs/models.md "The floor"), the error no learner can go
+    /// below. Push task and constant feedback on the thesis's scenes;
+    /// refused for Move to Target and the new-object experiments.
+    #[arg(long, conflicts_with_all = ["model", "learner", "learner_connect"])]
+    floor: bool,
+
     /// How long an external learner may take over one answer (its hello
     /// included) before the job fails, in seconds.
     #[arg(long, value_name = "SECS", default_value_t = DEFAULT_TIMEOUT.as_secs_f64(), value_parser = parse_timeout)]
@@ -167,6 +175,7 @@ impl LearnerArgs {
         match (&self.learner, &self.learner_connect) {
             (Some(command), _) => external(Source::Command(command.clone())),
             (None, Some(addr)) => external(Source::Connect(addr.clone())),
+            (None, None) if self.floor => LearnerChoice::Floor,
             (None, None) => LearnerChoice::Builtin(self.model),
         }
     }
@@ -525,7 +534,7 @@ impl PushTaskLine {
         let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
         match line.args.learner.choice() {
             LearnerChoice::Builtin(kind) => kind.check(options, rate)?,
-            LearnerChoice::External(_) => options.check_external()?,
+            LearnerChoice::External(_) | LearnerChoice::Floor => options.check_external()?,
         }
         Ok(Self {
             args: line.args,

@@ -56,6 +56,8 @@ pub enum Recipe {
         task: String,
         publish_rate_hz: u32,
     },
+    /// The floor ([`crate::floor::Floor`]) of `scene`.
+    Floor { scene: String, publish_rate_hz: u32 },
 }
 
 impl Recipe {
@@ -67,6 +69,9 @@ impl Recipe {
                 publish_rate_hz, ..
             }
             | Recipe::External {
+                publish_rate_hz, ..
+            }
+            | Recipe::Floor {
                 publish_rate_hz, ..
             } => *publish_rate_hz,
         }
@@ -526,6 +531,10 @@ impl Kept {
             Recipe::Builtin { kind, options, .. } => kind
                 .dispatch(options, rate_hz, job)
                 .map_err(|err| ExperimentError::InWorker(err.to_string()))??,
+            Recipe::Floor { scene, .. } => job.run(
+                crate::floor::Floor::new(scene, rate_hz)
+                    .map_err(|err| ExperimentError::InWorker(err.to_string()))?,
+            )?,
             Recipe::External { spec, task, .. } => {
                 let key = serde_json::to_string(&request.recipe)
                     .map_err(|err| ExperimentError::InWorker(err.to_string()))?;

@@ -50,14 +50,18 @@ pub struct LearnerSpec {
 pub enum LearnerChoice {
     Builtin(ModelKind),
     External(LearnerSpec),
+    /// The world as a predictor of itself ([`crate::floor`]): not a
+    /// learner, the error no learner can go below.
+    Floor,
 }
 
 /// The choice as `pushlearn experiment` flags: `--model gate`,
-/// `--learner 'CMD'` or `--learner-connect ADDR`.
+/// `--learner 'CMD'`, `--learner-connect ADDR` or `--floor`.
 impl std::fmt::Display for LearnerChoice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
+            LearnerChoice::Floor => write!(f, "--floor"),
             LearnerChoice::External(spec) => {
                 match &spec.source {
                     Source::Command(command) => write!(f, "--learner '{command}'")?,

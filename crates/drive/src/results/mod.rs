@@ -58,15 +58,17 @@ impl Setup {
     /// The built-in model the document is shown against (its tables,
     /// figures and the thesis's reference numbers): the one `model` names
     /// ([`ModelKind::of_report_name`]), or for an external learner of
-    /// another name (`knn`) the gate model, whose thesis numbers every
-    /// learner is compared with.
+    /// another name (`knn`) and the floor the gate model, whose thesis
+    /// numbers every learner is compared with.
     ///
     /// # Errors
     /// Any other name: a document we did not write, or a hand-edited one.
     pub fn reference_model(&self) -> Result<ModelKind, UnknownModel> {
         match ModelKind::of_report_name(&self.model) {
             Some(kind) => Ok(kind),
-            None if self.learner.is_some() => Ok(ModelKind::Gate),
+            None if self.learner.is_some() || self.model == crate::floor::NAME => {
+                Ok(ModelKind::Gate)
+            }
             None => Err(UnknownModel(self.model.clone())),
         }
     }

@@ -13,7 +13,7 @@ use drive::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use drive::external::LearnerChoice;
 use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::scene::{Object, Transfer};
-use learner::registry::{Improvement, ModelKind, ModelOptions};
+use learner::registry::{Improvement, ModelKind, ModelOptions, Parts};
 
 /// The seeds whose spread `docs/results.md` shows beside seed 1 for the
 /// issue's targets (20 folds each).
@@ -88,6 +88,9 @@ impl Entry {
             }
             if !options.improve.is_empty() {
                 let _ = write!(line, " --improve {}", options.improvement_names().join(","));
+            }
+            if options.parts != default.parts {
+                let _ = write!(line, " --parts {}", options.parts.as_str());
             }
         };
         match &self.spec {
@@ -196,6 +199,14 @@ pub fn beyond_models() -> Vec<(String, ModelKind, Vec<Improvement>)> {
         .collect()
 }
 
+/// The hybrid model and its ablation (`docs/models.md` "The hybrid
+/// model"): (document name suffix, parts), the whole model first.
+pub const HYBRIDS: [(&str, Parts); 3] = [
+    ("hybrid", Parts::Full),
+    ("hybrid-identified", Parts::Identified),
+    ("hybrid-mechanics", Parts::Mechanics),
+];
+
 /// The "Beyond the thesis" experiments: the push task's curve of each
 /// change and of gate+, Move to Target on the thesis's targets for
 /// forward-check and gate+, and on sampled targets for gate and gate+.
@@ -218,6 +229,43 @@ fn beyond() -> Vec<Entry> {
             },
         ));
     }
+    for (name, parts) in HYBRIDS {
+        entries.push(Entry::new(
+            format!("beyond-push-{name}"),
+            Spec::PushTask {
+                model: ModelKind::Hybrid.into(),
+                options: ModelOptions {
+                    parts,
+                    ..ModelOptions::default()
+                },
+                variant: Variant::Random,
+                transfer: None,
+                train_runs: BEYOND_RUNS.to_vec(),
+                folds: 20,
+            },
+        ));
+    }
+    entries.push(Entry::new(
+        "beyond-push-floor",
+        Spec::PushTask {
+            model: LearnerChoice::Floor,
+            options: ModelOptions::default(),
+            variant: Variant::Random,
+            transfer: None,
+            train_runs: BEYOND_RUNS.to_vec(),
+            folds: 20,
+        },
+    ));
+    entries.push(Entry::new(
+        "beyond-mtt-hybrid",
+        Spec::MoveToTarget {
+            model: ModelKind::Hybrid.into(),
+            options: ModelOptions::default(),
+            targets: TARGETS.to_vec(),
+            repetitions: REPETITIONS,
+            max_steps: MAX_STEPS,
+        },
+    ));
     for (name, kind, improve) in beyond_models() {
         if kind == ModelKind::GatePlus || improve == [Improvement::ForwardCheck] {
             entries.push(Entry::new(
@@ -235,6 +283,7 @@ fn beyond() -> Vec<Entry> {
     for (name, kind) in [
         ("gate", ModelKind::Gate),
         ("gate-plus", ModelKind::GatePlus),
+        ("hybrid", ModelKind::Hybrid),
     ] {
         entries.push(Entry::new(
             format!("beyond-sampled-{name}"),
@@ -501,7 +550,7 @@ pub fn transfers() -> Vec<Transfer> {
 }
 
 /// The learners of the new-object table: (document name part, learner):
-/// both faithful models, gate+, and both baselines.
+/// both faithful models, gate+, the hybrid model and the baselines.
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
     let [(_, knn, knn_timeout), (_, gp, gp_timeout)] = BASELINES;
@@ -509,6 +558,7 @@ pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
         ("gate", ModelKind::Gate.into()),
         ("interaction", ModelKind::Interaction.into()),
         ("gate-plus", ModelKind::GatePlus.into()),
+        ("hybrid", ModelKind::Hybrid.into()),
         ("knn", baseline(knn, knn_timeout)),
         ("gp", baseline(gp, gp_timeout)),
     ]
@@ -692,6 +742,14 @@ mod tests {
         assert_eq!(
             find("draft"),
             "pushlearn experiment push-task --report draft --json d/draft.json"
+        );
+        assert_eq!(
+            find("beyond-push-hybrid-mechanics"),
+            "pushlearn experiment push-task --model hybrid --train-runs 1,3,10,30 --parts mechanics --json d/beyond-push-hybrid-mechanics.json"
+        );
+        assert_eq!(
+            find("beyond-push-floor"),
+            "pushlearn experiment push-task --floor --train-runs 1,3,10,30 --json d/beyond-push-floor.json"
         );
     }
 }

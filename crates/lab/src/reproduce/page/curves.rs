@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 
 use learner::eval::MeanStd;
 
-use super::objects::learner_label;
+use super::objects::{learner_label, FLOOR_LABEL};
 use super::{entry_at, ms, push_doc, thesis_ms};
 use crate::report::reference;
 use crate::reproduce::Reproduction;
@@ -104,19 +104,26 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
 /// # Errors
 /// A document the reproduction does not have.
 pub fn baseline_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)>, String> {
-    let names = ["push-task-gate", "push-task-interaction"]
-        .into_iter()
-        .chain(
-            crate::reproduce::manifest::BASELINES
-                .iter()
-                .map(|(name, ..)| *name),
-        );
+    let names = [
+        "push-task-gate",
+        "push-task-interaction",
+        "beyond-push-hybrid",
+    ]
+    .into_iter()
+    .chain(
+        crate::reproduce::manifest::BASELINES
+            .iter()
+            .map(|(name, ..)| *name),
+    )
+    .chain(["beyond-push-floor"]);
     names
         .map(|name| {
             let report = push_doc(results, name)?;
-            let label = match &report.setup.learner {
-                Some(l) => format!("{} {} (Python)", report.setup.model, l.version),
-                None => format!("{} (thesis model, Rust)", report.setup.model),
+            let label = match (&report.setup.learner, report.setup.model.as_str()) {
+                (Some(l), model) => format!("{model} {} (Python)", l.version),
+                (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model, Rust)"),
+                (None, drive::floor::NAME) => FLOOR_LABEL.to_owned(),
+                (None, model) => format!("{model} (Rust)"),
             };
             Ok((label, report))
         })
@@ -159,10 +166,16 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
             .map(|(name, ..)| format!("beyond-push-{name}")),
     );
     names.extend(
+        crate::reproduce::manifest::HYBRIDS
+            .iter()
+            .map(|(name, _)| format!("beyond-push-{name}")),
+    );
+    names.extend(
         crate::reproduce::manifest::BASELINES
             .iter()
             .map(|(n, ..)| (*n).to_owned()),
     );
+    names.push("beyond-push-floor".to_owned());
     names
         .iter()
         .map(|name| {

@@ -25,12 +25,17 @@ pub(super) fn beyond_move_to_target(results: &Reproduction) -> Result<String, St
         "move-to-target-gate",
         "beyond-mtt-forward-check",
         "beyond-mtt-gate-plus",
+        "beyond-mtt-hybrid",
     ] {
         let r = mtt_doc(results, name)?;
         let _ = writeln!(out, "| {} | {} |", r.setup.model, mtt_cells(r));
     }
     out.push_str("\n| Model | Sampled targets reached | Mean steps (failures count the limit) | Mean steps of the reached |\n|---|---|---|---|\n");
-    for name in ["beyond-sampled-gate", "beyond-sampled-gate-plus"] {
+    for name in [
+        "beyond-sampled-gate",
+        "beyond-sampled-gate-plus",
+        "beyond-sampled-hybrid",
+    ] {
         let r = mtt_doc(results, name)?;
         let steps: Vec<f64> = r.targets.iter().map(|t| t.summary.steps).collect();
         let reached_steps: Vec<f64> = r

@@ -6,6 +6,9 @@ use super::{entry_at, push_doc};
 use crate::reproduce::Reproduction;
 use drive::results::{PushReport, Setup};
 
+/// The floor's label: not a learner (`drive::floor`).
+pub(super) const FLOOR_LABEL: &str = "floor (the world predicting itself)";
+
 /// A learner's label and its report on each new-object condition.
 pub type ObjectRow<'r> = (String, Vec<&'r PushReport>);
 
@@ -15,6 +18,7 @@ pub(super) fn learner_label(setup: &Setup) -> String {
     match (&setup.learner, setup.model.as_str()) {
         (Some(l), model) => format!("{model} {} (Python)", l.version),
         (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model)"),
+        (None, drive::floor::NAME) => FLOOR_LABEL.to_owned(),
         (None, model) => model.to_owned(),
     }
 }

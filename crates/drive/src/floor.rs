@@ -1,0 +1,273 @@
+//! The floor: a predictor that is the world itself (`docs/models.md`,
+//! "The floor"). Not a learner: from the state it is shown it steps a copy
+//! of the experiment's world — the same scene, so the true masses,
+//! frictions and shapes — under the action, one message at a time, and
+//! chains its own states as a model chains its predictions. What it does
+//! not know is what no learner can know: when each of the world's Moves
+//! took effect (the latency emulation's draws). Its error is the part of
+//! every learner's error that no learning can remove.
+//!
+//! It implements [`Model`] so that an experiment runs it as it runs a
+//! model; it learns nothing, plans nothing (Move to Target is refused) and
+//! reports no maps.
+
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+
+use learner::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
+use learner::stats::ModelStats;
+use learner::{Action, Frame, Model, Observation, Poses, Target, TargetError};
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+use sim_plugin::world::{ActuatorMode, Command, World};
+use sim_plugin::Scene;
+
+/// The name reports give the floor.
+pub const NAME: &str = "floor";
+
+/// The floor's world: the state shown or stepped, and which step of the
+/// copy it is (0: a state the copy did not produce).
+#[derive(Clone, Debug)]
+pub struct FloorWorld {
+    frame: Frame,
+    poses: Poses,
+    token: u64,
+}
+
+/// The world copy and the token of the state it holds.
+#[derive(Default)]
+struct WorldCopy {
+    world: Option<World>,
+    token: u64,
+}
+
+impl std::fmt::Debug for WorldCopy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WorldCopy")
+            .field("built", &self.world.is_some())
+            .field("token", &self.token)
+            .finish()
+    }
+}
+
+/// The world as a predictor of itself, latency draws unknown.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Floor {
+    scene: String,
+    publish_rate_hz: u32,
+    training: bool,
+    /// Built at the first prediction; shared by clones, which take turns
+    /// (a fold's predictions are sequential).
+    #[serde(skip)]
+    copy: Arc<Mutex<WorldCopy>>,
+}
+
+/// Why the floor cannot be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum FloorError {
+    #[error("the floor needs a built-in scene: {0}")]
+    Scene(String),
+}
+
+impl Floor {
+    /// The floor of the built-in scene `scene` at `publish_rate_hz`.
+    ///
+    /// # Errors
+    /// An unknown scene.
+    pub fn new(scene: &str, publish_rate_hz: u32) -> Result<Self, FloorError> {
+        Scene::builtin(scene).map_err(|err| FloorError::Scene(err.to_string()))?;
+        Ok(Self {
+            scene: scene.to_owned(),
+            publish_rate_hz,
+            training: true,
+            copy: Arc::default(),
+        })
+    }
+
+    fn lock(&self) -> MutexGuard<'_, WorldCopy> {
+        self.copy.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// One message of the copy from `from` under `action`: the copy's next
+    /// state if it holds `from`, else from `from`'s poses at rest (what it
+    /// is shown carries no velocities). `None` if the copy refused the
+    /// state (a body the scene does not have) or could not step.
+    fn step(&self, from: &FloorWorld, action: Action) -> Option<FloorWorld> {
+        let mut copy = self.lock();
+        let copy = &mut *copy;
+        if copy.world.is_none() {
+            let scene = Scene::builtin(&self.scene).ok()?;
+            copy.world = Some(World::new(&scene).ok()?);
+        }
+        let world = copy.world.as_mut()?;
+        if from.token == 0 || from.token != copy.token {
+            world.apply(Command::Reset).ok()?;
+            world.apply(Command::Unpause).ok()?;
+            world
+                .apply(Command::SetPublishRate(self.publish_rate_hz))
+                .ok()?;
+            for body in from.frame.objects.iter().filter(|o| !is_skipped(&o.name)) {
+                world
+                    .apply(Command::SetPose {
+                        name: body.name.as_str().into(),
+                        position: body.position,
+                        orientation: body.orientation,
+                    })
+                    .ok()?;
+            }
+        }
+        world
+            .apply(Command::Actuator {
+                mode: ActuatorMode::Move,
+                velocity: [action.vx, action.vy, 0.0],
+            })
+            .ok()?;
+        let snapshot = loop {
+            if let Some(s) = world.step().ok()? {
+                break s;
+            }
+        };
+        let frame = Frame {
+            objects: snapshot
+                .bodies
+                .iter()
+                .map(|b| Observation {
+                    name: b.name.clone(),
+                    id: b.id,
+                    position: b.position,
+                    orientation: b.orientation,
+                    footprint: None,
+                })
+                .collect(),
+        };
+        let poses = parse_frame_at(&frame, ActuatorYaw::ForceZero, Precision::Full).ok()?;
+        copy.token = copy.token.wrapping_add(1).max(1);
+        Some(FloorWorld {
+            frame,
+            poses,
+            token: copy.token,
+        })
+    }
+}
+
+impl Model for Floor {
+    type World = FloorWorld;
+
+    fn parse(&self, frame: &Frame) -> Result<FloorWorld, ParseError> {
+        Ok(FloorWorld {
+            poses: parse_frame_at(frame, ActuatorYaw::ForceZero, Precision::Full)?,
+            frame: frame.clone(),
+            token: 0,
+        })
+    }
+
+    fn poses(world: &FloorWorld) -> Poses {
+        world.poses.clone()
+    }
+
+    fn reset_objects(&mut self, _world: &FloorWorld) {}
+
+    fn update(&mut self, _world: &FloorWorld, _action: Action) {}
+
+    /// A state the copy refuses (a body its scene lacks) is predicted to
+    /// stay as it is.
+    fn predict(&self, world: &FloorWorld, action: Action) -> FloorWorld {
+        self.step(world, action).unwrap_or_else(|| FloorWorld {
+            token: 0,
+            ..world.clone()
+        })
+    }
+
+    fn set_training(&mut self, on: bool) {
+        self.training = on;
+    }
+
+    fn is_training(&self) -> bool {
+        self.training
+    }
+
+    fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
+        match target {
+            None => Ok(()),
+            Some(t) => Err(TargetError::UnknownObject { id: t.id }),
+        }
+    }
+
+    fn has_target(&self) -> bool {
+        false
+    }
+
+    fn act(&mut self, _rng: &mut dyn Rng) -> Action {
+        Action::ZERO
+    }
+
+    fn stats(&self) -> ModelStats {
+        ModelStats::Other(learner::stats::OtherStats::default())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sim_plugin::push_run::record_push_run;
+    use sim_plugin::Snapshot;
+
+    fn frame(s: &Snapshot) -> Frame {
+        Frame {
+            objects: s
+                .bodies
+                .iter()
+                .map(|b| Observation {
+                    name: b.name.clone(),
+                    id: b.id,
+                    position: b.position,
+                    orientation: b.orientation,
+                    footprint: None,
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn the_floor_chains_a_latency_free_copy_of_the_world() {
+        let scene = Scene::builtin("one_block").unwrap();
+        let mut world = World::new(&scene).unwrap();
+        world.apply(Command::SetPublishRate(100)).unwrap();
+        let push = Action::new(0.0, 0.5);
+        let run = record_push_run(&mut world, 0.1, [push.vx, push.vy], 120).unwrap();
+        let floor = Floor::new("one_block", 100).unwrap();
+        // Sent after the first message, the push moves the world into the
+        // second.
+        let mut predicted = floor.parse(&frame(&run[0])).unwrap();
+        for _ in 1..run.len() {
+            predicted = floor.predict(&predicted, push);
+        }
+        let seen = floor.parse(&frame(&run[run.len() - 1])).unwrap();
+        let (p, s) = (
+            Floor::poses(&predicted).blocks[&learner::BLUE_ID],
+            Floor::poses(&seen).blocks[&learner::BLUE_ID],
+        );
+        let start = Floor::poses(&floor.parse(&frame(&run[0])).unwrap()).blocks[&learner::BLUE_ID];
+        assert!(s.distance_to(&start) > 0.1, "the block was pushed");
+        assert!(p.distance_to(&s) < 1e-3, "{p:?} against {s:?}");
+
+        // A state it did not produce (token 0) is taken as shown, at rest:
+        // from the last message the block, released, hardly moves.
+        let shown = floor.parse(&frame(&run[run.len() - 1])).unwrap();
+        let next = floor.predict(&shown, Action::ZERO);
+        let b = |w: &FloorWorld| Floor::poses(w).blocks[&learner::BLUE_ID];
+        assert!(b(&next).distance_to(&b(&shown)) < 1e-3);
+        assert_ne!(next.token, 0);
+    }
+
+    #[test]
+    fn it_refuses_unknown_scenes_and_targets() {
+        assert!(Floor::new("no_such_scene", 100).is_err());
+        let mut floor = Floor::new("one_block", 100).unwrap();
+        let target = Target {
+            id: learner::BLUE_ID,
+            pose: learner::ObjectState::new(0.0, 0.5, 0.0),
+        };
+        assert!(floor.set_target(Some(target)).is_err());
+        assert!(!floor.has_target());
+    }
+}
