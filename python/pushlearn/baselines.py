@@ -151,6 +151,8 @@ __all__ = [
     "CvChoice",
     "GpLearner",
     "KnnLearner",
+    "MlpLearner",
+    "ContactGate",
     "apply_change",
     "block_change",
     "block_features",
@@ -169,18 +171,48 @@ def wrap_angle(angle: float) -> float:
     return math.pi if wrapped == -math.pi else wrapped
 
 
-def block_features(actuator: Pose, block: Pose, action: Action) -> list[float]:
-    """The regressors' input for one block: the actuator's position and the action
-    in the block's frame, ``[rel_x, rel_y, a_x, a_y]``."""
+FEATURES = (
+    "rel_x",
+    "rel_y",
+    "vel_x",
+    "vel_y",
+    "prev_dx",
+    "prev_dy",
+    "prev_dtheta",
+)
+"""The names of :func:`block_features`' numbers, in order."""
+
+
+def block_features(
+    actuator: Pose,
+    block: Pose,
+    previous_actuator: Pose | None = None,
+    previous_block: Pose | None = None,
+    publish_rate_hz: float = 100.0,
+) -> list[float]:
+    """The regressors' input for one block (:data:`FEATURES`), all in the block's
+    frame of the current state: the actuator's position relative to the block,
+    the actuator's velocity over the last message (m/s), and the block's own
+    change over the last message (:func:`block_change`). Without a previous
+    state (a run's first message) the velocity and the change are zero."""
     c, s = math.cos(block.theta), math.sin(block.theta)
     dx, dy = actuator.x - block.x, actuator.y - block.y
-    vx, vy = action
-    return [c * dx + s * dy, -s * dx + c * dy, c * vx + s * vy, -s * vx + c * vy]
+    features = [c * dx + s * dy, -s * dx + c * dy, 0.0, 0.0, 0.0, 0.0, 0.0]
+    if previous_actuator is not None:
+        vx = (actuator.x - previous_actuator.x) * publish_rate_hz
+        vy = (actuator.y - previous_actuator.y) * publish_rate_hz
+        features[2] = c * vx + s * vy
+        features[3] = -s * vx + c * vy
+    if previous_block is not None:
+        features[4:7] = block_change(previous_block, block, frame=block.theta)
+    return features
 
 
-def block_change(before: Pose, after: Pose) -> list[float]:
-    """The regressors' output: the block's change in its frame, ``[dx, dy, dθ]``."""
-    c, s = math.cos(before.theta), math.sin(before.theta)
+def block_change(before: Pose, after: Pose, frame: float | None = None) -> list[float]:
+    """The regressors' output: the block's change ``[dx, dy, dθ]`` in its frame of
+    ``before`` (or in the frame turned by ``frame``)."""
+    angle = before.theta if frame is None else frame
+    c, s = math.cos(angle), math.sin(angle)
     dx, dy = after.x - before.x, after.y - before.y
     return [c * dx + s * dy, -s * dx + c * dy, wrap_angle(after.theta - before.theta)]
 
@@ -194,6 +226,119 @@ def apply_change(block: Pose, change: Any) -> Pose:
         block.y + s * dx + c * dy,
         wrap_angle(block.theta + dtheta),
     )
+
+
+MOVED = 1e-4
+"""A block's change over one message counts as motion above this (m, or rad)."""
+
+SLIDING = 0.9
+"""A moving block whose change fell below this fraction of the last message's
+is taken to be sliding freely, not pushed (see :class:`ContactGate`)."""
+
+
+@dataclass
+class ContactGate:
+    """Where a block is pushed, as the training samples showed it, and how it
+    slides when it is not.
+
+    The contact region is the set of actuator positions (in the block's frame)
+    at which a training sample saw the block pushed: ``|rel_x| ≤ half_x``,
+    ``|rel_y| ≤ half_y`` and ``|rel| ≤ radius``, each bound the largest
+    seen. The box fits a rectangle's faces, the radius a round block's rim;
+    their intersection holds both without knowing the shape. A sample counts
+    as pushed when the block moved (a change above :data:`MOVED`) and did not
+    slow down as a freely sliding block does (its change at least
+    :data:`SLIDING` times the last message's), so the slide after a push
+    does not widen the region.
+
+    Outside the region the block slides freely: its change is
+    ``decay ⊙ previous change``, ``decay`` fitted per output by least
+    squares over the training samples outside the region (clipped to
+    [0, 1]); a block at rest stays at rest.
+    """
+
+    half_x: float = -1.0
+    half_y: float = -1.0
+    radius: float = -1.0
+    decay: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    pushed: int = 0
+    """How many training samples saw the block pushed."""
+
+    @classmethod
+    def fit(cls, x: Array, y: Array) -> ContactGate:
+        """The gate of one block's samples (inputs :func:`block_features`, outputs
+        :func:`block_change`)."""
+        moved = np.max(np.abs(y), axis=1) > MOVED
+        before = np.linalg.norm(x[:, 4:6], axis=1)
+        now = np.linalg.norm(y[:, :2], axis=1)
+        turn_before, turn_now = np.abs(x[:, 6]), np.abs(y[:, 2])
+        steady = (now >= SLIDING * before) | (turn_now >= SLIDING * turn_before)
+        pushed = moved & steady
+        gate = cls(pushed=int(pushed.sum()))
+        if pushed.any():
+            rel = x[pushed, :2]
+            gate.half_x = float(np.max(np.abs(rel[:, 0])))
+            gate.half_y = float(np.max(np.abs(rel[:, 1])))
+            gate.radius = float(np.max(np.hypot(rel[:, 0], rel[:, 1])))
+        outside = ~gate.inside_all(x)
+        previous, current = x[outside, 4:7], y[outside]
+        denominator = np.sum(previous**2, axis=0)
+        numerator = np.sum(previous * current, axis=0)
+        decay = [
+            float(np.clip(n / d, 0.0, 1.0)) if d > 0 else 0.0
+            for n, d in zip(numerator, denominator, strict=True)
+        ]
+        gate.decay = (decay[0], decay[1], decay[2])
+        return gate
+
+    def inside(self, features: list[float]) -> bool:
+        """Whether the actuator of ``features`` is in the contact region."""
+        rx, ry = features[0], features[1]
+        return (
+            abs(rx) <= self.half_x
+            and abs(ry) <= self.half_y
+            and math.hypot(rx, ry) <= self.radius
+        )
+
+    def inside_all(self, x: Array) -> NDArray[np.bool_]:
+        """:meth:`inside` for every row of ``x``."""
+        return np.asarray(
+            (np.abs(x[:, 0]) <= self.half_x)
+            & (np.abs(x[:, 1]) <= self.half_y)
+            & (np.hypot(x[:, 0], x[:, 1]) <= self.radius)
+        )
+
+    def snap(self, features: list[float]) -> list[float]:
+        """``features`` with the actuator moved onto the region's boundary, the
+        contact surface, by the shortest way (the box's nearest face or the rim).
+
+        A rigid block's pusher is never inside it; a chained prediction that
+        lags the block by a little puts it there, and a regressor would read
+        that as a position it never saw pushing (near the ends, where
+        training saw the pusher slide past without moving the block) and
+        stop the block. Training samples are snapped the same way.
+        """
+        rx, ry = features[0], features[1]
+        to_x, to_y = self.half_x - abs(rx), self.half_y - abs(ry)
+        r = math.hypot(rx, ry)
+        to_rim = self.radius - r
+        snapped = list(features)
+        if min(to_x, to_y) <= to_rim:
+            if to_x <= to_y:
+                snapped[0] = math.copysign(self.half_x, rx)
+            else:
+                snapped[1] = math.copysign(self.half_y, ry)
+        elif r > 0:
+            snapped[0], snapped[1] = rx * self.radius / r, ry * self.radius / r
+        return snapped
+
+    def snap_all(self, x: Array) -> Array:
+        """:meth:`snap` for every row of ``x`` (rows inside the region)."""
+        return np.asarray([self.snap(list(row)) for row in x], dtype=np.float64)
+
+    def slide(self, features: list[float]) -> list[float]:
+        """The free slide's change: the last change, decayed."""
+        return [d * f for d, f in zip(self.decay, features[4:7], strict=True)]
 
 
 @dataclass
@@ -221,17 +366,43 @@ class _BlockSamples:
     runs: list[int] = field(default_factory=list)
 
 
+_NO_ACTION: Action = (0.0, 0.0)
+
+INPUT_GROUPS: dict[str, tuple[int, ...]] = {
+    "position": (0, 1),
+    "velocity": (2, 3),
+    "motion": (4, 5, 6),
+}
+"""The groups of :data:`FEATURES` a regressor's inputs are chosen from."""
+
+DEFAULT_INPUTS = "position,velocity"
+"""The regressors' inputs unless ``--inputs`` says otherwise."""
+
+
+def _parse_inputs(text: str) -> list[int]:
+    groups = [g.strip() for g in text.split(",") if g.strip()]
+    unknown = [g for g in groups if g not in INPUT_GROUPS]
+    if unknown or not groups:
+        raise ValueError(
+            f"inputs must name some of {', '.join(INPUT_GROUPS)}, got {text!r}"
+        )
+    return sorted({i for g in groups for i in INPUT_GROUPS[g]})
+
+
 class BaselineLearner(Learner):
-    """What the baselines share: samples, the actuator gain, lazy fitting, prediction.
+    """What the baselines share: samples, the actuator's gains, the contact gate,
+    lazy fitting, prediction.
 
     Subclasses implement :meth:`_fit_block` (a fitted predictor for one
-    block's standardised samples) and name themselves.
+    block's samples inside its contact region) and name themselves.
     """
 
     capabilities: ClassVar[frozenset[Capability]] = frozenset({Capability.FORWARD})
-    version: ClassVar[str] = "0.1.0"
+    version: ClassVar[str] = "0.2.0"
 
-    def __init__(self, *, verbose: bool = False) -> None:
+    def __init__(self, *, inputs: str = DEFAULT_INPUTS, verbose: bool = False) -> None:
+        self.inputs = _parse_inputs(inputs)
+        """The indices into :data:`FEATURES` the regressor sees (the gate sees all)."""
         self.seed = 0
         """The fold's seed (from :meth:`new_fold`)."""
         self.verbose = verbose
@@ -241,36 +412,54 @@ class BaselineLearner(Learner):
     def _clear(self) -> None:
         self.training = True
         self._stored: StateLike | None = None
+        self._previous: StateLike | None = None
+        self._last_action: Action = _NO_ACTION
+        self._fresh = True
         self._run = -1
         self._samples: dict[int, _BlockSamples] = {}
-        self._actuator_steps: list[tuple[float, float, float, float]] = []  # u, Δp
+        # a·dt, a_prev·dt, Δp of every training message (x and y)
+        self._actuator_steps: list[tuple[float, float, float, float, float, float]] = []
         self._updates = 0
         self._training_runs: set[int] = set()
         self._dirty = False
         self._models: dict[int, Any] = {}
+        self._gates: dict[int, ContactGate] = {}
         self._used: dict[int, int] = {}
-        self._gain = 1.0
+        self._gains = (1.0, 0.0)
 
     # -- the protocol's calls --------------------------------------------------
 
     def new_fold(self, seed: int) -> None:
-        """Forgets every sample and fit; ``seed`` seeds the fold's subsampling."""
+        """Forgets every sample and fit; ``seed`` seeds the fold's randomness."""
         self.seed = seed
         self._clear()
 
     def reset(self, state: StateLike) -> None:
-        """Starts a run (a new cross-validation group) at ``state``."""
+        """Starts a run (a new cross-validation group) at ``state``, at rest."""
         self._stored = state
+        self._previous = None
+        self._last_action = _NO_ACTION
+        self._fresh = True
         self._run += 1
 
     def update(self, state: StateLike, action: Action) -> None:
-        """Records the transition from the stored state into ``state`` (training on)."""
+        """Records the transition from the stored state into ``state`` (training on)
+        and moves the history (previous state and action) one message on."""
         previous = self._stored
         if previous is None:  # no reset before: treat as a new run
-            self._run += 1
-        elif self.training:
-            self._record(previous, state, action)
-        self._stored = state
+            self.reset(state)
+            return
+        # A test run restates its first state as an update from it: no time
+        # passed, so the history must not start a message early (the
+        # actuator's velocity and last action stay those of a resting run).
+        if self._fresh and _same_poses(previous, state):
+            self._stored = state
+            return
+        if self.training:
+            self._record(self._previous, self._last_action, previous, state, action)
+        self._previous, self._stored = previous, state
+        self._last_action = action
+        self._fresh = False
 
     def set_training(self, on: bool) -> None:
         """Turns training on or off (the fit happens at the next prediction with it off)."""
@@ -281,34 +470,53 @@ class BaselineLearner(Learner):
         if not self.training and self._dirty:
             self._fit()
         poses = state.poses()
+        if state is self._stored or (
+            self._stored is not None and _same_poses(state, self._stored)
+        ):
+            before = self._previous.poses() if self._previous is not None else {}
+            last_action = self._last_action
+        else:  # a state outside the run's history: no motion known
+            before, last_action = {}, _NO_ACTION
         dt = 1.0 / self.publish_rate_hz
         out: dict[int, tuple[float, float, float]] = {}
         actuator = poses[ACTUATOR_ID]
-        vx, vy = action
+        g, g_last = self._gains
         out[ACTUATOR_ID] = (
-            actuator.x + self._gain * vx * dt,
-            actuator.y + self._gain * vy * dt,
+            actuator.x + (g * action[0] + g_last * last_action[0]) * dt,
+            actuator.y + (g * action[1] + g_last * last_action[1]) * dt,
             actuator.theta,
         )
         for id_, block in poses.items():
             if id_ == ACTUATOR_ID:
                 continue
-            model = self._models.get(id_)
-            if model is None:
+            gate = self._gates.get(id_)
+            if gate is None:
                 out[id_] = block
                 continue
-            out[id_] = apply_change(
-                block, model.predict_one(block_features(actuator, block, action))
+            features = block_features(
+                actuator,
+                block,
+                before.get(ACTUATOR_ID),
+                before.get(id_),
+                self.publish_rate_hz,
             )
+            model = self._models.get(id_)
+            if model is not None and gate.inside(features):
+                snapped = gate.snap(features)
+                change = model.predict_one([snapped[i] for i in self.inputs])
+            else:
+                change = gate.slide(features)
+            out[id_] = apply_change(block, change)
         return Prediction(out)
 
     def stats(self) -> dict[str, Any]:
         """Sample counts as maps: ``actuator_steps`` and ``block/ID``.
 
         ``update_calls`` counts the training updates, ``inserts`` the samples
-        recorded, ``nodes`` the samples the last fit used. No extras or
-        labels: the driver accepts those only in the built-in models' forms;
-        the fit's choices are in :meth:`describe_fit` (logged with ``verbose``).
+        recorded, ``nodes`` the samples the last fit's regressor used (those in
+        the contact region). No extras or labels: the driver accepts those only
+        in the built-in models' forms; the fit's choices are in
+        :meth:`describe_fit` (logged with ``verbose``).
         """
         maps: dict[str, dict[str, int]] = {
             "actuator_steps": {
@@ -327,8 +535,18 @@ class BaselineLearner(Learner):
 
     @property
     def actuator_gain(self) -> float:
-        """The fitted gain of the actuator's step (1 before any fit)."""
-        return self._gain
+        """The fitted gain of the action in force (1 before any fit)."""
+        return self._gains[0]
+
+    @property
+    def actuator_gains(self) -> tuple[float, float]:
+        """The fitted gains of the action in force and of the one before it."""
+        return self._gains
+
+    @property
+    def gates(self) -> dict[int, ContactGate]:
+        """The last fit's contact gate per block id."""
+        return dict(self._gates)
 
     @property
     def training_runs(self) -> int:
@@ -339,44 +557,101 @@ class BaselineLearner(Learner):
         """The last fit's choices, one line per block (empty before any fit)."""
         return []
 
+    def describe_gates(self) -> list[str]:
+        """The last fit's contact gates, one line per block."""
+        return [
+            f"block {id_}: contact |x| ≤ {g.half_x:.4f}, |y| ≤ {g.half_y:.4f}, "
+            f"|r| ≤ {g.radius:.4f} ({g.pushed} pushed samples), slide decay "
+            + ", ".join(f"{d:.3f}" for d in g.decay)
+            for id_, g in sorted(self._gates.items())
+        ]
+
     # -- samples and fitting ---------------------------------------------------
 
-    def _record(self, before: StateLike, after: StateLike, action: Action) -> None:
+    def _record(
+        self,
+        earlier: StateLike | None,
+        last_action: Action,
+        before: StateLike,
+        after: StateLike,
+        action: Action,
+    ) -> None:
         old, new = before.poses(), after.poses()
+        first = earlier.poses() if earlier is not None else {}
         self._updates += 1
         self._training_runs.add(self._run)
         a0, a1 = old[ACTUATOR_ID], new[ACTUATOR_ID]
         dt = 1.0 / self.publish_rate_hz
         self._actuator_steps.append(
-            (action[0] * dt, action[1] * dt, a1.x - a0.x, a1.y - a0.y)
+            (
+                action[0] * dt,
+                action[1] * dt,
+                last_action[0] * dt,
+                last_action[1] * dt,
+                a1.x - a0.x,
+                a1.y - a0.y,
+            )
         )
         for id_, block in old.items():
             if id_ == ACTUATOR_ID or id_ not in new:
                 continue
             samples = self._samples.setdefault(id_, _BlockSamples())
-            samples.inputs.append(block_features(a0, block, action))
+            samples.inputs.append(
+                block_features(
+                    a0,
+                    block,
+                    first.get(ACTUATOR_ID),
+                    first.get(id_),
+                    self.publish_rate_hz,
+                )
+            )
             samples.outputs.append(block_change(block, new[id_]))
             samples.runs.append(self._run)
         self._dirty = True
 
+    def _fit_actuator(self) -> None:
+        steps = np.asarray(self._actuator_steps, dtype=np.float64).reshape(-1, 6)
+        # Both axes share the gains: rows (a_x, a_prev_x) → Δx and (a_y, a_prev_y) → Δy.
+        design = np.concatenate([steps[:, [0, 2]], steps[:, [1, 3]]])
+        target = np.concatenate([steps[:, 4], steps[:, 5]])
+        gram = design.T @ design
+        if np.linalg.matrix_rank(gram) == 2:
+            g, g_last = np.linalg.solve(gram, design.T @ target)
+            self._gains = (float(g), float(g_last))
+        elif float(gram[0, 0]) > 0:  # one action throughout: the gain alone
+            self._gains = (float(design[:, 0] @ target / gram[0, 0]), 0.0)
+        else:
+            self._gains = (1.0, 0.0)
+
     def _fit(self) -> None:
-        steps = np.asarray(self._actuator_steps, dtype=np.float64).reshape(-1, 4)
-        denominator = float(np.sum(steps[:, :2] ** 2))
-        self._gain = (
-            float(np.sum(steps[:, :2] * steps[:, 2:]) / denominator)
-            if denominator
-            else 1.0
-        )
+        self._fit_actuator()
         self._models = {}
+        self._gates = {}
         self._used = {}
         for id_, samples in sorted(self._samples.items()):
             x = np.asarray(samples.inputs, dtype=np.float64)
             y = np.asarray(samples.outputs, dtype=np.float64)
             runs = np.asarray(samples.runs, dtype=np.int64)
-            self._models[id_], self._used[id_] = self._fit_block(id_, x, y, runs)
+            gate = ContactGate.fit(x, y)
+            self._gates[id_] = gate
+            inside = gate.inside_all(x)
+            if inside.any():
+                self._models[id_], self._used[id_] = self._fit_block(
+                    id_,
+                    gate.snap_all(x[inside])[:, self.inputs],
+                    y[inside],
+                    runs[inside],
+                )
+            else:
+                self._used[id_] = 0
         self._dirty = False
         if self.verbose:
-            lines = [f"actuator gain {self._gain:.6f}", *self.describe_fit()]
+            g, g_last = self._gains
+            lines = [
+                f"actuator gains {g:.6f} (action), {g_last:.6f} (last action)",
+                *self.describe_gates(),
+                *self.describe_fit(),
+            ]
             for line in lines:
                 sys.stderr.write(f"{self.display_name} (seed {self.seed}): {line}\n")
             sys.stderr.flush()
@@ -384,12 +659,23 @@ class BaselineLearner(Learner):
     def _fit_block(
         self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
     ) -> tuple[Any, int]:
-        """A fitted predictor (``predict_one(features) -> change``) and the number of
-        samples it used."""
+        """A fitted predictor (``predict_one(features) -> change``) of one block's
+        samples in its contact region, and the number of samples it used."""
         raise NotImplementedError
 
 
+def _same_poses(a: StateLike, b: StateLike) -> bool:
+    return a is b or a.poses() == b.poses()
+
+
 def _verbose_option(parser: ArgumentParser) -> None:
+    parser.add_argument(
+        "--inputs",
+        default=DEFAULT_INPUTS,
+        help="the feature groups the regressor sees, comma-separated, of "
+        f"{', '.join(INPUT_GROUPS)} (default {DEFAULT_INPUTS}; the contact gate "
+        "always sees all)",
+    )
     parser.add_argument(
         "--verbose", action="store_true", help="log every fit's choices to stderr"
     )
@@ -457,14 +743,16 @@ class KnnLearner(BaselineLearner):
 
     name: ClassVar[str] = "knn"
 
-    def __init__(self, max_k: int = 50, *, verbose: bool = False) -> None:
+    def __init__(
+        self, max_k: int = 50, *, inputs: str = DEFAULT_INPUTS, verbose: bool = False
+    ) -> None:
         if max_k < 1:
             raise ValueError(f"max_k must be at least 1, got {max_k}")
         self.max_k = max_k
         """The largest ``k`` tried."""
         self.choices: dict[int, CvChoice] = {}
         """The last fit's cross-validation per block id."""
-        super().__init__(verbose=verbose)
+        super().__init__(inputs=inputs, verbose=verbose)
 
     @classmethod
     def from_args(cls, argv: list[str]) -> KnnLearner:
@@ -476,7 +764,7 @@ class KnnLearner(BaselineLearner):
         _verbose_option(parser)
         args = parser.parse_args(argv)
         try:
-            return cls(max_k=args.max_k, verbose=args.verbose)
+            return cls(max_k=args.max_k, inputs=args.inputs, verbose=args.verbose)
         except ValueError as err:
             raise UsageError(f"knn: {err}") from None
 
@@ -547,11 +835,20 @@ class KnnLearner(BaselineLearner):
 _GP_JITTER = 1e-10
 """Added to the kernel matrix's diagonal: ``GaussianProcessRegressor``'s ``alpha``."""
 
-_GP_THETA0 = np.log([1.0, 1.0, 1.0, 1.0, 1.0, 1e-2])
-"""The kernel's initial hyper-parameters (amplitude, four length scales, noise), as logs."""
 
-_GP_BOUNDS = np.log([(1e-3, 1e3)] + [(1e-2, 1e3)] * 4 + [(1e-10, 1e1)])
-"""Their bounds, as logs."""
+def _gp_theta0(inputs: int = len(FEATURES)) -> Array:
+    """The kernel's initial hyper-parameters (amplitude, one length scale per
+    input, noise), as logs."""
+    return np.log([1.0] + [1.0] * inputs + [1e-2])
+
+
+def _gp_bounds(inputs: int = len(FEATURES)) -> Array:
+    """Their bounds, as logs."""
+    return np.log([(1e-3, 1e3)] + [(1e-2, 1e3)] * inputs + [(1e-10, 1e1)])
+
+
+_GP_THETA0 = _gp_theta0()
+"""The initial hyper-parameters for :data:`FEATURES`."""
 
 
 def _gp_neg_log_likelihood(
@@ -625,11 +922,11 @@ class _GpPredictor:
         sqdiff = _squared_differences(xs)
         result = scipy.optimize.minimize(
             _gp_neg_log_likelihood,
-            _GP_THETA0,
+            _gp_theta0(xs.shape[1]),
             args=(sqdiff, yn),
             method="L-BFGS-B",
             jac=True,
-            bounds=_GP_BOUNDS,
+            bounds=_gp_bounds(xs.shape[1]),
         )
         theta = result.x
         self.evaluations = int(result.nfev)
@@ -681,7 +978,13 @@ class GpLearner(BaselineLearner):
 
     name: ClassVar[str] = "gp"
 
-    def __init__(self, max_samples: int = 600, *, verbose: bool = False) -> None:
+    def __init__(
+        self,
+        max_samples: int = 600,
+        *,
+        inputs: str = DEFAULT_INPUTS,
+        verbose: bool = False,
+    ) -> None:
         if max_samples < 1:
             raise ValueError(f"max_samples must be at least 1, got {max_samples}")
         self.max_samples = max_samples
@@ -690,7 +993,7 @@ class GpLearner(BaselineLearner):
         """The last fit's optimised kernel per block id."""
         self.subsamples: dict[int, list[int]] = {}
         """The sample indices the last fit used per block id."""
-        super().__init__(verbose=verbose)
+        super().__init__(inputs=inputs, verbose=verbose)
 
     @classmethod
     def from_args(cls, argv: list[str]) -> GpLearner:
@@ -705,7 +1008,9 @@ class GpLearner(BaselineLearner):
         _verbose_option(parser)
         args = parser.parse_args(argv)
         try:
-            return cls(max_samples=args.max_samples, verbose=args.verbose)
+            return cls(
+                max_samples=args.max_samples, inputs=args.inputs, verbose=args.verbose
+            )
         except ValueError as err:
             raise UsageError(f"gp: {err}") from None
 
@@ -740,22 +1045,284 @@ class GpLearner(BaselineLearner):
         ]
 
 
-BASELINES: dict[str, type[BaselineLearner]] = {"knn": KnnLearner, "gp": GpLearner}
+def _member_seed(seed: int, block_id: int, member: int) -> int:
+    """A member's ``random_state``: the fold's seed, the block and the member mixed."""
+    state = np.random.SeedSequence([seed, block_id, member]).generate_state(1)
+    return int(state[0])
+
+
+class _Ensemble:
+    """An ensemble of small MLPs (scikit-learn's ``MLPRegressor``) of one block,
+    trained by ``partial_fit`` only; inputs and outputs standardised with the
+    statistics of the block's memory at the time of each training call. Its
+    prediction is the members' mean, computed here by their weights (ReLU
+    hidden layers, a linear output), as ``MLPRegressor.predict`` does."""
+
+    def __init__(
+        self,
+        seed: int,
+        block_id: int,
+        members: int,
+        hidden: tuple[int, ...],
+        learning_rate: float,
+    ) -> None:
+        from sklearn.neural_network import MLPRegressor
+
+        self.members = [
+            MLPRegressor(
+                hidden_layer_sizes=hidden,
+                activation="relu",
+                solver="adam",
+                learning_rate_init=learning_rate,
+                alpha=1e-4,
+                batch_size=32,
+                shuffle=True,
+                random_state=_member_seed(seed, block_id, m),
+            )
+            for m in range(members)
+        ]
+        self.calls = 0
+        """How many ``partial_fit`` calls each member has had."""
+        self._x_mean: Array = np.zeros(0)
+        self._x_scale: Array = np.ones(0)
+        self._y_mean: Array = np.zeros(3)
+        self._y_scale: Array = np.ones(3)
+        self._y_constant: NDArray[np.bool_] = np.zeros(3, dtype=bool)
+
+    def scale_by(self, x: Array, y: Array) -> None:
+        """Standardises with the statistics of ``x`` and ``y`` from now on."""
+        self._x_mean, self._x_scale = _mean_scale(x)
+        self._y_mean, self._y_scale = _mean_scale(y)
+        self._y_constant = np.ptp(y, axis=0) == 0
+
+    def partial_fit(self, x: Array, y: Array) -> None:
+        """One pass of every member over ``(x, y)`` (raw features and changes)."""
+        import warnings
+
+        xs = (x - self._x_mean) / self._x_scale
+        ys = (y - self._y_mean) / self._y_scale
+        with warnings.catch_warnings():
+            # A call with fewer samples than a minibatch is one minibatch.
+            warnings.filterwarnings("ignore", message="Got `batch_size`")
+            for member in self.members:
+                member.partial_fit(xs, ys)
+        self.calls += 1
+
+    def predict_one(self, features: list[float]) -> Array:
+        z = (np.asarray(features, dtype=np.float64) - self._x_mean) / self._x_scale
+        total = np.zeros(3)
+        for member in self.members:
+            a = z
+            last = len(member.coefs_) - 1
+            for layer, (w, b) in enumerate(
+                zip(member.coefs_, member.intercepts_, strict=True)
+            ):
+                a = a @ w + b
+                if layer < last:
+                    a = np.maximum(a, 0.0)
+            total += a
+        out = total / len(self.members) * self._y_scale + self._y_mean
+        # An output that never varied is that constant, not a network's noise.
+        return np.where(self._y_constant, self._y_mean, out)
+
+
+def _mean_scale(x: Array) -> tuple[Array, Array]:
+    """``StandardScaler``'s mean and scale: a constant column is left unscaled."""
+    mean = x.mean(axis=0)
+    scale = x.std(axis=0)
+    scale[scale < _EPS_STD] = 1.0
+    return mean, scale
+
+
+class MlpLearner(BaselineLearner):
+    """An ensemble of small MLPs per block (scikit-learn's ``MLPRegressor``),
+    trained online by ``partial_fit`` on every batch of new samples as they
+    arrive, then for a few epochs over the memory when training ends; the
+    members' mean is the prediction (module documentation)."""
+
+    name: ClassVar[str] = "mlp"
+
+    def __init__(
+        self,
+        members: int = 5,
+        hidden: tuple[int, ...] = (64, 64),
+        batch: int = 64,
+        epochs: int = 30,
+        learning_rate: float = 1e-3,
+        *,
+        inputs: str = DEFAULT_INPUTS,
+        verbose: bool = False,
+    ) -> None:
+        if members < 1:
+            raise ValueError(f"members must be at least 1, got {members}")
+        if not hidden or min(hidden) < 1:
+            raise ValueError(f"hidden layers need at least one unit each, got {hidden}")
+        if batch < 1:
+            raise ValueError(f"batch must be at least 1, got {batch}")
+        if epochs < 0:
+            raise ValueError(f"epochs must not be negative, got {epochs}")
+        if not learning_rate > 0:
+            raise ValueError(f"learning rate must be positive, got {learning_rate}")
+        self.members = members
+        """Networks per block."""
+        self.hidden = tuple(hidden)
+        """Units of each hidden layer."""
+        self.batch = batch
+        """New samples (of every block) between two online training calls."""
+        self.epochs = epochs
+        """Passes over the memory when training ends."""
+        self.learning_rate = learning_rate
+        """Adam's step size."""
+        self.ensembles: dict[int, _Ensemble] = {}
+        """Each block's ensemble."""
+        super().__init__(inputs=inputs, verbose=verbose)
+
+    @classmethod
+    def from_args(cls, argv: list[str]) -> MlpLearner:
+        """``[--members N] [--hidden N,N] [--batch N] [--epochs N]
+        [--learning-rate X] [--inputs …] [--verbose]``."""
+        parser = ArgumentParser(
+            prog="mlp",
+            description="online ensemble-of-MLPs baseline (scikit-learn's "
+            "MLPRegressor.partial_fit on each batch of new samples during "
+            "training, a few epochs over the memory when it ends; the members' "
+            "mean is the prediction; seeded from the fold's seed)",
+        )
+        parser.add_argument(
+            "--members", type=int, default=5, help="networks per block (default 5)"
+        )
+        parser.add_argument(
+            "--hidden",
+            default="64,64",
+            help="units per hidden layer, comma-separated (default 64,64)",
+        )
+        parser.add_argument(
+            "--batch",
+            type=int,
+            default=64,
+            help="new samples between two online training calls (default 64)",
+        )
+        parser.add_argument(
+            "--epochs",
+            type=int,
+            default=30,
+            help="passes over the memory when training ends (default 30)",
+        )
+        parser.add_argument(
+            "--learning-rate",
+            type=float,
+            default=1e-3,
+            help="Adam's step size (default 0.001)",
+        )
+        _verbose_option(parser)
+        args = parser.parse_args(argv)
+        try:
+            hidden = tuple(int(v) for v in args.hidden.split(","))
+            return cls(
+                members=args.members,
+                hidden=hidden,
+                batch=args.batch,
+                epochs=args.epochs,
+                learning_rate=args.learning_rate,
+                inputs=args.inputs,
+                verbose=args.verbose,
+            )
+        except ValueError as err:
+            raise UsageError(f"mlp: {err}") from None
+
+    def _clear(self) -> None:
+        super()._clear()
+        self.ensembles = {}
+        self._pending = 0
+
+    def _ensemble(self, block_id: int) -> _Ensemble:
+        if block_id not in self.ensembles:
+            self.ensembles[block_id] = _Ensemble(
+                self.seed, block_id, self.members, self.hidden, self.learning_rate
+            )
+        return self.ensembles[block_id]
+
+    def _record(
+        self,
+        earlier: StateLike | None,
+        last_action: Action,
+        before: StateLike,
+        after: StateLike,
+        action: Action,
+    ) -> None:
+        super()._record(earlier, last_action, before, after, action)
+        self._pending += 1
+        if self._pending >= self.batch:
+            self._train_online(self._pending)
+            self._pending = 0
+
+    def _train_online(self, new: int) -> None:
+        """One training call of every block's ensemble on its last ``new`` samples
+        in the contact region as the samples so far draw it; the ensemble then
+        predicts (behind that gate) until the next call or the final fit."""
+        for id_, samples in sorted(self._samples.items()):
+            x = np.asarray(samples.inputs, dtype=np.float64)
+            y = np.asarray(samples.outputs, dtype=np.float64)
+            gate = ContactGate.fit(x, y)
+            inside = gate.inside_all(x)
+            if not inside.any():
+                continue
+            recent = inside.copy()
+            recent[: max(0, len(x) - new)] = False
+            if not recent.any():
+                continue
+            xs = gate.snap_all(x[inside])[:, self.inputs]
+            ensemble = self._ensemble(id_)
+            ensemble.scale_by(xs, y[inside])
+            ensemble.partial_fit(gate.snap_all(x[recent])[:, self.inputs], y[recent])
+            self._gates[id_] = gate
+            self._models[id_] = ensemble
+            self._used[id_] = int(inside.sum())
+
+    def _fit_block(
+        self, block_id: int, x: Array, y: Array, runs: NDArray[np.int64]
+    ) -> tuple[Any, int]:
+        ensemble = self._ensemble(block_id)
+        ensemble.scale_by(x, y)
+        for _ in range(self.epochs):
+            ensemble.partial_fit(x, y)
+        return ensemble, len(x)
+
+    def _fit(self) -> None:
+        self._pending = 0
+        super()._fit()
+
+    def describe_fit(self) -> list[str]:
+        """``block ID: M members, hidden …, C training calls`` per block."""
+        return [
+            f"block {id_}: {len(e.members)} members, hidden {self.hidden}, "
+            f"{e.calls} training calls"
+            for id_, e in sorted(self.ensembles.items())
+        ]
+
+
+BASELINES: dict[str, type[BaselineLearner]] = {
+    "knn": KnnLearner,
+    "gp": GpLearner,
+    "mlp": MlpLearner,
+}
 """The baselines by the name ``python -m pushlearn.baselines`` takes."""
 
 
 def main(argv: list[str] | None = None) -> int:
-    """``python -m pushlearn.baselines knn|gp [--listen HOST:PORT] [OPTIONS]``."""
+    """``python -m pushlearn.baselines knn|gp|mlp [--listen HOST:PORT] [OPTIONS]``."""
     from .serve import main as serve_main
 
     args = list(sys.argv[1:] if argv is None else argv)
-    usage = "usage: python -m pushlearn.baselines knn|gp [--listen HOST:PORT] [OPTIONS]"
+    usage = (
+        "usage: python -m pushlearn.baselines knn|gp|mlp [--listen HOST:PORT] [OPTIONS]"
+    )
     if not args or args[0] in ("-h", "--help"):
         print(usage + "\n\n" + (__doc__ or "").split("\n\n", 1)[0])
         return 0 if args else 2
     if args[0] not in BASELINES:
         print(
-            f"pushlearn.baselines: unknown baseline {args[0]!r} (choose knn or gp)\n{usage}",
+            f"pushlearn.baselines: unknown baseline {args[0]!r} (choose knn, gp or mlp)\n{usage}",
             file=sys.stderr,
         )
         return 2
