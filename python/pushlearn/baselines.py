@@ -148,11 +148,11 @@ from .learner import (
 
 __all__ = [
     "BaselineLearner",
+    "ContactGate",
     "CvChoice",
     "GpLearner",
     "KnnLearner",
     "MlpLearner",
-    "ContactGate",
     "apply_change",
     "block_change",
     "block_features",
@@ -268,12 +268,13 @@ class ContactGate:
     def fit(cls, x: Array, y: Array) -> ContactGate:
         """The gate of one block's samples (inputs :func:`block_features`, outputs
         :func:`block_change`)."""
-        moved = np.max(np.abs(y), axis=1) > MOVED
         before = np.linalg.norm(x[:, 4:6], axis=1)
         now = np.linalg.norm(y[:, :2], axis=1)
         turn_before, turn_now = np.abs(x[:, 6]), np.abs(y[:, 2])
-        steady = (now >= SLIDING * before) | (turn_now >= SLIDING * turn_before)
-        pushed = moved & steady
+        # Pushed: a translation or a turn that did not fade as a slide does.
+        pushed = ((now > MOVED) & (now >= SLIDING * before)) | (
+            (turn_now > MOVED) & (turn_now >= SLIDING * turn_before)
+        )
         gate = cls(pushed=int(pushed.sum()))
         if pushed.any():
             rel = x[pushed, :2]
@@ -836,19 +837,19 @@ _GP_JITTER = 1e-10
 """Added to the kernel matrix's diagonal: ``GaussianProcessRegressor``'s ``alpha``."""
 
 
-def _gp_theta0(inputs: int = len(FEATURES)) -> Array:
+def _gp_theta0(inputs: int) -> Array:
     """The kernel's initial hyper-parameters (amplitude, one length scale per
     input, noise), as logs."""
     return np.log([1.0] + [1.0] * inputs + [1e-2])
 
 
-def _gp_bounds(inputs: int = len(FEATURES)) -> Array:
+def _gp_bounds(inputs: int) -> Array:
     """Their bounds, as logs."""
     return np.log([(1e-3, 1e3)] + [(1e-2, 1e3)] * inputs + [(1e-10, 1e1)])
 
 
-_GP_THETA0 = _gp_theta0()
-"""The initial hyper-parameters for :data:`FEATURES`."""
+_GP_THETA0 = _gp_theta0(len(_parse_inputs(DEFAULT_INPUTS)))
+"""The initial hyper-parameters for the default inputs."""
 
 
 def _gp_neg_log_likelihood(
@@ -1093,7 +1094,7 @@ class _Ensemble:
         """Standardises with the statistics of ``x`` and ``y`` from now on."""
         self._x_mean, self._x_scale = _mean_scale(x)
         self._y_mean, self._y_scale = _mean_scale(y)
-        self._y_constant = np.ptp(y, axis=0) == 0
+        self._y_constant = y.std(axis=0) < _EPS_STD
 
     def partial_fit(self, x: Array, y: Array) -> None:
         """One pass of every member over ``(x, y)`` (raw features and changes)."""
@@ -1320,6 +1321,14 @@ def main(argv: list[str] | None = None) -> int:
     if not args or args[0] in ("-h", "--help"):
         print(usage + "\n\n" + (__doc__ or "").split("\n\n", 1)[0])
         return 0 if args else 2
+    if args[0] in BASELINES and any(a in ("-h", "--help") for a in args[1:]):
+        # The learner's own options, not the server's (which `--help` alone shows).
+        print(f"{usage}\n\n{args[0]}: {BASELINES[args[0]].__doc__ or ''}\n")
+        try:
+            BASELINES[args[0]].from_args(["--help"])
+        except SystemExit as done:
+            return int(done.code or 0)
+        return 0
     if args[0] not in BASELINES:
         print(
             f"pushlearn.baselines: unknown baseline {args[0]!r} (choose knn, gp or mlp)\n{usage}",
