@@ -495,6 +495,14 @@ def test_the_contact_gate_is_where_the_block_was_pushed() -> None:
         [0.1, -0.075]
     )
     assert gate.snap([0.19, 0.0, 0, 0, 0, 0, 0])[:2] == pytest.approx([0.2, 0.0])
+    # Moving, it goes back along its path: near the region's end the nearest
+    # boundary is the end (x = 0.2), but it came through the face.
+    assert gate.snap([0.19, -0.06, 0.0, 0.5, 0, 0, 0])[:2] == pytest.approx(
+        [0.19, -0.075]
+    )
+    assert gate.snap([0.19, -0.06, 0.3, 0.4, 0, 0, 0])[:2] == pytest.approx(
+        [0.19 - 0.015 * 0.75, -0.075]
+    )
 
 
 def test_a_round_block_gates_by_its_rim() -> None:
@@ -574,6 +582,11 @@ def test_the_mlp_learns_the_push_online_and_at_the_end() -> None:
     assert learner.ensembles[15].calls == 2 + 2 + 20  # the final epochs
     assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.05)
     assert p.blocks[15].theta == 0.0  # an output that never varied stays exact
+    # Far from anything it saw, the ensemble's change stays within those seen.
+    ensemble = learner.ensembles[15]
+    wild = ensemble.predict_one([5.0, -3.0, 40.0, -20.0])
+    outputs = np.asarray(learner._samples[15].outputs)
+    assert np.all(wild >= outputs.min(axis=0)) and np.all(wild <= outputs.max(axis=0))
 
 
 def test_the_mlp_is_deterministic_given_the_fold_seed() -> None:
