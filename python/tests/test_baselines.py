@@ -24,6 +24,7 @@ from pushlearn._pb import learner_pb2
 from pushlearn.baselines import (
     _GP_THETA0,
     FEATURES,
+    GP_STRETCHES,
     BaselineLearner,
     ContactGate,
     GpLearner,
@@ -630,3 +631,20 @@ def test_the_mlp_explains_itself() -> None:
         check=False,
     )
     assert b"knn|gp|mlp" in top.stdout
+
+
+def test_the_gp_stretches_its_length_scales_by_cross_validation_over_runs() -> None:
+    learner = GpLearner(max_samples=200)
+    train(learner, [-0.04, 0.0, 0.04])
+    chained_test_run(learner, 0.02)
+    model = learner._models[15]
+    assert set(model.stretch_scores) == set(GP_STRETCHES)
+    assert model.stretch == min(
+        model.stretch_scores, key=lambda f: (model.stretch_scores[f], f)
+    )
+    assert "stretched" in learner.kernels[15]
+    # One run: nothing between runs to validate on, the likelihood's scales.
+    single = GpLearner(max_samples=200)
+    train(single, [0.0])
+    chained_test_run(single, 0.0)
+    assert single._models[15].stretch == 1.0 and not single._models[15].stretch_scores
