@@ -23,9 +23,13 @@ from pushlearn import Prediction, State
 from pushlearn._pb import learner_pb2
 from pushlearn.baselines import (
     _GP_THETA0,
+    FEATURES,
+    GP_STRETCHES,
     BaselineLearner,
+    ContactGate,
     GpLearner,
     KnnLearner,
+    MlpLearner,
     _gp_neg_log_likelihood,
     _GpPredictor,
     _KnnPredictor,
@@ -67,8 +71,20 @@ def chained_test_run(learner: BaselineLearner, x0: float) -> tuple[Prediction, S
 
 def test_features_are_in_the_block_frame() -> None:
     block = Pose(1.0, 2.0, math.pi / 2)  # turned a quarter: its x axis is the world's y
-    f = block_features(Pose(1.0, 2.5, 0.0), block, (0.0, 0.5))
-    assert f == pytest.approx([0.5, 0.0, 0.5, 0.0])
+    # A run's first message: no velocity, no motion yet.
+    f = block_features(Pose(1.0, 2.5, 0.0), block)
+    assert f == pytest.approx([0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    # The actuator came 5 mm along the world's y (the block's x) in 1/100 s;
+    # the block came 2 mm along the world's −x (its y) and turned 0.01 rad.
+    f = block_features(
+        Pose(1.0, 2.5, 0.0),
+        block,
+        Pose(1.0, 2.495, 0.0),
+        Pose(1.002, 2.0, math.pi / 2 - 0.01),
+        100.0,
+    )
+    assert f == pytest.approx([0.5, 0.0, 0.5, 0.0, 0.0, 0.002, 0.01])
+    assert len(f) == len(FEATURES)
     after = apply_change(block, [0.1, 0.0, 0.2])
     assert after == pytest.approx((1.0, 2.1, math.pi / 2 + 0.2))
     assert block_change(block, after) == pytest.approx([0.1, 0.0, 0.2])
@@ -176,7 +192,6 @@ def test_knn_cross_validates_over_the_training_runs_only() -> None:
     choice = learner.choices[15]
     assert choice.method == "GroupKFold"
     assert sorted(set(choice.groups)) == [0, 1, 2]  # the three runs between resets
-    assert len(choice.groups) == samples_after_training
     assert len(choice.splits) == 3
     groups = np.asarray(choice.groups)
     for train_idx, val_idx in choice.splits:
@@ -187,6 +202,13 @@ def test_knn_cross_validates_over_the_training_runs_only() -> None:
     assert (choice.k, choice.weights) == min(
         choice.scores, key=lambda key: choice.scores[key]
     )
+    # The regressor learns only inside the contact gate: the messages of the
+    # approach, far from the block, are not its samples.
+    inside = learner.gates[15].inside_all(
+        np.asarray(learner._samples[15].inputs, dtype=np.float64)
+    )
+    assert 0 < inside.sum() < samples_after_training
+    assert len(choice.groups) == inside.sum()
 
 
 def test_knn_with_one_run_validates_on_contiguous_segments() -> None:
@@ -229,7 +251,9 @@ def test_new_fold_forgets_everything() -> None:
     assert p.blocks[15].y == pytest.approx(0.25)  # the prior again
 
 
-@pytest.mark.parametrize("make", [KnnLearner, lambda: GpLearner(max_samples=100)])
+@pytest.mark.parametrize(
+    "make", [KnnLearner, lambda: GpLearner(max_samples=100), MlpLearner]
+)
 def test_stats_are_in_the_reports_form(make: type[BaselineLearner]) -> None:
     learner = make()
     train(learner, [-0.02, 0.02])
@@ -250,6 +274,10 @@ def test_stats_are_in_the_reports_form(make: type[BaselineLearner]) -> None:
     [
         (lambda: KnnLearner(max_k=0), "max_k"),
         (lambda: GpLearner(max_samples=0), "max_samples"),
+        (lambda: MlpLearner(members=0), "members"),
+        (lambda: MlpLearner(hidden=(8, 0)), "hidden"),
+        (lambda: MlpLearner(epochs=-1), "epochs"),
+        (lambda: KnnLearner(inputs="position,colour"), "inputs"),
     ],
 )
 def test_bad_parameters_are_refused(make: type[BaselineLearner], message: str) -> None:
@@ -287,7 +315,7 @@ def test_the_baselines_are_served_by_their_command_line() -> None:
         )
     )
     script.add(get_stats=learner_pb2.GetStats())
-    for name in ("knn", "gp"):
+    for name in ("knn", "gp", "mlp"):
         done = subprocess.run(
             [sys.executable, "-m", "pushlearn.baselines", name],
             input=script.bytes(),
@@ -330,7 +358,8 @@ def test_verbose_fits_log_their_choices(capsys: pytest.CaptureFixture[str]) -> N
     train(learner, [-0.02, 0.02])
     chained_test_run(learner, 0.0)
     err = capsys.readouterr().err
-    assert "knn (seed 7): actuator gain 1.000000" in err
+    assert "knn (seed 7): actuator gains 1.000000 (action), 0.000000 (last" in err
+    assert "knn (seed 7): block 15: contact |x| ≤ 0.0" in err
     assert "knn (seed 7): block 15: k=" in err and "GroupKFold, 2 folds, 2 runs" in err
 
 
@@ -427,3 +456,195 @@ def test_knn_predicts_as_sklearn_does(k: int, weights: str) -> None:
         assert ours.predict_one(list(q)) == pytest.approx(
             expected, rel=1e-12, abs=1e-15
         )
+
+
+def pushed_samples() -> tuple[np.ndarray, np.ndarray]:
+    """Samples of a block pushed along its y at 5 mm per message from behind its
+    face (y = −0.075), at offsets |x| ≤ 0.2, then sliding free (the actuator
+    gone, each change 0.7 of the last), and the actuator far off."""
+    x, y = [], []
+    for rx in np.linspace(-0.2, 0.2, 9):
+        for _ in range(5):
+            x.append([rx, -0.075, 0.0, 0.5, 0.0, 0.005, 0.0])
+            y.append([0.0, 0.005, 0.0])
+    change = 0.005
+    for _ in range(6):  # the slide after release, the actuator beside the block
+        x.append([0.3, -0.05, 0.0, 0.5, 0.0, change, 0.0])
+        change *= 0.7
+        y.append([0.0, change, 0.0])
+    x.append([0.0, -0.3, 0.0, 0.5, 0.0, 0.0, 0.0])  # approaching: nothing moves
+    y.append([0.0, 0.0, 0.0])
+    return np.asarray(x), np.asarray(y)
+
+
+def test_the_contact_gate_is_where_the_block_was_pushed() -> None:
+    gate = ContactGate.fit(*pushed_samples())
+    # The slide after release did not widen the region (its changes shrank).
+    assert (gate.half_x, gate.half_y) == pytest.approx((0.2, 0.075))
+    assert gate.radius == pytest.approx(math.hypot(0.2, 0.075))
+    assert gate.pushed == 45
+    assert gate.inside([0.1, -0.07, 0, 0, 0, 0, 0])
+    assert not gate.inside([0.1, -0.08, 0, 0, 0, 0, 0])
+    assert not gate.inside([0.25, -0.07, 0, 0, 0, 0, 0])
+    # Outside, the block slides on: the last change times the learned decay.
+    assert gate.decay[1] == pytest.approx(0.7)
+    assert gate.slide([0.3, -0.3, 0, 0, 0, 0.002, 0]) == pytest.approx(
+        [0.0, 0.0014, 0.0]
+    )
+    # A pusher inside the region is put back on the nearest contact surface.
+    assert gate.snap([0.1, -0.06, 0.0, 0.5, 0, 0, 0])[:2] == pytest.approx(
+        [0.1, -0.075]
+    )
+    assert gate.snap([0.19, 0.0, 0, 0, 0, 0, 0])[:2] == pytest.approx([0.2, 0.0])
+    # Moving, it goes back along its path: near the region's end the nearest
+    # boundary is the end (x = 0.2), but it came through the face.
+    assert gate.snap([0.19, -0.06, 0.0, 0.5, 0, 0, 0])[:2] == pytest.approx(
+        [0.19, -0.075]
+    )
+    assert gate.snap([0.19, -0.06, 0.3, 0.4, 0, 0, 0])[:2] == pytest.approx(
+        [0.19 - 0.015 * 0.75, -0.075]
+    )
+
+
+def test_a_round_block_gates_by_its_rim() -> None:
+    angles = np.linspace(0, 2 * math.pi, 16, endpoint=False)
+    x = [[0.1 * math.cos(a), 0.1 * math.sin(a), 0, 0.5, 0, 0.0, 0] for a in angles]
+    y = [[0.0, 0.005, 0.0]] * len(x)
+    gate = ContactGate.fit(np.asarray(x), np.asarray(y))
+    assert gate.radius == pytest.approx(0.1)
+    assert gate.inside([0.05, 0.05, 0, 0, 0, 0, 0])
+    # In the box the rim spans but beyond the rim: no contact.
+    assert not gate.inside([0.09, 0.09, 0, 0, 0, 0, 0])
+    assert gate.snap([0.03, 0.04, 0, 0, 0, 0, 0])[:2] == pytest.approx([0.06, 0.08])
+
+
+def test_a_block_beyond_the_contact_region_does_not_move() -> None:
+    learner = KnnLearner()
+    train(learner, [-0.03, 0.0, 0.03])
+    state = synthetic_state((0.5, 0.1), (0.0, 0.25, 0.3))
+    learner.reset(state)
+    p = learner.predict(state, PUSH)
+    assert tuple(p.blocks[15]) == pytest.approx((0.0, 0.25, 0.3), abs=1e-12)
+    # Without the gate, the nearest pushing samples would have moved it.
+    assert learner.gates[15].half_x < 0.1
+
+
+def test_a_test_runs_restated_first_state_starts_no_history() -> None:
+    learner = KnnLearner()
+    train(learner, [0.0])
+    run = synthetic_run(0.0)
+    learner.reset(run[0])
+    learner.update(run[0], PUSH)  # the driver's first update of a test run
+    assert learner._previous is None and learner._last_action == (0.0, 0.0)
+    learner.update(run[1], PUSH)
+    assert learner._previous is run[0] and learner._last_action == PUSH
+
+
+def test_the_actuator_is_fitted_on_the_action_and_the_last_one() -> None:
+    # A world whose actuator moves by the mean of this and the last action:
+    # one message of latency, half the time.
+    learner = KnnLearner()
+    learner.start("push-task", 100)
+    learner.new_fold(1)
+    rng = np.random.default_rng(3)
+    x, last = 0.0, (0.0, 0.0)
+    state = synthetic_state((x, 0.0), (0.0, 0.25, 0.0))
+    learner.reset(state)
+    for _ in range(60):
+        a = (float(rng.uniform(-0.5, 0.5)), 0.0)
+        x += 0.5 * (a[0] + last[0]) / 100
+        state = synthetic_state((x, 0.0), (0.0, 0.25, 0.0))
+        learner.update(state, a)
+        last = a
+    learner.set_training(False)
+    learner.predict(state, (0.1, 0.0))  # fits
+    assert learner.actuator_gains == pytest.approx((0.5, 0.5))
+    p = learner.predict(state, (0.1, 0.0))
+    assert p.actuator.x == pytest.approx(x + 0.5 * (0.1 + last[0]) / 100)
+
+
+def test_the_mlp_learns_the_push_online_and_at_the_end() -> None:
+    learner = MlpLearner(members=3, hidden=(16, 16), epochs=20)
+    learner.start("push-task", 100)
+    learner.new_fold(7)
+    run = synthetic_run(0.0)
+    learner.reset(run[0])
+    for state in run[1:]:
+        learner.update(state, PUSH)
+    # Trained online: after 150 messages (two batches of 64) it predicts
+    # before training ends.
+    assert learner.ensembles[15].calls == 2
+    second = synthetic_run(0.02)
+    learner.reset(second[0])
+    for state in second[1:]:
+        learner.update(state, PUSH)
+    learner.set_training(False)
+    p, truth = chained_test_run(learner, 0.01)
+    assert learner.ensembles[15].calls == 2 + 2 + 20  # the final epochs
+    assert p.blocks[15].y == pytest.approx(truth.blocks[15].y, abs=0.05)
+    assert p.blocks[15].theta == 0.0  # an output that never varied stays exact
+    # Far from anything it saw, the ensemble's change stays within those seen.
+    ensemble = learner.ensembles[15]
+    wild = ensemble.predict_one([5.0, -3.0, 40.0, -20.0])
+    outputs = np.asarray(learner._samples[15].outputs)
+    assert np.all(wild >= outputs.min(axis=0)) and np.all(wild <= outputs.max(axis=0))
+
+
+def test_the_mlp_is_deterministic_given_the_fold_seed() -> None:
+    def trained(seed: int) -> tuple[list[float], list[np.ndarray]]:
+        learner = MlpLearner(members=2, hidden=(8,), epochs=3)
+        train(learner, [-0.03, 0.03], seed=seed)
+        weights = [w for m in learner.ensembles[15].members for w in m.coefs_]
+        return chained_ys(learner), weights
+
+    (ys, weights), (ys_again, weights_again) = trained(11), trained(11)
+    assert ys == ys_again
+    assert all(
+        np.array_equal(a, b) for a, b in zip(weights, weights_again, strict=True)
+    )
+    _, other = trained(12)  # another fold, other initial weights and order
+    assert not any(np.array_equal(a, b) for a, b in zip(weights, other, strict=True))
+    # The members of one ensemble differ too.
+    assert not np.array_equal(weights[0], weights[2])
+
+
+def test_the_mlp_explains_itself() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "pushlearn.baselines", "mlp", "--help"],
+        capture_output=True,
+        env=python_env(),
+        cwd=TESTS_DIR,
+        timeout=LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr.decode()
+    text = done.stdout.decode()
+    assert "ensemble" in text and "partial_fit" in text
+    for option in ("--members", "--hidden", "--batch", "--epochs", "--inputs"):
+        assert option in text
+    top = subprocess.run(
+        [sys.executable, "-m", "pushlearn.baselines", "--help"],
+        capture_output=True,
+        env=python_env(),
+        cwd=TESTS_DIR,
+        timeout=LIMIT,
+        check=False,
+    )
+    assert b"knn|gp|mlp" in top.stdout
+
+
+def test_the_gp_stretches_its_length_scales_by_cross_validation_over_runs() -> None:
+    learner = GpLearner(max_samples=200)
+    train(learner, [-0.04, 0.0, 0.04])
+    chained_test_run(learner, 0.02)
+    model = learner._models[15]
+    assert set(model.stretch_scores) == set(GP_STRETCHES)
+    assert model.stretch == min(
+        model.stretch_scores, key=lambda f: (model.stretch_scores[f], f)
+    )
+    assert "stretched" in learner.kernels[15]
+    # One run: nothing between runs to validate on, the likelihood's scales.
+    single = GpLearner(max_samples=200)
+    train(single, [0.0])
+    chained_test_run(single, 0.0)
+    assert single._models[15].stretch == 1.0 and not single._models[15].stretch_scores

@@ -62,7 +62,7 @@ def test_the_driver_runs_the_knn_baseline(
     assert done.returncode == 0, done.stderr
     result = json.loads(report.read_text())
     assert result["model"] == "knn"
-    assert result["learner"]["version"] == "0.1.0"
+    assert result["learner"]["version"] == "0.2.0"
     assert "learner 'knn'" in done.stdout
 
 

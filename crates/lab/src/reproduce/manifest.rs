@@ -337,11 +337,13 @@ fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
 /// The baselines a reviewer asks for (`python/pushlearn/baselines.py`):
 /// (document name, learner class, seconds its slowest answer may take),
 /// served from the Python package. A GP's fit when training ends takes a
-/// few seconds (`baselines.py`: at most 600 samples, O(n³)); the timeout
-/// leaves room for a machine ten times slower.
-pub const BASELINES: [(&str, &str, u64); 2] = [
+/// few seconds (`baselines.py`: at most 600 samples, O(n³)), and so do the
+/// MLP ensemble's last epochs over its memory; the timeout leaves room for
+/// a machine ten times slower.
+pub const BASELINES: [(&str, &str, u64); 3] = [
     ("baseline-knn", "pushlearn.baselines:KnnLearner", 60),
     ("baseline-gp", "pushlearn.baselines:GpLearner", 60),
+    ("baseline-mlp", "pushlearn.baselines:MlpLearner", 60),
 ];
 
 /// The baseline `class` of the Python package, served for the driver, its
@@ -550,10 +552,14 @@ pub fn transfers() -> Vec<Transfer> {
 }
 
 /// The learners of the new-object table: (document name part, learner):
+<<<<<<< HEAD
 /// both faithful models, gate+, the hybrid model and the baselines.
+=======
+/// both faithful models, gate+, and every baseline.
+>>>>>>> baselines
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
-    let [(_, knn, knn_timeout), (_, gp, gp_timeout)] = BASELINES;
+    let [(_, knn, knn_timeout), (_, gp, gp_timeout), (_, mlp, mlp_timeout)] = BASELINES;
     vec![
         ("gate", ModelKind::Gate.into()),
         ("interaction", ModelKind::Interaction.into()),
@@ -561,6 +567,7 @@ pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
         ("hybrid", ModelKind::Hybrid.into()),
         ("knn", baseline(knn, knn_timeout)),
         ("gp", baseline(gp, gp_timeout)),
+        ("mlp", baseline(mlp, mlp_timeout)),
     ]
 }
 
@@ -695,6 +702,26 @@ mod tests {
                 e.spec.validate().expect("every entry is runnable");
             }
         }
+    }
+
+    #[test]
+    fn every_baseline_runs_in_the_baselines_and_new_object_tables() {
+        let names: Vec<String> = full().into_iter().map(|e| e.name).collect();
+        let objects: Vec<&str> = object_learners().into_iter().map(|(n, _)| n).collect();
+        for (name, class, _) in BASELINES {
+            assert!(names.iter().any(|n| n == name), "{name} is not run");
+            let short = name.trim_start_matches("baseline-");
+            assert!(
+                objects.contains(&short),
+                "{short} is not in the new-object table"
+            );
+            for transfer in transfers() {
+                let entry = object_entry_name(short, &transfer);
+                assert!(names.contains(&entry), "{entry} is not run");
+            }
+            assert!(class.starts_with("pushlearn.baselines:"), "{class}");
+        }
+        assert!(BASELINES.iter().any(|(n, ..)| *n == "baseline-mlp"));
     }
 
     #[test]

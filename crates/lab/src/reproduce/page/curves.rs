@@ -130,8 +130,9 @@ pub fn baseline_curves(results: &Reproduction) -> Result<Vec<(String, &PushRepor
         .collect()
 }
 
-/// Gate, interaction, kNN and GP at the baseline table's training runs, all
-/// 21 positions: one row per learner and N.
+/// Gate, interaction and every baseline (kNN, GP, MLP ensemble) at the
+/// baseline table's training runs, all 21 positions: one row per learner
+/// and N.
 pub(super) fn baselines(results: &Reproduction) -> Result<String, String> {
     let mut out = String::from(
         "| learner | N | block position [m] | block orientation [rad] | actuator [m] | folds |\n|---|---|---|---|---|---|\n",
@@ -154,7 +155,7 @@ pub(super) fn baselines(results: &Reproduction) -> Result<String, String> {
 }
 
 /// Every learning curve of "Beyond the thesis", labelled: the thesis's gate
-/// model, each change on it, gate+, and the two baselines.
+/// model, each change on it, gate+, and every baseline.
 ///
 /// # Errors
 /// A document the reproduction does not have.
