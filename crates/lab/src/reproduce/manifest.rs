@@ -552,11 +552,7 @@ pub fn transfers() -> Vec<Transfer> {
 }
 
 /// The learners of the new-object table: (document name part, learner):
-<<<<<<< HEAD
-/// both faithful models, gate+, the hybrid model and the baselines.
-=======
-/// both faithful models, gate+, and every baseline.
->>>>>>> baselines
+/// both faithful models, gate+, the hybrid model and every baseline.
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
     let [(_, knn, knn_timeout), (_, gp, gp_timeout), (_, mlp, mlp_timeout)] = BASELINES;
