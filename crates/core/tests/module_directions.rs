@@ -122,16 +122,18 @@ const CRATES: &[(&str, Table)] = &[
             ("frame", &[]),
             ("latency", &[]),
             ("scene", &[]),
+            // The world predicting itself, a model on the world library.
+            ("floor", &[]),
             // The learner protocol's client and server, and which learner
             // an experiment runs.
             ("external", &["frame", "process"]),
             // What the experiments measured, as plain data.
-            ("results", &["latency", "scene"]),
+            ("results", &["floor", "latency", "scene"]),
             // The driver, the tasks, the links and workers, and whole
             // experiments into documents.
             (
                 "experiment",
-                &["external", "frame", "latency", "results", "scene"],
+                &["external", "floor", "frame", "latency", "results", "scene"],
             ),
         ],
     ),
