@@ -120,6 +120,19 @@ impl BodyState {
     pub fn yaw(&self) -> f64 {
         unit_yaw(self.orientation)
     }
+
+    /// The body as a learner sees it published (no outline: that comes
+    /// from the Hello).
+    #[must_use]
+    pub fn observation(&self) -> pushlearn_core::Observation {
+        pushlearn_core::Observation {
+            name: self.name.clone(),
+            id: self.id,
+            position: self.position,
+            orientation: self.orientation,
+            footprint: None,
+        }
+    }
 }
 
 /// The world's state at a step boundary.

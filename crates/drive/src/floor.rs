@@ -15,10 +15,10 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use learner::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
 use learner::stats::ModelStats;
-use learner::{Action, Frame, Model, Observation, Poses, Target, TargetError};
+use learner::{Action, Frame, Model, Poses, Target, TargetError};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
-use sim_plugin::world::{ActuatorMode, Command, World};
+use sim_plugin::world::{ActuatorMode, BodyState, Command, Snapshot, World};
 use sim_plugin::Scene;
 
 /// The name reports give the floor.
@@ -126,19 +126,7 @@ impl Floor {
                 break s;
             }
         };
-        let frame = Frame {
-            objects: snapshot
-                .bodies
-                .iter()
-                .map(|b| Observation {
-                    name: b.name.clone(),
-                    id: b.id,
-                    position: b.position,
-                    orientation: b.orientation,
-                    footprint: None,
-                })
-                .collect(),
-        };
+        let frame = frame_of(&snapshot);
         let poses = parse_frame_at(&frame, ActuatorYaw::ForceZero, Precision::Full).ok()?;
         copy.token = copy.token.wrapping_add(1).max(1);
         Some(FloorWorld {
@@ -146,6 +134,13 @@ impl Floor {
             poses,
             token: copy.token,
         })
+    }
+}
+
+/// The learner's view of a state of the copy: its bodies as published.
+fn frame_of(snapshot: &Snapshot) -> Frame {
+    Frame {
+        objects: snapshot.bodies.iter().map(BodyState::observation).collect(),
     }
 }
 
@@ -209,23 +204,6 @@ impl Model for Floor {
 mod tests {
     use super::*;
     use sim_plugin::push_run::record_push_run;
-    use sim_plugin::Snapshot;
-
-    fn frame(s: &Snapshot) -> Frame {
-        Frame {
-            objects: s
-                .bodies
-                .iter()
-                .map(|b| Observation {
-                    name: b.name.clone(),
-                    id: b.id,
-                    position: b.position,
-                    orientation: b.orientation,
-                    footprint: None,
-                })
-                .collect(),
-        }
-    }
 
     #[test]
     fn the_floor_chains_a_latency_free_copy_of_the_world() {
@@ -237,22 +215,23 @@ mod tests {
         let floor = Floor::new("one_block", 100).unwrap();
         // Sent after the first message, the push moves the world into the
         // second.
-        let mut predicted = floor.parse(&frame(&run[0])).unwrap();
+        let mut predicted = floor.parse(&frame_of(&run[0])).unwrap();
         for _ in 1..run.len() {
             predicted = floor.predict(&predicted, push);
         }
-        let seen = floor.parse(&frame(&run[run.len() - 1])).unwrap();
+        let seen = floor.parse(&frame_of(&run[run.len() - 1])).unwrap();
         let (p, s) = (
             Floor::poses(&predicted).blocks[&learner::BLUE_ID],
             Floor::poses(&seen).blocks[&learner::BLUE_ID],
         );
-        let start = Floor::poses(&floor.parse(&frame(&run[0])).unwrap()).blocks[&learner::BLUE_ID];
+        let start =
+            Floor::poses(&floor.parse(&frame_of(&run[0])).unwrap()).blocks[&learner::BLUE_ID];
         assert!(s.distance_to(&start) > 0.1, "the block was pushed");
         assert!(p.distance_to(&s) < 1e-3, "{p:?} against {s:?}");
 
         // A state it did not produce (token 0) is taken as shown, at rest:
         // from the last message the block, released, hardly moves.
-        let shown = floor.parse(&frame(&run[run.len() - 1])).unwrap();
+        let shown = floor.parse(&frame_of(&run[run.len() - 1])).unwrap();
         let next = floor.predict(&shown, Action::ZERO);
         let b = |w: &FloorWorld| Floor::poses(w).blocks[&learner::BLUE_ID];
         assert!(b(&next).distance_to(&b(&shown)) < 1e-3);

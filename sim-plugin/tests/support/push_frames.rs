@@ -3,7 +3,7 @@
 //! benchmarks, so that what is tested is what is timed.
 
 use learner::eval::{MESSAGES_PER_RUN, PUSH_ACTION};
-use learner::{Frame, Observation};
+use learner::Frame;
 use sim_plugin::push_run::record_push_run;
 use sim_plugin::{Snapshot, World};
 
@@ -15,13 +15,7 @@ pub fn frame(s: &Snapshot) -> Frame {
             .bodies
             .iter()
             .chain(&s.ghosts)
-            .map(|b| Observation {
-                name: b.name.clone(),
-                id: b.id,
-                position: b.position,
-                orientation: b.orientation,
-                footprint: None,
-            })
+            .map(sim_plugin::BodyState::observation)
             .collect(),
     }
 }
