@@ -71,6 +71,15 @@ impl Footprints {
         )
     }
 
+    /// The first body with this outline, if any.
+    #[must_use]
+    pub fn body_with(&self, footprint: Footprint) -> Option<&str> {
+        self.0
+            .iter()
+            .find(|(_, f)| *f == footprint)
+            .map(|(n, _)| n.as_str())
+    }
+
     /// The outline of the body `name`, if the world gave one.
     #[must_use]
     pub fn of(&self, name: &str) -> Option<Footprint> {

@@ -15,11 +15,14 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use learner::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
 use learner::stats::ModelStats;
-use learner::{Action, Frame, Model, Poses, Target, TargetError};
+use learner::{Action, Footprint, Frame, Model, Observation, Poses, Target, TargetError};
+use pushlearn::wire::{pb, Footprints};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
-use sim_plugin::world::{ActuatorMode, BodyState, Command, Snapshot, World};
+use sim_plugin::world::{ActuatorMode, Command, Snapshot, World};
 use sim_plugin::Scene;
+
+use crate::scene::Object;
 
 /// The name reports give the floor.
 pub const NAME: &str = "floor";
@@ -31,12 +34,17 @@ pub struct FloorWorld {
     frame: Frame,
     poses: Poses,
     token: u64,
+    /// What the world's bodies were shown as (empty until the copy
+    /// stepped it).
+    shown: Vec<Shown>,
 }
 
 /// The world copy and the token of the state it holds.
 #[derive(Default)]
 struct WorldCopy {
     world: Option<World>,
+    /// The scene's bodies' outlines.
+    footprints: Footprints,
     token: u64,
 }
 
@@ -96,25 +104,53 @@ impl Floor {
         let copy = &mut *copy;
         if copy.world.is_none() {
             let scene = Scene::builtin(&self.scene).ok()?;
+            copy.footprints = Footprints::from_hello(&pb::Hello {
+                shapes: sim_plugin::server::shapes(&scene),
+                ..pb::Hello::default()
+            });
             copy.world = Some(World::new(&scene).ok()?);
         }
         let world = copy.world.as_mut()?;
-        if from.token == 0 || from.token != copy.token {
+        let shown = if from.token == 0 || from.token != copy.token {
+            let shown = shown_bodies(&from.frame, &copy.footprints)?;
             world.apply(Command::Reset).ok()?;
             world.apply(Command::Unpause).ok()?;
             world
                 .apply(Command::SetPublishRate(self.publish_rate_hz))
                 .ok()?;
-            for body in from.frame.objects.iter().filter(|o| !is_skipped(&o.name)) {
+            for (body, shown) in shown
+                .iter()
+                .zip(from.frame.objects.iter().filter(|o| !is_skipped(&o.name)))
+            {
+                if body.body != body.name {
+                    // The new-object view: the object shown under another
+                    // body's name took that body's start, and that body its
+                    // parking place (`experiment::push_task::objects`).
+                    let object = Object::ALL.into_iter().find(|o| o.body() == body.body)?;
+                    let park = object.park()?;
+                    let z = world.scene().bodies[world.scene().body_index(&body.name)?]
+                        .start
+                        .position()[2];
+                    world
+                        .apply(Command::SetPose {
+                            name: body.name.as_str().into(),
+                            position: [park.x, park.y, z],
+                            orientation: pushlearn_core::orientation::from_yaw(park.theta),
+                        })
+                        .ok()?;
+                }
                 world
                     .apply(Command::SetPose {
-                        name: body.name.as_str().into(),
-                        position: body.position,
-                        orientation: body.orientation,
+                        name: body.body.as_str().into(),
+                        position: shown.position,
+                        orientation: shown.orientation,
                     })
                     .ok()?;
             }
-        }
+            shown
+        } else {
+            from.shown.clone()
+        };
         world
             .apply(Command::Actuator {
                 mode: ActuatorMode::Move,
@@ -126,22 +162,67 @@ impl Floor {
                 break s;
             }
         };
-        let frame = frame_of(&snapshot);
+        let frame = view_of(&snapshot, &shown)?;
         let poses = parse_frame_at(&frame, ActuatorYaw::ForceZero, Precision::Full).ok()?;
         copy.token = copy.token.wrapping_add(1).max(1);
         Some(FloorWorld {
             frame,
             poses,
             token: copy.token,
+            shown,
         })
     }
 }
 
-/// The learner's view of a state of the copy: its bodies as published.
-fn frame_of(snapshot: &Snapshot) -> Frame {
-    Frame {
-        objects: snapshot.bodies.iter().map(BodyState::observation).collect(),
-    }
+/// A body as the floor was shown it, and the world's body it is.
+#[derive(Clone, Debug, PartialEq)]
+struct Shown {
+    name: String,
+    id: u32,
+    footprint: Option<Footprint>,
+    body: String,
+}
+
+/// Which of the world's bodies each body shown is: the one of its name,
+/// unless its observed outline is another body's (the new-object view
+/// shows an object under the blue block's name). `None` if an outline
+/// matches no body.
+fn shown_bodies(frame: &Frame, footprints: &Footprints) -> Option<Vec<Shown>> {
+    frame
+        .objects
+        .iter()
+        .filter(|o| !is_skipped(&o.name))
+        .map(|o| {
+            let body = match o.footprint {
+                Some(f) if footprints.of(&o.name) != Some(f) => footprints.body_with(f)?,
+                _ => o.name.as_str(),
+            };
+            Some(Shown {
+                name: o.name.clone(),
+                id: o.id,
+                footprint: o.footprint,
+                body: body.to_owned(),
+            })
+        })
+        .collect()
+}
+
+/// The copy's state as the floor was shown the world: the bodies shown,
+/// under the names they were shown with.
+fn view_of(snapshot: &Snapshot, shown: &[Shown]) -> Option<Frame> {
+    let objects = shown
+        .iter()
+        .map(|s| {
+            let body = snapshot.bodies.iter().find(|b| b.name == s.body)?;
+            Some(Observation {
+                name: s.name.clone(),
+                id: s.id,
+                footprint: s.footprint,
+                ..body.observation()
+            })
+        })
+        .collect::<Option<Vec<_>>>()?;
+    Some(Frame { objects })
 }
 
 impl Model for Floor {
@@ -152,6 +233,7 @@ impl Model for Floor {
             poses: parse_frame_at(frame, ActuatorYaw::ForceZero, Precision::Full)?,
             frame: frame.clone(),
             token: 0,
+            shown: Vec::new(),
         })
     }
 
@@ -236,6 +318,46 @@ mod tests {
         let b = |w: &FloorWorld| Floor::poses(w).blocks[&learner::BLUE_ID];
         assert!(b(&next).distance_to(&b(&shown)) < 1e-3);
         assert_ne!(next.token, 0);
+    }
+
+    fn frame_of(snapshot: &sim_plugin::Snapshot) -> Frame {
+        Frame {
+            objects: snapshot
+                .bodies
+                .iter()
+                .map(sim_plugin::BodyState::observation)
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn an_object_shown_under_the_blue_blocks_name_is_found_by_its_outline() {
+        let scene = Scene::builtin(crate::scene::SCENE).unwrap();
+        let footprints = Footprints::from_hello(&pb::Hello {
+            shapes: sim_plugin::server::shapes(&scene),
+            ..pb::Hello::default()
+        });
+        let cylinder = footprints.of(Object::Cylinder.body()).unwrap();
+        let shown = |footprint| Observation {
+            name: learner::BLUE_NAME.into(),
+            id: learner::BLUE_ID,
+            position: [0.0, 0.3, 0.05],
+            orientation: [0.0, 0.0, 0.0, 1.0],
+            footprint,
+        };
+        let frame = |footprint| Frame {
+            objects: vec![shown(footprint)],
+        };
+        let body =
+            |footprint| shown_bodies(&frame(footprint), &footprints).map(|s| s[0].body.clone());
+        assert_eq!(
+            body(Some(cylinder)).as_deref(),
+            Some(Object::Cylinder.body())
+        );
+        assert_eq!(body(None).as_deref(), Some(learner::BLUE_NAME));
+        let blue = footprints.of(learner::BLUE_NAME);
+        assert_eq!(body(blue).as_deref(), Some(learner::BLUE_NAME));
+        assert_eq!(body(Some(Footprint::Disc { radius: 7.0 })), None);
     }
 
     #[test]

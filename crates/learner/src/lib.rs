@@ -53,7 +53,7 @@ pub use stats::{
     StatsError,
 };
 pub use types::{
-    object_name, Action, Frame, ObjectState, Observation, Poses, Target, TargetError,
+    object_name, Action, Footprint, Frame, ObjectState, Observation, Poses, Target, TargetError,
     TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME,
     RED_ID, RED_NAME,
 };

@@ -137,10 +137,15 @@ pub(super) fn hello(
                 ..Default::default()
             })
             .collect(),
-        shapes: scene.bodies.iter().map(shape).collect(),
+        shapes: shapes(scene),
         latency_max_steps,
         max_speed: Some(scene.drive.max_speed),
     }
+}
+
+/// Every body's size as the Hello gives it.
+pub fn shapes(scene: &Scene) -> Vec<pb::Shape> {
+    scene.bodies.iter().map(shape).collect()
 }
 
 /// The size of a body on the wire, so that viewers draw it at its real size.

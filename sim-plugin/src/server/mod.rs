@@ -101,6 +101,7 @@ impl Timing {
 }
 
 pub use crate::lockstep::Latency;
+pub use convert::shapes;
 pub use embedded::EmbeddedWorld;
 
 /// Everything the daemon needs to start.

@@ -157,8 +157,8 @@ struct LearnerArgs {
     /// Run the floor instead of a learner: the world predicting itself (a
     /// latency-free copy of the experiment's world stepped under the same
     /// actions, docs/models.md "The floor"), the error no learner can go
-    /// below. Push task and constant feedback on the thesis's scenes;
-    /// refused for Move to Target and the new-object experiments.
+    /// below. Push task (new objects included) and constant feedback;
+    /// refused for Move to Target.
     #[arg(long, conflicts_with_all = ["model", "learner", "learner_connect"])]
     floor: bool,
 

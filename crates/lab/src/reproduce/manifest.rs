@@ -552,7 +552,8 @@ pub fn transfers() -> Vec<Transfer> {
 }
 
 /// The learners of the new-object table: (document name part, learner):
-/// both faithful models, gate+, the hybrid model and every baseline.
+/// both faithful models, gate+, the hybrid model, every baseline and the
+/// floor.
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
     let [(_, knn, knn_timeout), (_, gp, gp_timeout), (_, mlp, mlp_timeout)] = BASELINES;
@@ -564,6 +565,7 @@ pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
         ("knn", baseline(knn, knn_timeout)),
         ("gp", baseline(gp, gp_timeout)),
         ("mlp", baseline(mlp, mlp_timeout)),
+        ("floor", LearnerChoice::Floor),
     ]
 }
 
