@@ -47,7 +47,7 @@ use drive::results::{MttReport, PushReport};
 use latency::latency;
 use learner::registry::ModelKind;
 use move_to_target::{beyond_move_to_target, move_to_target};
-use objects::beyond_objects;
+use objects::{beyond_objects, cross_objects};
 use selectors::selectors;
 use targets::{beyond_targets, targets};
 
@@ -91,6 +91,8 @@ enum Block<'a> {
     BeyondAblation,
     /// `beyond-objects`: the new-object experiments, learner by condition.
     BeyondObjects,
+    /// `cross-objects`: trained on one object, tested on each other one.
+    CrossObjects,
     /// `beyond-move-to-target`: Move to Target, thesis's and sampled targets.
     BeyondMoveToTarget,
     /// `ablation`: the ablation sweep, configuration by training runs.
@@ -127,6 +129,7 @@ impl<'a> Block<'a> {
             "beyond-ablation" => Block::BeyondAblation,
             "beyond-move-to-target" => Block::BeyondMoveToTarget,
             "beyond-objects" => Block::BeyondObjects,
+            "cross-objects" => Block::CrossObjects,
             "ablation" => Block::Ablation,
             "commands" => Block::Commands,
             other => return Err(format!("unknown block `{other}`")),
@@ -260,6 +263,7 @@ fn render(block: &Block<'_>, results: &Reproduction) -> Result<String, String> {
         Block::BeyondAblation => beyond_ablation(results),
         Block::BeyondMoveToTarget => beyond_move_to_target(results),
         Block::BeyondObjects => beyond_objects(results),
+        Block::CrossObjects => cross_objects(results),
         Block::Ablation => ablation(results),
         Block::Commands => Ok(commands(results)),
     }

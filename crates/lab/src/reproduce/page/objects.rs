@@ -72,3 +72,40 @@ pub(super) fn beyond_objects(results: &Reproduction) -> Result<String, String> {
     }
     Ok(out)
 }
+
+/// The cross-object table: one row per learner and number of training
+/// runs, one column per condition (trained on one object, tested on
+/// another): block position / orientation error.
+pub(super) fn cross_objects(results: &Reproduction) -> Result<String, String> {
+    use crate::reproduce::manifest::{
+        cross_entry_name, cross_transfers, CROSS_LEARNERS, CROSS_RUNS,
+    };
+    let conditions = cross_transfers();
+    let mut out = String::from("| learner | N |");
+    for c in &conditions {
+        let _ = write!(out, " {} |", c.label());
+    }
+    out.push('\n');
+    out.push_str(&"|---".repeat(conditions.len() + 2));
+    out.push_str("|\n");
+    for learner in CROSS_LEARNERS {
+        let reports = conditions
+            .iter()
+            .map(|t| push_doc(results, &cross_entry_name(learner, t)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let label = learner_label(&reports[0].setup);
+        for n in CROSS_RUNS {
+            let _ = write!(out, "| {label} | {n} |");
+            for report in &reports {
+                let e = entry_at(report, &report.setup.model, n)?;
+                let _ = write!(
+                    out,
+                    " {:.3} / {:.3} |",
+                    e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
+                );
+            }
+            out.push('\n');
+        }
+    }
+    Ok(out)
+}
