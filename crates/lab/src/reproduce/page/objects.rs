@@ -60,17 +60,24 @@ pub(super) fn beyond_objects(results: &Reproduction) -> Result<String, String> {
     for (label, reports) in rows {
         let _ = write!(out, "| {label} |");
         for report in reports {
-            let name = &report.setup.model;
-            let e = entry_at(report, name, crate::reproduce::manifest::OBJECT_RUNS)?;
-            let _ = write!(
-                out,
-                " {:.3} / {:.3} |",
-                e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
-            );
+            out.push_str(&block_cell(
+                report,
+                crate::reproduce::manifest::OBJECT_RUNS,
+            )?);
         }
         out.push('\n');
     }
     Ok(out)
+}
+
+/// A table cell: the block's position / orientation error after `n`
+/// training runs.
+fn block_cell(report: &PushReport, n: usize) -> Result<String, String> {
+    let e = entry_at(report, &report.setup.model, n)?;
+    Ok(format!(
+        " {:.3} / {:.3} |",
+        e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
+    ))
 }
 
 /// The cross-object table: one row per learner and number of training
@@ -97,12 +104,7 @@ pub(super) fn cross_objects(results: &Reproduction) -> Result<String, String> {
         for n in CROSS_RUNS {
             let _ = write!(out, "| {label} | {n} |");
             for report in &reports {
-                let e = entry_at(report, &report.setup.model, n)?;
-                let _ = write!(
-                    out,
-                    " {:.3} / {:.3} |",
-                    e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
-                );
+                out.push_str(&block_cell(report, n)?);
             }
             out.push('\n');
         }
