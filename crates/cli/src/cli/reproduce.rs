@@ -639,7 +639,8 @@ mod tests {
             [
                 "push-task-gate",
                 "beyond-sampled-gate",
-                "beyond-sampled-gate-plus"
+                "beyond-sampled-gate-plus",
+                "beyond-sampled-hybrid"
             ]
         );
         let error = chosen_entries(&entries, &sweeps, &["beyond-typo".to_owned()])
