@@ -122,8 +122,9 @@ const CRATES: &[(&str, Table)] = &[
             ("frame", &[]),
             ("latency", &[]),
             ("scene", &[]),
-            // The world predicting itself, a model on the world library.
-            ("floor", &[]),
+            // The world predicting itself, a model on the world library
+            // (the new-object scene's parking places).
+            ("floor", &["scene"]),
             // The learner protocol's client and server, and which learner
             // an experiment runs.
             ("external", &["frame", "process"]),
