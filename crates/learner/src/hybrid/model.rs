@@ -7,6 +7,7 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use super::mechanics::{Outline, Parameters, Push, Slide, Stepped, Twist, SUBSTEPS};
+use super::planner::PushPlan;
 use super::residual::{self, Memory};
 use crate::aitm::MapStats;
 use crate::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
@@ -376,10 +377,9 @@ pub struct HybridModel {
     actuator: ActuatorFit,
     blocks: BTreeMap<u32, BlockKnowledge>,
     pub(super) target: Option<Target>,
-    /// The push the planner is carrying out: contact point and outward
-    /// normal, slider frame.
+    /// The push the planner is carrying out.
     #[serde(skip)]
-    pub(super) push_plan: Option<(Vector2<f64>, Vector2<f64>)>,
+    pub(super) push_plan: Option<PushPlan>,
 }
 
 /// The pusher's radius, from the shape table.

@@ -1,21 +1,29 @@
-//! Move to Target with the hybrid model: push where the model says the
-//! block goes towards its target.
+//! Move to Target with the hybrid model: the thesis's greedy reduction of
+//! one part of the error at a time (`docs/spec/inverse-model.md` §4), with
+//! the pushes found by rolling the model forward instead of recalled from
+//! a memory of pushes seen.
 //!
-//! A frictionless pusher can only push along the normal of the face it
-//! touches, so a push is chosen by where it starts: every candidate
-//! contact around the block's outline is rolled forward with the model
-//! for a short push, and the one that ends nearest the target wins. The
-//! actuator then gets there the way the thesis's planners do
-//! (`docs/spec/planning.md` §2, §4: circling at a distance, a straight
-//! approach) and pushes, at the speed the model predicts best for the
-//! next message. The choice is made again at every message, so a push
-//! turns into another as the block turns.
+//! Minimising the whole error at every push stalls: near the target
+//! position a turn needs an off-centre push, which moves the block away
+//! before it turns it, so no push looks good and large turns never happen.
+//! The thesis's inverse model avoids this by working on the largest part of
+//! the error in the block's frame (along, across, turn) until its sign
+//! flips or it is small, whatever the others do meanwhile; so does this
+//! planner. A frictionless pusher can only push along the normal of the
+//! face it touches, so a push is chosen by where it starts: every
+//! candidate contact around the block's outline is rolled forward with the
+//! model for a short push, and the one that takes the chosen part nearest
+//! zero, helping the rest most, wins. The actuator gets there the way the
+//! thesis's planners do (`docs/spec/planning.md` §2, §4: circling at a
+//! distance, a straight approach) and pushes at the speed the model
+//! predicts best for the next message.
 
 use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 
 use super::mechanics::{Outline, Twist};
 use super::model::{pusher_radius, surface_gap, HybridModel};
+use crate::eval::goal_distance;
 use crate::planning::{
     circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
 };
@@ -29,6 +37,76 @@ const HORIZON: usize = 12;
 const STANDOFF: f64 = 0.005;
 /// Push speeds weighed at each message, fastest first (ties go to speed).
 const SPEEDS: [f64; 5] = [APPROACH_SPEED, 0.2, 0.1, 0.05, 0.02];
+/// Messages a kept push is rolled forward to see that it still helps:
+/// enough to close the stand-off.
+const KEEP_CHECK: usize = 4;
+/// The cosine above which the face the pusher touches is the plan's.
+const SAME_FACE: f64 = 0.9;
+/// A part of the error is worked on until it is this small
+/// (`docs/spec/inverse-model.md` §4, the thesis's `ε_keep`).
+const KEEP: f64 = 0.01;
+/// What the rest of the error counts beside the part worked on, when
+/// pushes are compared: less than it, so that the chosen part leads.
+const REST_WEIGHT: f64 = 0.5;
+
+/// The push being carried out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct PushPlan {
+    /// Contact point and outward normal, slider frame.
+    contact: Vector2<f64>,
+    normal: Vector2<f64>,
+    /// The part of the error it works on (0 along, 1 across the block,
+    /// 2 the turn) and that part's sign when it was chosen.
+    part: usize,
+    sign: f64,
+}
+
+/// A candidate push and the block's errors over its horizon.
+struct Rolled {
+    contact: Vector2<f64>,
+    normal: Vector2<f64>,
+    errors: Vec<[f64; 3]>,
+}
+
+/// The block's error to `goal` in the frame of `frame`: the position
+/// difference rotated into it and the wrapped turn (signed).
+fn error_in(frame: &ObjectState, pose: &ObjectState, goal: &ObjectState) -> [f64; 3] {
+    let d = Rotation2::new(-frame.theta) * (goal.position() - pose.position());
+    let turn = wrapped(goal.theta - pose.theta);
+    [d.x, d.y, turn]
+}
+
+fn wrapped(angle: f64) -> f64 {
+    use std::f64::consts::{PI, TAU};
+    let a = angle.rem_euclid(TAU);
+    if a > PI {
+        a - TAU
+    } else {
+        a
+    }
+}
+
+/// How much better `after` is than `before` for working on `part`: what
+/// that part came nearer zero, plus [`REST_WEIGHT`] times what the rest
+/// came nearer.
+fn progress(part: usize, before: &[f64; 3], after: &[f64; 3]) -> f64 {
+    let rest = |e: &[f64; 3]| {
+        (0..3)
+            .filter(|&j| j != part)
+            .map(|j| e[j] * e[j])
+            .sum::<f64>()
+            .sqrt()
+    };
+    (before[part].abs() - after[part].abs()) + REST_WEIGHT * (rest(before) - rest(after))
+}
+
+/// The parts of `error` from the largest down (ties: the higher index
+/// first, as the thesis's inverse model orders them).
+fn parts_by_size(error: &[f64; 3]) -> [usize; 3] {
+    let mut order = [2, 1, 0];
+    order.sort_by(|&a, &b| error[b].abs().total_cmp(&error[a].abs()));
+    order
+}
 
 impl HybridModel {
     pub(super) fn plan(&mut self, rng: &mut dyn Rng) -> Action {
@@ -43,79 +121,85 @@ impl HybridModel {
         };
         let pusher = world.poses.actuator.position();
         let goal = target.pose;
-        let now = block.distance_to(&goal);
+        let now = goal_distance(&block, &goal);
         if now < REACHED {
             self.target = None;
+            self.push_plan = None;
             return Action::ZERO;
         }
         let outline = world.outline(target.id);
-        // Keep the chosen push while it still brings the block nearer:
-        // choosing afresh at every message makes the actuator chase a
-        // contact that moves as it moves. Once at the block, a push is
-        // kept only while the model says it still helps (the pusher slides
-        // along the face as the block turns, so where it is says nothing
-        // then).
+        let error = error_in(&block, &block, &goal);
+        let to_world = Rotation2::new(block.theta);
+        // Keep the chosen push while its part of the error is still to be
+        // worked on: choosing afresh at every message makes the actuator
+        // chase a contact that moves as it moves. Once at the block, a
+        // push is kept only while the model says it still helps (the
+        // pusher slides along the face as the block turns, so where it is
+        // says nothing then).
         let distance = surface_gap(&outline, &block, pusher);
-        let at_block = distance <= STANDOFF;
-        let kept = self.push_plan.filter(|&(contact, normal)| {
-            let to_world = Rotation2::new(block.theta);
-            let wait =
-                block.position() + to_world * (contact + normal * (pusher_radius() + STANDOFF));
-            let approaching = !at_block && norm2(wait - pusher) > EPS_CLOSE_ENOUGH;
-            let u = Action::from_vector(-(to_world * normal) * APPROACH_SPEED);
-            approaching
-                || self
-                    .one_step(target.id, &outline, block, u)
-                    .distance_to(&goal)
-                    < now
+        let local_pusher = to_world.inverse() * (pusher - block.position());
+        let touching = outline.closest(local_pusher);
+        // At the plan's face, not merely at the block: a pusher that came
+        // to rest against another face would slide along it.
+        let pushing = |plan: &PushPlan| {
+            distance <= STANDOFF / 2.0 && touching.normal.dot(&plan.normal) > SAME_FACE
+        };
+        let kept = self.push_plan.filter(|plan| {
+            let part = error[plan.part];
+            if part.signum() != plan.sign || part.abs() <= KEEP {
+                return false;
+            }
+            let wait = block.position()
+                + to_world * (plan.contact + plan.normal * (pusher_radius() + STANDOFF));
+            let approaching = !pushing(plan) && norm2(wait - pusher) > EPS_CLOSE_ENOUGH;
+            approaching || {
+                let direction = -(to_world * plan.normal);
+                self.roll(target.id, &outline, block, pusher, direction, KEEP_CHECK)
+                    .iter()
+                    .any(|pose| progress(plan.part, &error, &error_in(&block, pose, &goal)) > 0.0)
+            }
         });
-        let (contact, normal) = match kept {
+        let plan = match kept {
             Some(plan) => plan,
             None => {
-                let Some((contact, normal, reached)) =
-                    self.best_push(target.id, block, &goal, &outline)
-                else {
+                let Some(plan) = self.best_push(target.id, block, &goal, &outline, &error) else {
                     self.push_plan = None;
                     return exploration(block.position() - pusher, rng);
                 };
-                if reached >= now {
-                    self.push_plan = None;
-                    return exploration(block.position() - pusher, rng);
-                }
-                self.push_plan = Some((contact, normal));
-                (contact, normal)
+                self.push_plan = Some(plan);
+                plan
             }
         };
-        let to_world = Rotation2::new(block.theta);
-        let wait = contact + normal * (pusher_radius() + STANDOFF);
+        let wait = plan.contact + plan.normal * (pusher_radius() + STANDOFF);
         let wait_world = block.position() + to_world * wait;
         let delta = wait_world - pusher;
         let gap = norm2(delta);
-        let local_pusher = to_world.inverse() * (pusher - block.position());
         let r = pusher - block.position();
         if gap > EPS_CLOSE {
             return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
         }
-        if gap > EPS_CLOSE_ENOUGH && distance > STANDOFF / 2.0 {
+        if gap > EPS_CLOSE_ENOUGH && !pushing(&plan) {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
-            if self
-                .one_step(target.id, &outline, block, u)
-                .distance_to(&goal)
-                > now
+            // The thesis's safety check (`docs/spec/planning.md` §2): a
+            // straight move that would touch the block and knock it away
+            // from its target goes round instead. Contact is asked of the
+            // geometry, as the thesis asks its gate: the residual memory
+            // may move a block a little with no contact at all.
+            let touches = surface_gap(&outline, &block, pusher + self.actuator_path(u)) <= 0.0;
+            if touches && goal_distance(&self.one_step(target.id, &outline, block, u), &goal) > now
             {
                 return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
             }
             return u;
         }
-        let direction = -(to_world * normal);
-        let mut best = (f64::INFINITY, Action::ZERO);
+        let direction = -(to_world * plan.normal);
+        let mut best = (f64::NEG_INFINITY, Action::ZERO);
         for speed in SPEEDS {
             let u = Action::from_vector(direction * speed);
-            let d = self
-                .one_step(target.id, &outline, block, u)
-                .distance_to(&goal);
-            if d < best.0 {
-                best = (d, u);
+            let next = self.one_step(target.id, &outline, block, u);
+            let gain = progress(plan.part, &error, &error_in(&block, &next, &goal));
+            if gain > best.0 {
+                best = (gain, u);
             }
         }
         best.1
@@ -132,37 +216,87 @@ impl HybridModel {
             .0
     }
 
-    /// Of the candidate contacts (slider frame), the one whose push brings
-    /// the block nearest the goal within the horizon: its contact point,
-    /// outward normal and the distance it reached.
+    /// The block's poses over `messages` of a push from `pusher` along
+    /// `direction` at the approach speed, from rest, by the model.
+    fn roll(
+        &self,
+        id: u32,
+        outline: &Outline,
+        block: ObjectState,
+        mut pusher: Vector2<f64>,
+        direction: Vector2<f64>,
+        messages: usize,
+    ) -> Vec<ObjectState> {
+        let path = self.actuator_path(Action::from_vector(direction * APPROACH_SPEED));
+        let mut pose = block;
+        let mut motion = Twist::default();
+        (0..messages)
+            .map(|_| {
+                let (next, moved) = self.block_after(id, outline, pose, motion, pusher, path);
+                pusher += path;
+                pose = next;
+                motion = moved;
+                pose
+            })
+            .collect()
+    }
+
+    /// The push that works best on the largest part of `error` that some
+    /// push can work on: of the candidate contacts, the one whose push,
+    /// rolled forward over the horizon, makes the most [`progress`] on
+    /// that part at its best message. `None` if no push helps any part.
     fn best_push(
         &self,
         id: u32,
         block: ObjectState,
         goal: &ObjectState,
         outline: &Outline,
-    ) -> Option<(Vector2<f64>, Vector2<f64>, f64)> {
+        error: &[f64; 3],
+    ) -> Option<PushPlan> {
         let to_world = Rotation2::new(block.theta);
-        let mut best: Option<(Vector2<f64>, Vector2<f64>, f64)> = None;
-        for (contact, normal) in candidates(outline) {
-            let mut pusher = block.position() + to_world * (contact + normal * pusher_radius());
-            let direction = -(to_world * normal);
-            let path = self.actuator_path(Action::from_vector(direction * APPROACH_SPEED));
-            let mut pose = block;
-            let mut motion = Twist::default();
-            let mut nearest = f64::INFINITY;
-            for _ in 0..HORIZON {
-                let (next, moved) = self.block_after(id, outline, pose, motion, pusher, path);
-                pusher += path;
-                pose = next;
-                motion = moved;
-                nearest = nearest.min(pose.distance_to(goal));
+        // Each candidate's poses over the horizon, rolled once for all parts.
+        let rolled: Vec<Rolled> = candidates(outline)
+            .into_iter()
+            .map(|(contact, normal)| {
+                let pusher = block.position() + to_world * (contact + normal * pusher_radius());
+                let errors = self
+                    .roll(id, outline, block, pusher, -(to_world * normal), HORIZON)
+                    .iter()
+                    .map(|pose| error_in(&block, pose, goal))
+                    .collect();
+                Rolled {
+                    contact,
+                    normal,
+                    errors,
+                }
+            })
+            .collect();
+        for part in parts_by_size(error) {
+            let mut best: Option<(f64, Vector2<f64>, Vector2<f64>)> = None;
+            for Rolled {
+                contact,
+                normal,
+                errors,
+            } in &rolled
+            {
+                let gain = errors
+                    .iter()
+                    .map(|after| progress(part, error, after))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                if gain > 0.0 && best.is_none_or(|b| gain > b.0) {
+                    best = Some((gain, *contact, *normal));
+                }
             }
-            if best.is_none_or(|b| nearest < b.2) {
-                best = Some((contact, normal, nearest));
+            if let Some((_, contact, normal)) = best {
+                return Some(PushPlan {
+                    contact,
+                    normal,
+                    part,
+                    sign: error[part].signum(),
+                });
             }
         }
-        best
+        None
     }
 }
 
@@ -204,6 +338,37 @@ fn candidates(outline: &Outline) -> Vec<(Vector2<f64>, Vector2<f64>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_largest_part_comes_first_and_ties_go_to_the_higher_index() {
+        assert_eq!(parts_by_size(&[0.1, -0.3, 0.2]), [1, 2, 0]);
+        assert_eq!(parts_by_size(&[0.2, -0.2, 0.2]), [2, 1, 0]);
+        assert_eq!(parts_by_size(&[-0.5, 0.0, 0.0]), [0, 2, 1]);
+    }
+
+    #[test]
+    fn the_error_is_in_the_blocks_frame_and_the_turn_the_short_way() {
+        let block = ObjectState::new(1.0, 0.0, std::f64::consts::FRAC_PI_2);
+        let goal = ObjectState::new(1.0, 0.5, -3.0);
+        let e = error_in(&block, &block, &goal);
+        // Straight ahead along the block's own x axis, which points up.
+        assert!((e[0] - 0.5).abs() < 1e-12 && e[1].abs() < 1e-12);
+        // From π/2 to −3.0 is −4.57 rad one way, +1.71 the other.
+        assert!(
+            (e[2] - (-3.0 - std::f64::consts::FRAC_PI_2 + std::f64::consts::TAU)).abs() < 1e-12
+        );
+    }
+
+    #[test]
+    fn progress_leads_with_the_chosen_part_and_punishes_overshoot() {
+        let before = [0.2, 0.1, 0.0];
+        // Halving the chosen part while the rest grows a little still helps.
+        assert!(progress(0, &before, &[0.1, 0.15, 0.0]) > 0.0);
+        // Overshooting to the other side by more than it was is no help.
+        assert!(progress(0, &before, &[-0.25, 0.1, 0.0]) < 0.0);
+        // Nothing moved: nothing gained.
+        assert_eq!(progress(1, &before, &before), 0.0);
+    }
 
     #[test]
     fn candidates_cover_every_face_in_proportion() {
