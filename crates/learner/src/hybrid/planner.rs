@@ -159,6 +159,10 @@ impl HybridModel {
                     .any(|pose| progress(plan.part, &error, &error_in(&block, pose, &goal)) > 0.0)
             }
         });
+        // A kept push goes on wherever along its face the pusher has slid
+        // (the roll above says it still helps from there); a new one
+        // starts at its contact.
+        let under_way = kept.is_some_and(|plan| pushing(&plan));
         let plan = match kept {
             Some(plan) => plan,
             None => {
@@ -178,7 +182,7 @@ impl HybridModel {
         if gap > EPS_CLOSE {
             return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
         }
-        if gap > EPS_CLOSE_ENOUGH && !pushing(&plan) {
+        if gap > EPS_CLOSE_ENOUGH && !under_way {
             let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
             // The thesis's safety check (`docs/spec/planning.md` §2): a
             // straight move that would touch the block and knock it away
@@ -258,9 +262,9 @@ impl HybridModel {
         let rolled: Vec<Rolled> = candidates(outline)
             .into_iter()
             .map(|(contact, normal)| {
-                let pusher = block.position() + to_world * (contact + normal * pusher_radius());
+                let start = block.position() + to_world * (contact + normal * pusher_radius());
                 let errors = self
-                    .roll(id, outline, block, pusher, -(to_world * normal), HORIZON)
+                    .roll(id, outline, block, start, -(to_world * normal), HORIZON)
                     .iter()
                     .map(|pose| error_in(&block, pose, goal))
                     .collect();
