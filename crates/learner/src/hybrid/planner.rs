@@ -18,15 +18,15 @@
 //! distance, a straight approach) and pushes at the speed the model
 //! predicts best for the next message.
 
+use std::f64::consts::{PI, TAU};
+
 use nalgebra::{Rotation2, Vector2};
 use rand::Rng;
 
 use super::mechanics::{Outline, Twist};
 use super::model::{pusher_radius, surface_gap, HybridModel};
 use crate::eval::goal_distance;
-use crate::planning::{
-    circle, exploration, norm2, scaled, APPROACH_SPEED, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED,
-};
+use crate::planning::{exploration, norm2, scaled, EPS_CLOSE, EPS_CLOSE_ENOUGH, REACHED};
 use crate::types::{Action, ObjectState};
 
 /// Candidate contacts per outline.
@@ -35,11 +35,22 @@ const CANDIDATES: usize = 48;
 const HORIZON: usize = 12;
 /// The pusher waits this far off the outline before a push.
 const STANDOFF: f64 = 0.005;
+/// The speed the pusher travels and pushes at: the world's limit
+/// (`docs/spec/world.md` §5), faster than the thesis's planners (0.3 and
+/// 0.4 m/s), and the speed of every training push, so the one the model
+/// knows best.
+const SPEED: f64 = 0.5;
 /// Push speeds weighed at each message, fastest first (ties go to speed).
-const SPEEDS: [f64; 5] = [APPROACH_SPEED, 0.2, 0.1, 0.05, 0.02];
+const SPEEDS: [f64; 6] = [SPEED, 0.3, 0.2, 0.1, 0.05, 0.02];
 /// Messages a kept push is rolled forward to see that it still helps:
 /// enough to close the stand-off.
 const KEEP_CHECK: usize = 4;
+/// How far off the outline the pusher goes round it: the middle of the
+/// thesis's circling band (`docs/spec/planning.md` §1).
+const CLEARANCE: f64 = 0.05;
+/// How far along the outline ahead of itself the pusher heads while it
+/// goes round.
+const LOOK_AHEAD: f64 = 0.03;
 /// The cosine above which the face the pusher touches is the plan's.
 const SAME_FACE: f64 = 0.9;
 /// A part of the error is worked on until it is this small
@@ -61,6 +72,85 @@ pub(super) struct PushPlan {
     sign: f64,
 }
 
+/// The way a pusher at `pusher` (slider frame) goes round the outline
+/// towards `contact`, the shorter way, [`CLEARANCE`] off it: towards the
+/// point [`LOOK_AHEAD`] further along. The thesis's circling (matching the
+/// angle seen from the centre, `docs/spec/planning.md` §4) suits compact
+/// blocks; beside a long one, the angle of a contact near an end is met
+/// far from it and the pusher swings about there.
+fn round_the_outline(
+    outline: &Outline,
+    pusher: Vector2<f64>,
+    contact: Vector2<f64>,
+) -> Vector2<f64> {
+    let around = perimeter(outline);
+    let here = along(outline, outline.closest(pusher).point);
+    let ahead = (along(outline, contact) - here).rem_euclid(around);
+    let step = if ahead <= around / 2.0 {
+        ahead.min(LOOK_AHEAD)
+    } else {
+        -(around - ahead).min(LOOK_AHEAD)
+    };
+    let (point, normal) = at_along(outline, here + step);
+    point + normal * (pusher_radius() + CLEARANCE) - pusher
+}
+
+/// Where a point of the outline lies along it, counter-clockwise from the
+/// corner at (−x, −y) for a box, from the +x axis for a disc.
+fn along(outline: &Outline, point: Vector2<f64>) -> f64 {
+    match *outline {
+        Outline::Disc { radius } => radius * point.y.atan2(point.x).rem_euclid(TAU),
+        Outline::Box { half: [hx, hy] } => {
+            // The face the point is on, in proportion to the box's size
+            // (at a corner the two faces' formulas agree).
+            let (u, v) = (point.x / hx, point.y / hy);
+            if v.abs() >= u.abs() {
+                if v < 0.0 {
+                    point.x + hx
+                } else {
+                    2.0 * hx + 2.0 * hy + (hx - point.x)
+                }
+            } else if u > 0.0 {
+                2.0 * hx + (point.y + hy)
+            } else {
+                4.0 * hx + 2.0 * hy + (hy - point.y)
+            }
+        }
+    }
+}
+
+/// The point of the outline at `s` along it ([`along`]) and the outward
+/// normal there.
+fn at_along(outline: &Outline, s: f64) -> (Vector2<f64>, Vector2<f64>) {
+    let s = s.rem_euclid(perimeter(outline));
+    match *outline {
+        Outline::Disc { radius } => {
+            let n = Vector2::new((s / radius).cos(), (s / radius).sin());
+            (n * radius, n)
+        }
+        Outline::Box { half: [hx, hy] } => {
+            let (bottom, right, top) = (2.0 * hx, 2.0 * hx + 2.0 * hy, 4.0 * hx + 2.0 * hy);
+            if s < bottom {
+                (Vector2::new(s - hx, -hy), Vector2::new(0.0, -1.0))
+            } else if s < right {
+                (Vector2::new(hx, s - bottom - hy), Vector2::new(1.0, 0.0))
+            } else if s < top {
+                (Vector2::new(hx - (s - right), hy), Vector2::new(0.0, 1.0))
+            } else {
+                (Vector2::new(-hx, hy - (s - top)), Vector2::new(-1.0, 0.0))
+            }
+        }
+    }
+}
+
+/// The outline's length.
+fn perimeter(outline: &Outline) -> f64 {
+    match *outline {
+        Outline::Disc { radius } => TAU * radius,
+        Outline::Box { half: [hx, hy] } => 4.0 * (hx + hy),
+    }
+}
+
 /// A candidate push and the block's errors over its horizon.
 struct Rolled {
     contact: Vector2<f64>,
@@ -77,7 +167,6 @@ fn error_in(frame: &ObjectState, pose: &ObjectState, goal: &ObjectState) -> [f64
 }
 
 fn wrapped(angle: f64) -> f64 {
-    use std::f64::consts::{PI, TAU};
     let a = angle.rem_euclid(TAU);
     if a > PI {
         a - TAU
@@ -178,12 +267,15 @@ impl HybridModel {
         let wait_world = block.position() + to_world * wait;
         let delta = wait_world - pusher;
         let gap = norm2(delta);
-        let r = pusher - block.position();
+        let go_round = || {
+            let way = round_the_outline(&outline, local_pusher, plan.contact);
+            Action::from_vector(scaled(to_world * way, SPEED))
+        };
         if gap > EPS_CLOSE {
-            return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
+            return go_round();
         }
         if gap > EPS_CLOSE_ENOUGH && !under_way {
-            let u = Action::from_vector(scaled(delta, APPROACH_SPEED));
+            let u = Action::from_vector(scaled(delta, SPEED));
             // The thesis's safety check (`docs/spec/planning.md` §2): a
             // straight move that would touch the block and knock it away
             // from its target goes round instead. Contact is asked of the
@@ -192,7 +284,7 @@ impl HybridModel {
             let touches = surface_gap(&outline, &block, pusher + self.actuator_path(u)) <= 0.0;
             if touches && goal_distance(&self.one_step(target.id, &outline, block, u), &goal) > now
             {
-                return circle(distance, r, local_pusher.y.atan2(local_pusher.x), wait);
+                return go_round();
             }
             return u;
         }
@@ -231,7 +323,7 @@ impl HybridModel {
         direction: Vector2<f64>,
         messages: usize,
     ) -> Vec<ObjectState> {
-        let path = self.actuator_path(Action::from_vector(direction * APPROACH_SPEED));
+        let path = self.actuator_path(Action::from_vector(direction * SPEED));
         let mut pose = block;
         let mut motion = Twist::default();
         (0..messages)
@@ -372,6 +464,40 @@ mod tests {
         assert!(progress(0, &before, &[-0.25, 0.1, 0.0]) < 0.0);
         // Nothing moved: nothing gained.
         assert_eq!(progress(1, &before, &before), 0.0);
+    }
+
+    #[test]
+    fn along_the_outline_and_back_agree() {
+        let bar = Outline::Box { half: [0.25, 0.05] };
+        assert!((perimeter(&bar) - 1.2).abs() < 1e-12);
+        for i in 0..120 {
+            let s = 0.01 * f64::from(i) + 0.005;
+            let (point, normal) = at_along(&bar, s);
+            assert!((along(&bar, point) - s).abs() < 1e-12, "at {s}");
+            assert_eq!(bar.closest(point + normal * 0.01).normal, normal);
+        }
+        let disc = Outline::Disc { radius: 0.1 };
+        let (point, normal) = at_along(&disc, 0.1);
+        assert!((along(&disc, point) - 0.1).abs() < 1e-12);
+        assert!((normal.norm() - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn going_round_takes_the_shorter_way_and_keeps_clear() {
+        let bar = Outline::Box { half: [0.25, 0.05] };
+        // Below the middle of the long face, for a contact near the right
+        // end of the top face: round the right end (counter-clockwise).
+        let pusher = Vector2::new(0.0, -0.125);
+        let way = round_the_outline(&bar, pusher, Vector2::new(0.2, 0.05));
+        assert!(way.x > 0.0 && way.y.abs() < 1e-12, "{way:?}");
+        // The same contact seen from the left end: the top face is shorter.
+        let pusher = Vector2::new(-0.325, 0.0);
+        let way = round_the_outline(&bar, pusher, Vector2::new(0.2, 0.05));
+        assert!(way.y > 0.0 && way.x.abs() < 1e-12, "{way:?}");
+        // Too close: the aim is out at the clearance.
+        let pusher = Vector2::new(0.0, -0.08);
+        let way = round_the_outline(&bar, pusher, Vector2::new(-0.2, -0.05));
+        assert!(way.y < 0.0 && way.x < 0.0, "{way:?}");
     }
 
     #[test]
