@@ -8,7 +8,9 @@
 //!   [`learner::Model`] method
 //!   (`models.rs`), configured by the model registry
 //!   (`learner::registry`) as the command line's models are;
-//! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`).
+//! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`);
+//! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
+//!   the process (`world.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
 //! `unsafe_code = "forbid"` and needs no exception. The FFI stays inside pyo3
@@ -16,13 +18,14 @@
 //! macro's own code, which the lint does not flag (`docs/architecture.md`).
 //!
 //! Every class is `Send + Sync` (PyO3 requires it of a class that is not
-//! `unsendable`), so Python may use an object from any thread. No method
-//! releases the GIL, so calls on one object from several threads run one
-//! after another.
+//! `unsendable`), so Python may use an object from any thread. The models'
+//! methods hold the GIL, so calls on one object from several threads run one
+//! after another; the worlds release it while they step.
 
 mod aitm;
 mod args;
 mod models;
+mod world;
 
 use learner::ModelStats;
 use pyo3::prelude::*;
@@ -80,7 +83,8 @@ fn is_skipped(name: &str) -> bool {
 
 /// The pushlearn models, implemented in Rust: GateModel, InteractionModel,
 /// HybridModel (with their worlds GateWorld, InteractionWorld and
-/// HybridWorld) and Aitm.
+/// HybridWorld) and Aitm; and World, the world of pushlearn-sim in this
+/// process.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyGateModel>()?;
@@ -90,6 +94,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyInteractionWorld>()?;
     m.add_class::<models::PyHybridWorld>()?;
     m.add_class::<aitm::PyAitm>()?;
+    m.add_class::<world::PyWorld>()?;
+    m.add_class::<world::PyWorlds>()?;
+    m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
     m.add("GOAL_TOLERANCE", learner::eval::GOAL_TOLERANCE)?;
