@@ -1,4 +1,4 @@
-"""The Gymnasium environments (pushlearn.envs) against the real world daemon."""
+"""The Gymnasium environments (pushlearn.envs) on the in-process world and the real world daemon."""
 
 from __future__ import annotations
 
@@ -57,12 +57,13 @@ def process_gone(pid: int, within: float = 10.0) -> bool:
 
 
 @pytest.fixture
-def make(sim_bin: Path) -> Iterator[Callable[..., Any]]:
-    """``gymnasium.make`` with this checkout's pushlearn-sim; closes every env at the end."""
+def make() -> Iterator[Callable[..., Any]]:
+    """``gymnasium.make`` (the world in this process unless ``sim`` says otherwise);
+    closes every env at the end."""
     made: list[Any] = []
 
     def make_env(env_id: str = "pushlearn/PushBlock-v0", **kwargs: Any) -> Any:
-        env = gym.make(env_id, sim_bin=str(sim_bin), **kwargs)
+        env = gym.make(env_id, **kwargs)
         made.append(env)
         return env
 
@@ -71,9 +72,15 @@ def make(sim_bin: Path) -> Iterator[Callable[..., Any]]:
         env.close()
 
 
+@pytest.mark.parametrize("daemon", [False, True], ids=["in-process", "daemon"])
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_gymnasiums_own_checker_passes(env_id: str, sim_bin: Path) -> None:
-    env = gym.make(env_id, sim_bin=str(sim_bin), render_mode="rgb_array")
+def test_gymnasiums_own_checker_passes(
+    env_id: str, daemon: bool, request: pytest.FixtureRequest
+) -> None:
+    where: dict[str, Any] = {}
+    if daemon:
+        where = {"sim": "daemon", "sim_bin": str(request.getfixturevalue("sim_bin"))}
+    env = gym.make(env_id, render_mode="rgb_array", **where)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -298,8 +305,10 @@ def test_rgb_array_draws_the_bodies_and_the_target_like_the_viewer(
     assert moved is not image and not np.array_equal(moved, image)
 
 
-def test_close_is_idempotent_and_stops_the_world(make: Callable[..., Any]) -> None:
-    env = make()
+def test_close_is_idempotent_and_stops_the_world(
+    make: Callable[..., Any], sim_bin: Path
+) -> None:
+    env = make(sim="daemon", sim_bin=str(sim_bin))
     pid = env.unwrapped.world_pid
     env.reset(seed=0)
     env.close()
@@ -372,7 +381,8 @@ def test_the_native_vector_env_steps_as_gymnasiums_sync_vector_env_bit_for_bit(
     env_id: str, sim_bin: Path
 ) -> None:
     # A short time limit, so that truncation and the next step's autoreset happen.
-    kwargs: dict[str, Any] = {"sim_bin": str(sim_bin), "max_episode_steps": 25}
+    kwargs: dict[str, Any] = {"sim": "daemon", "sim_bin": str(sim_bin)}
+    kwargs["max_episode_steps"] = 25
     native = gym.make_vec(env_id, num_envs=3, **kwargs)
     sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync", **kwargs)
     try:
@@ -423,20 +433,18 @@ def test_a_running_world_can_be_used_when_it_fits(
         make("pushlearn/PushTwoBlocks-v0", sim=f"127.0.0.1:{daemon.port}")
 
 
-def test_bad_arguments_are_refused_with_the_reason(
-    make: Callable[..., Any], sim_bin: Path
-) -> None:
+def test_bad_arguments_are_refused_with_the_reason(make: Callable[..., Any]) -> None:
     with pytest.raises(ValueError, match="reward_type must be"):
         make(reward_type="shaped")
     with pytest.raises(ValueError, match="render_mode must be"):
-        PushBlockEnv(render_mode="ansi", sim_bin=str(sim_bin))
+        PushBlockEnv(render_mode="ansi")
     with pytest.raises(ValueError, match="must have 3 numbers"):
         make(targets=[(0.1, 0.2)])
     with pytest.raises(ValueError, match="one of"):
         make("pushlearn/PushTwoBlocks-v0", targets="thesis")
     with pytest.raises(ValueError, match="latency_max must be"):
         make(latency_max=-1)
-    with pytest.raises(ValueError, match="sim must be HOST:PORT"):
+    with pytest.raises(ValueError, match="sim must be None, 'daemon' or HOST:PORT"):
         make(sim="localhost")
     env = make()
     env.reset(seed=0)

@@ -4,24 +4,26 @@
 ids' vector entry point; ``vectorization_mode="async"`` still gives
 Gymnasium's ``AsyncVectorEnv``). Each sub-environment is a
 :class:`~pushlearn.envs.push.PushBlockEnv` (or ``PushTwoBlocksEnv``) with a
-lock-step world of its own; a step sends every world its Move and Advance
-first and only then reads the states, so the worlds step in parallel while
-this process waits, with no process per environment and no pipes between
-them. Autoreset follows Gymnasium's default, ``NEXT_STEP``: the step after
-an episode ended resets that sub-environment (its action is ignored, its
-reward is 0).
+lock-step world of its own. In-process worlds (the default) are stepped
+all together by one call into Rust (:class:`pushlearn._native.Worlds`),
+with the GIL released; with daemons (``sim="daemon"``) a step sends every
+world its Move and Advance first and only then reads the states, so the
+daemons step in parallel while this process waits. Autoreset follows
+Gymnasium's default, ``NEXT_STEP``: the step after an episode ended resets
+that sub-environment (its action is ignored, its reward is 0).
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from .push import MAX_STEPS, PushBlockEnv, PushTwoBlocksEnv, _PushEnv
+from .. import native
+from .push import ACTUATOR_SPEED, MAX_STEPS, PushBlockEnv, PushTwoBlocksEnv, _PushEnv
 
 __all__ = ["PushBlockVectorEnv", "PushTwoBlocksVectorEnv"]
 
@@ -69,6 +71,9 @@ class _PushVectorEnv(
         self.action_space = batch_space(self.single_action_space, num_envs)
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._autoreset = np.zeros(num_envs, dtype=np.bool_)
+        self._worlds: Any = None
+        if all(env.in_process for env in self.envs):
+            self._worlds = native().Worlds([env._native for env in self.envs])
 
     def reset(
         self,
@@ -104,7 +109,8 @@ class _PushVectorEnv(
         npt.NDArray[np.bool_],
         dict[str, Any],
     ]:
-        """Steps every sub-environment: all Moves sent first, then all states read."""
+        """Steps every sub-environment: in-process worlds in one call, daemons
+        all sent their Moves first, then all states read."""
         batch = np.asarray(actions)
         if batch.shape != (self.num_envs, 2):
             raise ValueError(
@@ -114,22 +120,40 @@ class _PushVectorEnv(
         bad = [i for i in range(self.num_envs) if not np.all(np.isfinite(batch[i]))]
         if bad:
             raise ValueError(f"the actions of environments {bad} are not finite")
-        moves: list[int | None] = []
-        for i, env in enumerate(self.envs):
-            moves.append(None if self._autoreset[i] else env._start_step(batch[i]))
+        if self._worlds is not None:
+            if any(env._rows is None for env in self.envs):
+                raise RuntimeError("call reset() before step()")
+            velocities = np.clip(batch.astype(np.float64), -1.0, 1.0) * ACTUATOR_SPEED
+            stepped = [not reset for reset in self._autoreset.tolist()]
+            states = self._worlds.move_and_advance(
+                velocities, planar=True, stepped=stepped
+            ).tolist()
+
+            def finish(i: int, env: _PushEnv) -> Any:
+                return env._result(*env._observe_rows(states[i]))
+
+        else:
+            moves = [
+                None if reset else env._start_step(batch[i])
+                for i, (env, reset) in enumerate(
+                    zip(self.envs, self._autoreset.tolist(), strict=True)
+                )
+            ]
+
+            def finish(i: int, env: _PushEnv) -> Any:
+                return env._finish_step(cast(int, moves[i]))
+
         rewards = np.zeros(self.num_envs, dtype=np.float64)
         terminations = np.zeros(self.num_envs, dtype=np.bool_)
         truncations = np.zeros(self.num_envs, dtype=np.bool_)
         infos: list[dict[str, Any]] = []
         observations = []
-        for i, (env, move) in enumerate(zip(self.envs, moves, strict=True)):
-            if move is None:
+        for i, env in enumerate(self.envs):
+            if self._autoreset[i]:
                 observation, info = env.reset()
                 self._elapsed[i] = 0
             else:
-                observation, rewards[i], terminations[i], _, info = env._finish_step(
-                    move
-                )
+                observation, rewards[i], terminations[i], _, info = finish(i, env)
                 self._elapsed[i] += 1
                 truncations[i] = (
                     self.max_episode_steps is not None
@@ -155,12 +179,13 @@ class _PushVectorEnv(
 
     def close_extras(self, **kwargs: Any) -> None:
         """Closes every sub-environment and stops its world."""
+        self._worlds = None
         for env in self.envs:
             env.close()
 
     @property
     def world_pids(self) -> list[int | None]:
-        """The process ids of the sub-environments' worlds."""
+        """The process ids of the sub-environments' worlds (``None`` for in-process ones)."""
         return [env.world_pid for env in self.envs]
 
 
