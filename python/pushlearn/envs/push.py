@@ -68,6 +68,9 @@ THESIS_TARGETS: tuple[tuple[float, float, float], ...] = (
 Observation = dict[str, Any]
 """``observation``, ``achieved_goal`` and ``desired_goal``, each a float64 array."""
 
+Rows = Sequence[Sequence[float]] | npt.NDArray[np.float64]
+"""A state's planar rows, one per body: x, y, yaw, vx, vy and the spin about z."""
+
 
 class TargetRegion:
     """Where sampled targets lie: block centres in a rectangle, any yaw.
@@ -260,7 +263,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self._state: State | None = None
         # The last state's planar rows (x, y, yaw, vx, vy, spin) in the
         # scene's body order; `None` before the first reset.
-        self._rows: list[list[float]] | None = None
+        self._rows: Rows | None = None
         self._target_values: tuple[float, ...] = (0.0,) * (3 * len(self.blocks))
         self._closed = False
 
@@ -493,7 +496,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
             raise ValueError(f"an action has shape (2,), got {values.shape}")
         # Plain floats from here: numpy's per-call cost on two numbers is
         # most of a step's Python time.
-        ax, ay = float(values[0]), float(values[1])
+        ax, ay = values.tolist()
         if not (math.isfinite(ax) and math.isfinite(ay)):
             raise ValueError(f"an action must be finite, got {[ax, ay]}")
         vx = min(max(ax, -1.0), 1.0) * ACTUATOR_SPEED
@@ -608,7 +611,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         return observation
 
     def _observe_rows(
-        self, rows: list[list[float]]
+        self, rows: Sequence[Sequence[float]]
     ) -> tuple[Observation, dict[str, Any]]:
         """The observation of a state's planar rows (``World.state(planar=True)``,
         the scene's body order) and its ``info``: whether every block meets

@@ -15,7 +15,7 @@ that sub-environment (its action is ignored, its reward is 0).
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -23,7 +23,15 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from .. import native
-from .push import ACTUATOR_SPEED, MAX_STEPS, PushBlockEnv, PushTwoBlocksEnv, _PushEnv
+from .push import (
+    ACTUATOR_SPEED,
+    MAX_STEPS,
+    REACHED,
+    PushBlockEnv,
+    PushTwoBlocksEnv,
+    _PushEnv,
+    goal_distances,
+)
 
 __all__ = ["PushBlockVectorEnv", "PushTwoBlocksVectorEnv"]
 
@@ -117,32 +125,18 @@ class _PushVectorEnv(
                 f"actions must have shape ({self.num_envs}, 2), got {batch.shape}"
             )
         # Checked whole before anything is sent, so a bad row sends nothing.
-        bad = [i for i in range(self.num_envs) if not np.all(np.isfinite(batch[i]))]
-        if bad:
+        finite = np.isfinite(batch).all(axis=1)
+        if not finite.all():
+            bad = np.flatnonzero(~finite).tolist()
             raise ValueError(f"the actions of environments {bad} are not finite")
         if self._worlds is not None:
-            if any(env._rows is None for env in self.envs):
-                raise RuntimeError("call reset() before step()")
-            velocities = np.clip(batch.astype(np.float64), -1.0, 1.0) * ACTUATOR_SPEED
-            stepped = [not reset for reset in self._autoreset.tolist()]
-            states = self._worlds.move_and_advance(
-                velocities, planar=True, stepped=stepped
-            ).tolist()
-
-            def finish(i: int, env: _PushEnv) -> Any:
-                return env._result(*env._observe_rows(states[i]))
-
-        else:
-            moves = [
-                None if reset else env._start_step(batch[i])
-                for i, (env, reset) in enumerate(
-                    zip(self.envs, self._autoreset.tolist(), strict=True)
-                )
-            ]
-
-            def finish(i: int, env: _PushEnv) -> Any:
-                return env._finish_step(cast(int, moves[i]))
-
+            return self._step_in_process(batch)
+        moves = [
+            None if reset else env._start_step(batch[i])
+            for i, (env, reset) in enumerate(
+                zip(self.envs, self._autoreset.tolist(), strict=True)
+            )
+        ]
         rewards = np.zeros(self.num_envs, dtype=np.float64)
         terminations = np.zeros(self.num_envs, dtype=np.bool_)
         truncations = np.zeros(self.num_envs, dtype=np.bool_)
@@ -153,7 +147,11 @@ class _PushVectorEnv(
                 observation, info = env.reset()
                 self._elapsed[i] = 0
             else:
-                observation, rewards[i], terminations[i], _, info = finish(i, env)
+                move = moves[i]
+                assert move is not None
+                observation, rewards[i], terminations[i], _, info = env._finish_step(
+                    move
+                )
                 self._elapsed[i] += 1
                 truncations[i] = (
                     self.max_episode_steps is not None
@@ -170,6 +168,73 @@ class _PushVectorEnv(
             truncations,
             _batched(infos),
         )
+
+    def _step_in_process(
+        self, batch: npt.NDArray[Any]
+    ) -> tuple[
+        dict[str, Any],
+        npt.NDArray[np.float64],
+        npt.NDArray[np.bool_],
+        npt.NDArray[np.bool_],
+        dict[str, Any],
+    ]:
+        """:meth:`step` of in-process worlds: one call steps them all, and the
+        observations, rewards and infos are computed for all at once, with
+        the sub-environments' arithmetic (so the same bits as theirs)."""
+        envs = self.envs
+        if any(env._rows is None for env in envs):
+            raise RuntimeError("call reset() before step()")
+        n = self.num_envs
+        resetting = self._autoreset
+        velocities = np.clip(batch.astype(np.float64), -1.0, 1.0) * ACTUATOR_SPEED
+        states = self._worlds.move_and_advance(
+            velocities, planar=True, stepped=(~resetting).tolist()
+        )
+        first = envs[0]
+        blocks = states[:, first._block_rows, :]
+        actuator = states[:, first._actuator_row, :]
+        observation = np.concatenate(
+            (actuator[:, [0, 1, 3, 4]], blocks.reshape(n, -1)), axis=1
+        )
+        achieved = blocks[:, :, :3].reshape(n, -1)
+        desired = np.array([env._target_values for env in envs], dtype=np.float64)
+        distances = goal_distances(achieved, desired)
+        success = np.all(distances < REACHED, axis=-1)
+        distance = np.sum(distances, axis=-1)
+        if first.reward_type == "sparse":
+            rewards = np.where(success, 0.0, -1.0)
+        else:
+            rewards = -distance
+        terminations = success & first.terminate_on_success
+        for i, env in enumerate(envs):
+            env._rows = states[i]
+            env._state = None
+        self._elapsed += 1
+        truncations = np.zeros(n, dtype=np.bool_)
+        if self.max_episode_steps is not None:
+            truncations = (self._elapsed >= self.max_episode_steps) & ~terminations
+        for i in np.flatnonzero(resetting).tolist():
+            reset, info = envs[i].reset()
+            observation[i] = reset["observation"]
+            achieved[i] = reset["achieved_goal"]
+            desired[i] = reset["desired_goal"]
+            success[i], distance[i] = info["is_success"], info["distance"]
+            rewards[i], terminations[i], truncations[i] = 0.0, False, False
+            self._elapsed[i] = 0
+        self._autoreset = terminations | truncations
+        every = np.ones(n, dtype=np.bool_)
+        infos = {
+            "is_success": success,
+            "_is_success": every,
+            "distance": distance,
+            "_distance": every.copy(),
+        }
+        observations = {
+            "observation": observation,
+            "achieved_goal": achieved,
+            "desired_goal": desired,
+        }
+        return observations, rewards, terminations, truncations, infos
 
     def render(self) -> tuple[Any, ...] | None:
         """Each sub-environment's picture (``rgb_array``), or ``None`` without a render mode."""
