@@ -229,6 +229,10 @@ def test_the_one_goal_distance_is_the_batch_distance_bit_for_bit() -> None:
         for a, d in zip(achieved, desired, strict=True)
     ]
     assert batch.tolist() == one
+    # The native batch (the vector environment's) is the harness's: the same bits.
+    assert pushlearn.native().goal_distances(achieved, desired).tolist() == one
+    with pytest.raises(ValueError, match="one shape"):
+        pushlearn.native().goal_distances(achieved, desired[:, :5])
     # A yaw of π and one of −π are the same pose.
     assert goal_distances([0.0, 0.0, math.pi], [0.0, 0.0, -math.pi])[0] < 1e-12
     with pytest.raises(ValueError, match="one shape"):
