@@ -37,6 +37,13 @@ def goal_distance(
     """The norm of ``(Δx, Δy, wrap(Δθ))`` from ``pose`` to ``target``: the one success
     criterion every task with a goal is judged by (``docs/spec/experiments.md`` §4.4)."""
 
+def goal_distances(
+    achieved: npt.NDArray[np.float64], desired: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
+    """:func:`goal_distance` of every block of every row: ``achieved`` and ``desired``
+    of shape ``(n, 3k)`` (x, y, θ per block), the result ``(n, k)``; ``ValueError``
+    for other shapes."""
+
 ACTUATOR_ID: int
 """The actuator's body id (8)."""
 ACTUATOR_NAME: str

@@ -264,6 +264,7 @@ impl PyWorld {
         self.send(py, Payload::pause())
     }
 
+    /// Resumes stepping.
     fn unpause(&self, py: Python<'_>) -> PyResult<u64> {
         self.send(py, Payload::unpause())
     }
@@ -423,6 +424,7 @@ impl PyWorlds {
         Ok(PyWorlds { worlds, bodies })
     }
 
+    /// The number of worlds.
     fn __len__(&self) -> usize {
         self.worlds.len()
     }
