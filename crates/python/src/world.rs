@@ -142,11 +142,14 @@ impl Session {
         failure.map_or(Ok(seq), Err)
     }
 
-    fn rows(&self) -> Result<&[f64], Failure> {
+    fn published(&self) -> Result<&Published, Failure> {
         self.last
             .as_ref()
-            .map(|p| &p.rows[..])
             .ok_or_else(|| Failure::Refused("no state yet: advance the world first".to_owned()))
+    }
+
+    fn rows(&self) -> Result<&[f64], Failure> {
+        self.published().map(|p| &p.rows[..])
     }
 
     fn move_and_advance(&mut self, vx: f64, vy: f64) -> Result<(), Failure> {
@@ -359,32 +362,26 @@ impl PyWorld {
     /// about z. `ValueError` before the first `advance`.
     #[pyo3(signature = (*, planar = false))]
     fn state<'py>(&self, py: Python<'py>, planar: bool) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let values = self.lock().rows().map(|rows| view(rows, planar))?;
+        // Without the GIL: another thread may be stepping this world.
+        let values = py.detach(|| self.lock().rows().map(|rows| view(rows, planar)))?;
         self.state_array(py, values)
     }
 
     /// The last published state as the daemon sent it: `pushlearn.WorldState`
     /// message bytes (ghosts and counters included).
     fn state_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
-        let session = self.lock();
-        let published = session.last.as_ref().ok_or_else(|| {
-            PyErr::from(Failure::Refused(
-                "no state yet: advance the world first".to_owned(),
-            ))
-        })?;
-        Ok(PyBytes::new(py, &published.message.encode_to_vec()))
+        let bytes = py.detach(|| self.lock().published().map(|p| p.message.encode_to_vec()))?;
+        Ok(PyBytes::new(py, &bytes))
     }
 
     /// `(step, applied_seq)` of the last published state: physics steps
     /// since the last reset, and the last command in force.
-    fn counters(&self) -> PyResult<(u64, u64)> {
-        let session = self.lock();
-        let published = session.last.as_ref().ok_or_else(|| {
-            PyErr::from(Failure::Refused(
-                "no state yet: advance the world first".to_owned(),
-            ))
-        })?;
-        Ok((published.message.step, published.message.applied_seq))
+    fn counters(&self, py: Python<'_>) -> PyResult<(u64, u64)> {
+        Ok(py.detach(|| {
+            self.lock()
+                .published()
+                .map(|p| (p.message.step, p.message.applied_seq))
+        })?)
     }
 
     fn __repr__(&self) -> String {
