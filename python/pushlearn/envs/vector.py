@@ -138,8 +138,10 @@ class _PushVectorEnv(
                 f"actions must have shape ({self.num_envs}, 2), got {batch.shape}"
             )
         # Checked whole before anything is sent, so a bad row sends nothing.
-        finite = np.isfinite(batch).all(axis=1)
-        if not finite.all():
+        # Reductions by their ufuncs: ndarray.all and .sum go through Python
+        # wrappers that cost more than these small arrays' arithmetic.
+        finite = np.logical_and.reduce(np.isfinite(batch), axis=1)
+        if not np.logical_and.reduce(finite):
             bad = np.flatnonzero(~finite).tolist()
             raise ValueError(f"the actions of environments {bad} are not finite")
         if self._worlds is not None:
@@ -199,7 +201,7 @@ class _PushVectorEnv(
             raise RuntimeError("call reset() before step()")
         n = self.num_envs
         resetting = self._autoreset
-        any_reset = bool(resetting.any())
+        any_reset = bool(np.logical_or.reduce(resetting))
         # The ufuncs themselves: np.clip's dispatch costs more than the clipping.
         velocities = np.minimum(np.maximum(batch, -1.0, dtype=np.float64), 1.0)
         velocities *= ACTUATOR_SPEED
@@ -218,8 +220,8 @@ class _PushVectorEnv(
         achieved = blocks[:, :, :3].reshape(n, -1)
         desired = self._desired.copy()
         distances = self._native.goal_distances(achieved, desired)
-        success = (distances < REACHED).all(axis=1)
-        distance = distances.sum(axis=1)
+        success = np.logical_and.reduce(distances < REACHED, axis=1)
+        distance = np.add.reduce(distances, axis=1)
         if first.reward_type == "sparse":
             rewards = success - 1.0
         else:
