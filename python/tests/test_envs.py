@@ -148,6 +148,30 @@ def test_the_same_seed_and_actions_give_the_same_episode_bit_for_bit(
     assert run_episode(second, 8, actions) != a
 
 
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_in_process_world_gives_the_daemons_episodes_bit_for_bit(
+    env_id: str, make: Callable[..., Any], sim_bin: Path
+) -> None:
+    rng = np.random.default_rng(6)
+    actions = np.column_stack([rng.uniform(-0.3, 0.3, 300), np.full(300, 1.0)]).astype(
+        np.float32
+    )
+    options = {"show_target": True, "reward_type": "dense"}
+    in_process = make(env_id, **options)
+    daemon = make(env_id, sim="daemon", sim_bin=str(sim_bin), **options)
+    assert in_process.unwrapped.in_process and not daemon.unwrapped.in_process
+    assert run_episode(in_process, 3, actions) == run_episode(daemon, 3, actions)
+    # The full world states too, ghosts included.
+    mine, theirs = in_process.unwrapped.state, daemon.unwrapped.state
+    assert [b.name for b in mine.bodies] == [b.name for b in theirs.bodies]
+    assert mine.bodies == theirs.bodies and mine.step == theirs.step
+    # A start elsewhere, through the reset's set_pose.
+    start = {"actuator": (0.2, -0.1)}
+    a, _ = in_process.reset(seed=4, options=start)
+    b, _ = daemon.reset(seed=4, options=start)
+    assert all(a[key].tobytes() == b[key].tobytes() for key in b)
+
+
 def test_the_world_moves_the_actuator_at_the_thesis_speed(
     make: Callable[..., Any],
 ) -> None:
