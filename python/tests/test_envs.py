@@ -346,6 +346,21 @@ def test_close_is_idempotent_and_stops_the_world(
         env.unwrapped.reset()
 
 
+def test_a_closed_in_process_env_says_so(make: Callable[..., Any]) -> None:
+    env = make()
+    env.reset(seed=0)
+    env.step(np.zeros(2, dtype=np.float32))
+    env.close()
+    env.close()
+    for call in (
+        lambda: env.unwrapped.reset(),
+        lambda: env.unwrapped.step(np.zeros(2)),
+        lambda: env.unwrapped.state,
+    ):
+        with pytest.raises(RuntimeError, match="closed"):
+            call()
+
+
 def test_a_garbage_collected_env_stops_its_world(sim_bin: Path) -> None:
     env = gym.make("pushlearn/PushBlock-v0", sim_bin=str(sim_bin))
     env.reset(seed=0)

@@ -378,7 +378,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         if self._state is None:
             # In-process: built when asked for, not at every step.
             self._state = State.from_world_state(
-                pushlearn_pb2.WorldState.FromString(self._native.state_bytes())
+                pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes())
             )
         return self._state
 
