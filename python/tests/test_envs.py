@@ -352,13 +352,12 @@ def test_a_closed_in_process_env_says_so(make: Callable[..., Any]) -> None:
     env.step(np.zeros(2, dtype=np.float32))
     env.close()
     env.close()
-    for call in (
-        lambda: env.unwrapped.reset(),
-        lambda: env.unwrapped.step(np.zeros(2)),
-        lambda: env.unwrapped.state,
-    ):
-        with pytest.raises(RuntimeError, match="closed"):
-            call()
+    with pytest.raises(RuntimeError, match="closed"):
+        env.unwrapped.reset()
+    with pytest.raises(RuntimeError, match="closed"):
+        env.unwrapped.step(np.zeros(2))
+    with pytest.raises(RuntimeError, match="closed"):
+        _ = env.unwrapped.state
 
 
 def test_a_garbage_collected_env_stops_its_world(sim_bin: Path) -> None:
