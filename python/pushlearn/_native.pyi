@@ -532,8 +532,8 @@ class World:
     def set_pose(
         self,
         name: str,
-        position: Sequence[float],
-        orientation: Sequence[float] | None = None,
+        position: npt.ArrayLike,
+        orientation: npt.ArrayLike | None = None,
     ) -> int:
         """Puts body ``name`` at ``position`` (x, y, z) with ``orientation``, the
         quaternion (x, y, z, w) (normalised by the world; default upright).

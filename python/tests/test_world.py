@@ -199,14 +199,19 @@ def refusals() -> list[tuple[str, Callable[[World], Any], str]]:
         ),
         ("ghost of nothing", lambda w: w.set_pose("blockZShadow", (0, 0, 0)), "blockZ"),
         (
+            "matrix position",
+            lambda w: w.set_pose("blockA", np.zeros((1, 3))),
+            r"position must be 3 numbers .* shape \(1, 3\)",
+        ),
+        (
             "short position",
             lambda w: w.set_pose("blockA", (0, 0)),
-            "position must have 3",
+            r"position must be 3 numbers \(x, y, z\), got an array of shape \(2,\)",
         ),
         (
             "long orientation",
             lambda w: w.set_pose("blockA", (0, 0, 0), (0, 0, 0, 1, 0)),
-            "orientation must have 4",
+            r"orientation must be 4 numbers .* shape \(5,\)",
         ),
         (
             "nan position",

@@ -22,7 +22,10 @@
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
 
-use numpy::{PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    AllowTypeChange, PyArray2, PyArray3, PyArrayLikeDyn, PyArrayMethods, PyReadonlyArray2,
+    PyUntypedArrayMethods,
+};
 use prost::Message;
 use pushlearn::wire::pb::{self, client_message::Payload, server_message};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
@@ -31,7 +34,7 @@ use pyo3::types::PyBytes;
 use sim_plugin::server::{EmbeddedWorld, Latency};
 use sim_plugin::Scene;
 
-use crate::args::{shape_text, value_error, Unsigned};
+use crate::args::{elements, shape_text, value_error, Unsigned};
 
 /// The values of a body's row in a state array: position (x, y, z),
 /// orientation quaternion (x, y, z, w), linear velocity (x, y, z) and
@@ -55,6 +58,26 @@ fn view(rows: &[f64], planar: bool) -> (Vec<f64>, usize) {
         out.extend([r[0], r[1], yaw, r[7], r[8], r[12]]);
     }
     (out, PLANAR_COLUMNS)
+}
+
+/// The `N` numbers of a 1-D array argument called `name` (`what` names
+/// them); the world's own checks judge their values.
+fn numbers<const N: usize>(
+    name: &str,
+    what: &str,
+    array: &PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+) -> PyResult<[f64; N]> {
+    let shape = array.shape();
+    let wrong = || {
+        value_error(format!(
+            "{name} must be {N} numbers ({what}), got an array of shape {}",
+            shape_text(shape)
+        ))
+    };
+    if shape != [N] {
+        return Err(wrong());
+    }
+    <[f64; N]>::try_from(&elements(array)[..]).map_err(|_| wrong())
 }
 
 /// The latest published state, as the daemon would have sent it.
@@ -287,22 +310,14 @@ impl PyWorld {
         &self,
         py: Python<'_>,
         name: String,
-        position: Vec<f64>,
-        orientation: Option<Vec<f64>>,
+        position: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        orientation: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
     ) -> PyResult<u64> {
-        let orientation = orientation.unwrap_or_else(|| vec![0.0, 0.0, 0.0, 1.0]);
-        let [x, y, z] = <[f64; 3]>::try_from(position.as_slice()).map_err(|_| {
-            value_error(format!(
-                "position must have 3 numbers (x, y, z), got {}",
-                position.len()
-            ))
-        })?;
-        let [qx, qy, qz, qw] = <[f64; 4]>::try_from(orientation.as_slice()).map_err(|_| {
-            value_error(format!(
-                "orientation must have 4 numbers (x, y, z, w), got {}",
-                orientation.len()
-            ))
-        })?;
+        let [x, y, z] = numbers("position", "x, y, z", &position)?;
+        let [qx, qy, qz, qw] = match &orientation {
+            Some(orientation) => numbers("orientation", "x, y, z, w", orientation)?,
+            None => [0.0, 0.0, 0.0, 1.0],
+        };
         let pose = pb::Pose {
             position: Some(pb::Vector3d::new(x, y, z)),
             orientation: Some(pb::Quaternion {
