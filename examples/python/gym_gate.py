@@ -9,7 +9,7 @@ every action towards the target, learning on, until the environment reports
 success or truncates the episode at 3000 steps. Prints each target's reached
 count and mean steps, then the success rate.
 
-    cargo build --release -p sim-plugin --bins && pip install '.[gym]'
+    pip install '.[gym]'
     python3 examples/python/gym_gate.py [--repetitions 5] [--seed 1]
 
 The model learns from the environment's world states (``env.unwrapped.state``,

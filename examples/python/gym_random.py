@@ -3,9 +3,9 @@
 
 Runs episodes of uniformly random actions, seeded, and prints each episode's
 length, return and final distance to the target, then the success rate. The
-environment starts its own lock-step ``pushlearn-sim`` and stops it at the end.
+environment steps the lock-step world of ``pushlearn-sim`` in this process.
 
-    cargo build --release -p sim-plugin --bins && pip install '.[gym]'
+    pip install '.[gym]'
     python3 examples/python/gym_random.py [--env pushlearn/PushTwoBlocks-v0] [--episodes 5]
 """
 

@@ -19,8 +19,10 @@ baselines, ``numpy`` and ``scikit-learn``):
   on import when Gymnasium is installed.
 
 ``GateModel``, ``InteractionModel``, ``HybridModel`` and ``Aitm`` are the
-Rust models themselves, from the native extension ``pushlearn._native``; they are
-imported only when first used, so everything else works without it.
+Rust models themselves, and ``World`` the world of ``pushlearn-sim`` in this
+process (no daemon, no socket), from the native extension
+``pushlearn._native``; they are imported only when first used, so everything
+else works without it.
 """
 
 from __future__ import annotations
@@ -58,7 +60,7 @@ from .learner import (
 from .sim import SimClient, SimError, WorldHello
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ._native import Aitm, GateModel, HybridModel, InteractionModel
+    from ._native import Aitm, GateModel, HybridModel, InteractionModel, World
 
 __version__ = "0.1.0"
 """The package's version."""
@@ -89,6 +91,7 @@ __all__ = [
     "Target",
     "TargetRefused",
     "UsageError",
+    "World",
     "WorldHello",
     "__version__",
     "is_skipped",
@@ -97,7 +100,7 @@ __all__ = [
     "serve_tcp",
 ]
 
-_NATIVE = ("GateModel", "InteractionModel", "HybridModel", "Aitm")
+_NATIVE = ("GateModel", "InteractionModel", "HybridModel", "Aitm", "World")
 
 
 def native() -> Any:

@@ -6,8 +6,16 @@ and HybridWorld are their world states, returned by ``parse`` and
 ``predict``. Aitm is the memory-based regressor and classifier the thesis's
 learners are built from.
 
-Every class may be used from any thread. No method releases the GIL, so calls
-on one object from several threads run one after another.
+World is the lock-step world of ``pushlearn-sim`` inside this process (the
+daemon's own code: same scenes, checks, latency emulation and states, bit
+for bit), Worlds several of them stepped in one call, and
+:func:`step_messages` the physics floor of ``python -m
+pushlearn.envs.throughput``.
+
+Every class may be used from any thread. The models hold the GIL, so calls
+on one object from several threads run one after another; World and Worlds
+release it while the world steps, and worlds stepped from several threads
+take turns in ODE (one process-wide lock) and stay bit-identical.
 """
 
 from collections.abc import Sequence
@@ -28,6 +36,13 @@ def goal_distance(
 ) -> float:
     """The norm of ``(Δx, Δy, wrap(Δθ))`` from ``pose`` to ``target``: the one success
     criterion every task with a goal is judged by (``docs/spec/experiments.md`` §4.4)."""
+
+def goal_distances(
+    achieved: npt.NDArray[np.float64], desired: npt.NDArray[np.float64]
+) -> npt.NDArray[np.float64]:
+    """:func:`goal_distance` of every block of every row: ``achieved`` and ``desired``
+    of shape ``(n, 3k)`` (x, y, θ per block), the result ``(n, k)``; ``ValueError``
+    for other shapes."""
 
 ACTUATOR_ID: int
 """The actuator's body id (8)."""
@@ -463,3 +478,109 @@ class Aitm:
         ever inserted), "nodes": int (current nodes)}``."""
     def copy(self) -> Aitm:
         """A deep copy of the map."""
+
+class World:
+    """The lock-step world of ``pushlearn-sim serve --mode lockstep`` in this process.
+
+    ``scene`` is a built-in scene name (``one_block``, ``two_blocks``,
+    ``objects``) or a scene file, as ``--scene`` takes it; ``latency_max``
+    and ``latency_seed`` are ``--latency-max`` and ``--latency-seed``
+    (``None``: no latency emulation), ``publish_rate`` is ``--rate`` (Hz,
+    ``None``: the scene's). Every command is the message a
+    :class:`pushlearn.SimClient` would send, checked by the daemon's own
+    checks: what the daemon refuses raises ``ValueError`` with its text
+    (unknown scene or body, a non-finite or out-of-range number, an Advance
+    while paused, …), and a physics blow-up (the world resets itself) raises
+    ``RuntimeError``. Commands return their seq, numbered from 1.
+
+    States are float64 arrays with a row per dynamic body (:attr:`body_names`,
+    scene order) and 13 columns: position x, y, z; orientation quaternion x,
+    y, z, w; linear velocity x, y, z; angular velocity x, y, z (world frame,
+    m, m/s, rad/s). With ``planar=True`` 6 columns: x, y, yaw (as the
+    learners read it), vx, vy and the spin about z.
+    """
+
+    def __init__(
+        self,
+        scene: str = "one_block",
+        *,
+        latency_max: int | None = None,
+        latency_seed: int = 0,
+        publish_rate: int | None = None,
+    ) -> None: ...
+    @property
+    def scene(self) -> str:
+        """The scene as given."""
+    @property
+    def body_names(self) -> list[str]:
+        """The dynamic bodies' names: the rows of a state, in order."""
+    @property
+    def latency_max(self) -> int | None:
+        """The latency emulation's largest delay of a Move in steps (``None``: none)."""
+    def hello_bytes(self) -> bytes:
+        """The daemon's Hello for this world (``pushlearn.Hello`` message bytes)."""
+    def reset(self) -> int:
+        """Every body to its start pose at rest, step and time to 0 (the stored
+        actuator command is kept)."""
+    def pause(self) -> int:
+        """Stops stepping; an Advance is refused until :meth:`unpause`."""
+    def unpause(self) -> int:
+        """Resumes stepping."""
+    def move(self, vx: float, vy: float) -> int:
+        """The actuator's velocity (m/s, world frame) until the next Move; the
+        world scales it down to its top speed."""
+    def set_pose(
+        self,
+        name: str,
+        position: npt.ArrayLike,
+        orientation: npt.ArrayLike | None = None,
+    ) -> int:
+        """Puts body ``name`` at ``position`` (x, y, z) with ``orientation``, the
+        quaternion (x, y, z, w) (normalised by the world; default upright).
+        ``…Shadow…`` names set the viewer's ghosts."""
+    def latency_seed(self, seed: int) -> int:
+        """Reseeds the latency emulation (``ValueError`` without it)."""
+    def set_publish_rate(self, hz: int) -> int:
+        """Publishes every ``1000 / hz`` steps (``hz`` must divide 1000)."""
+    def advance(self, *, planar: bool = False) -> npt.NDArray[np.float64]:
+        """Runs the world to its next publish (every command sent before is in
+        force by then) and returns its state."""
+    def move_and_advance(
+        self, vx: float, vy: float, *, planar: bool = False
+    ) -> npt.NDArray[np.float64]:
+        """:meth:`move` and :meth:`advance` in one call: one environment step."""
+    def state(self, *, planar: bool = False) -> npt.NDArray[np.float64]:
+        """The last published state (``ValueError`` before the first advance)."""
+    def state_bytes(self) -> bytes:
+        """The last published state as the daemon sent it: ``pushlearn.WorldState``
+        message bytes, ghosts and counters included."""
+    def counters(self) -> tuple[int, int]:
+        """``(step, applied_seq)`` of the last published state."""
+
+class Worlds:
+    """Several :class:`World` of one scene's bodies, stepped together in one call
+    with the GIL released (the native vector environment's step)."""
+
+    def __init__(self, worlds: Sequence[World]) -> None: ...
+    def __len__(self) -> int: ...
+    def move_and_advance(
+        self,
+        velocities: npt.NDArray[np.float64],
+        *,
+        planar: bool = False,
+        stepped: Sequence[bool] | None = None,
+    ) -> npt.NDArray[np.float64]:
+        """Moves world i at ``velocities[i]`` (m/s; shape ``(len, 2)``) and advances
+        it, for every i flagged in ``stepped`` (default all), and returns every
+        world's state stacked: shape ``(len, bodies, 13)``, or ``(len, bodies, 6)``
+        with ``planar``. Everything is checked before any world steps."""
+
+def step_messages(
+    velocities: npt.NDArray[np.float64],
+    scene: str = "one_block",
+    *,
+    latency_max: int | None = None,
+) -> float:
+    """Seconds the world library takes to step ``velocities`` (shape ``(n, 2)``,
+    m/s) as Moves, each followed by an Advance, on a fresh :class:`World` of
+    ``scene``, with nothing between them: the physics floor."""

@@ -1,4 +1,4 @@
-"""The Gymnasium environments (pushlearn.envs) against the real world daemon."""
+"""The Gymnasium environments (pushlearn.envs) on the in-process world and the real world daemon."""
 
 from __future__ import annotations
 
@@ -57,12 +57,13 @@ def process_gone(pid: int, within: float = 10.0) -> bool:
 
 
 @pytest.fixture
-def make(sim_bin: Path) -> Iterator[Callable[..., Any]]:
-    """``gymnasium.make`` with this checkout's pushlearn-sim; closes every env at the end."""
+def make() -> Iterator[Callable[..., Any]]:
+    """``gymnasium.make`` (the world in this process unless ``sim`` says otherwise);
+    closes every env at the end."""
     made: list[Any] = []
 
     def make_env(env_id: str = "pushlearn/PushBlock-v0", **kwargs: Any) -> Any:
-        env = gym.make(env_id, sim_bin=str(sim_bin), **kwargs)
+        env = gym.make(env_id, **kwargs)
         made.append(env)
         return env
 
@@ -71,9 +72,15 @@ def make(sim_bin: Path) -> Iterator[Callable[..., Any]]:
         env.close()
 
 
+@pytest.mark.parametrize("daemon", [False, True], ids=["in-process", "daemon"])
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_gymnasiums_own_checker_passes(env_id: str, sim_bin: Path) -> None:
-    env = gym.make(env_id, sim_bin=str(sim_bin), render_mode="rgb_array")
+def test_gymnasiums_own_checker_passes(
+    env_id: str, daemon: bool, request: pytest.FixtureRequest
+) -> None:
+    where: dict[str, Any] = {}
+    if daemon:
+        where = {"sim": "daemon", "sim_bin": str(request.getfixturevalue("sim_bin"))}
+    env = gym.make(env_id, render_mode="rgb_array", **where)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -139,6 +146,30 @@ def test_the_same_seed_and_actions_give_the_same_episode_bit_for_bit(
     assert run_episode(first, 7, actions) == a
     # Another seed draws another latency stream (and target): the episode differs.
     assert run_episode(second, 8, actions) != a
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_the_in_process_world_gives_the_daemons_episodes_bit_for_bit(
+    env_id: str, make: Callable[..., Any], sim_bin: Path
+) -> None:
+    rng = np.random.default_rng(6)
+    actions = np.column_stack([rng.uniform(-0.3, 0.3, 300), np.full(300, 1.0)]).astype(
+        np.float32
+    )
+    options = {"show_target": True, "reward_type": "dense"}
+    in_process = make(env_id, **options)
+    daemon = make(env_id, sim="daemon", sim_bin=str(sim_bin), **options)
+    assert in_process.unwrapped.in_process and not daemon.unwrapped.in_process
+    assert run_episode(in_process, 3, actions) == run_episode(daemon, 3, actions)
+    # The full world states too, ghosts included.
+    mine, theirs = in_process.unwrapped.state, daemon.unwrapped.state
+    assert [b.name for b in mine.bodies] == [b.name for b in theirs.bodies]
+    assert mine.bodies == theirs.bodies and mine.step == theirs.step
+    # A start elsewhere, through the reset's set_pose.
+    start = {"actuator": (0.2, -0.1)}
+    a, _ = in_process.reset(seed=4, options=start)
+    b, _ = daemon.reset(seed=4, options=start)
+    assert all(a[key].tobytes() == b[key].tobytes() for key in b)
 
 
 def test_the_world_moves_the_actuator_at_the_thesis_speed(
@@ -222,6 +253,10 @@ def test_the_one_goal_distance_is_the_batch_distance_bit_for_bit() -> None:
         for a, d in zip(achieved, desired, strict=True)
     ]
     assert batch.tolist() == one
+    # The native batch (the vector environment's) is the harness's: the same bits.
+    assert pushlearn.native().goal_distances(achieved, desired).tolist() == one
+    with pytest.raises(ValueError, match="one shape"):
+        pushlearn.native().goal_distances(achieved, desired[:, :5])
     # A yaw of π and one of −π are the same pose.
     assert goal_distances([0.0, 0.0, math.pi], [0.0, 0.0, -math.pi])[0] < 1e-12
     with pytest.raises(ValueError, match="one shape"):
@@ -298,8 +333,10 @@ def test_rgb_array_draws_the_bodies_and_the_target_like_the_viewer(
     assert moved is not image and not np.array_equal(moved, image)
 
 
-def test_close_is_idempotent_and_stops_the_world(make: Callable[..., Any]) -> None:
-    env = make()
+def test_close_is_idempotent_and_stops_the_world(
+    make: Callable[..., Any], sim_bin: Path
+) -> None:
+    env = make(sim="daemon", sim_bin=str(sim_bin))
     pid = env.unwrapped.world_pid
     env.reset(seed=0)
     env.close()
@@ -307,6 +344,20 @@ def test_close_is_idempotent_and_stops_the_world(make: Callable[..., Any]) -> No
     assert process_gone(pid)
     with pytest.raises(RuntimeError, match="closed"):
         env.unwrapped.reset()
+
+
+def test_a_closed_in_process_env_says_so(make: Callable[..., Any]) -> None:
+    env = make()
+    env.reset(seed=0)
+    env.step(np.zeros(2, dtype=np.float32))
+    env.close()
+    env.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        env.unwrapped.reset()
+    with pytest.raises(RuntimeError, match="closed"):
+        env.unwrapped.step(np.zeros(2))
+    with pytest.raises(RuntimeError, match="closed"):
+        _ = env.unwrapped.state
 
 
 def test_a_garbage_collected_env_stops_its_world(sim_bin: Path) -> None:
@@ -367,18 +418,21 @@ def test_a_vector_env_runs_one_world_per_env_and_stops_them_all(sim_bin: Path) -
     assert all(process_gone(pid) for pid in pids)
 
 
+@pytest.mark.parametrize("daemon", [False, True], ids=["in-process", "daemon"])
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_the_native_vector_env_steps_as_gymnasiums_sync_vector_env_bit_for_bit(
-    env_id: str, sim_bin: Path
+    env_id: str, daemon: bool, request: pytest.FixtureRequest
 ) -> None:
     # A short time limit, so that truncation and the next step's autoreset happen.
-    kwargs: dict[str, Any] = {"sim_bin": str(sim_bin), "max_episode_steps": 25}
+    kwargs: dict[str, Any] = {"max_episode_steps": 25}
+    if daemon:
+        kwargs |= {"sim": "daemon", "sim_bin": str(request.getfixturevalue("sim_bin"))}
     native = gym.make_vec(env_id, num_envs=3, **kwargs)
     sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync", **kwargs)
     try:
         assert type(native).__name__.endswith("VectorEnv") and native is not sync
         pids = cast(Any, native).world_pids
-        assert len(set(pids)) == 3
+        assert len(set(pids)) == (3 if daemon else 1)
         rng = np.random.default_rng(2)
         first = native.reset(seed=4), sync.reset(seed=4)
         for (obs_native, _), (obs_sync, _) in [first]:
@@ -391,9 +445,12 @@ def test_the_native_vector_env_steps_as_gymnasiums_sync_vector_env_bit_for_bit(
             b = sync.step(actions)
             for key in b[0]:
                 assert a[0][key].tobytes() == b[0][key].tobytes(), key
+                assert a[0][key].dtype == b[0][key].dtype, key
             for x, y in zip(a[1:4], b[1:4], strict=True):
                 assert x.tolist() == y.tolist()
-            assert a[4]["is_success"].tolist() == b[4]["is_success"].tolist()
+                assert x.dtype == y.dtype
+            for key in b[4]:
+                assert a[4][key].tobytes() == b[4][key].tobytes(), key
             truncated_seen += int(a[3].sum())
         assert truncated_seen == 6  # each env at steps 25 and 51
         with pytest.raises(ValueError, match="not finite"):
@@ -402,7 +459,7 @@ def test_the_native_vector_env_steps_as_gymnasiums_sync_vector_env_bit_for_bit(
     finally:
         native.close()
         sync.close()
-    assert all(process_gone(pid) for pid in pids)
+    assert all(pid is None or process_gone(pid) for pid in pids)
 
 
 def test_a_running_world_can_be_used_when_it_fits(
@@ -423,20 +480,18 @@ def test_a_running_world_can_be_used_when_it_fits(
         make("pushlearn/PushTwoBlocks-v0", sim=f"127.0.0.1:{daemon.port}")
 
 
-def test_bad_arguments_are_refused_with_the_reason(
-    make: Callable[..., Any], sim_bin: Path
-) -> None:
+def test_bad_arguments_are_refused_with_the_reason(make: Callable[..., Any]) -> None:
     with pytest.raises(ValueError, match="reward_type must be"):
         make(reward_type="shaped")
     with pytest.raises(ValueError, match="render_mode must be"):
-        PushBlockEnv(render_mode="ansi", sim_bin=str(sim_bin))
+        PushBlockEnv(render_mode="ansi")
     with pytest.raises(ValueError, match="must have 3 numbers"):
         make(targets=[(0.1, 0.2)])
     with pytest.raises(ValueError, match="one of"):
         make("pushlearn/PushTwoBlocks-v0", targets="thesis")
     with pytest.raises(ValueError, match="latency_max must be"):
         make(latency_max=-1)
-    with pytest.raises(ValueError, match="sim must be HOST:PORT"):
+    with pytest.raises(ValueError, match="sim must be None, 'daemon' or HOST:PORT"):
         make(sim="localhost")
     env = make()
     env.reset(seed=0)

@@ -1,6 +1,8 @@
 //! The daemon's handling of one connection's bytes, without sockets or
 //! threads: the same frame decoder, the same gate and the same world
-//! commands as a live daemon, applied in the calling thread. This is the code
+//! commands as a live daemon, applied in the calling thread; and the same
+//! messages sent to an [`EmbeddedWorld`] with latency emulation, the entry
+//! point of the Python extension's `pushlearn.World`. This is the code
 //! under fuzzing (`fuzz/fuzz_targets/daemon_bytes.rs`) and under the property
 //! tests that run the fuzzers' inputs in the normal test suite
 //! (`docs/reliability.md`).
@@ -13,7 +15,7 @@ use pushlearn::wire::{decode_stream, encode_frame, pb, LENGTH_PREFIX_SIZE};
 use crate::replay::{Replay, Served};
 use crate::scene::Scene;
 use crate::server::gate::{Gate, Op, ToPhysics};
-use crate::server::{Config, ServerError, Timing};
+use crate::server::{Config, EmbeddedWorld, Latency, ServerError, Timing};
 use crate::world::{StepError, World};
 
 /// Steps run per accepted Advance (at most; a live daemon runs to the next
@@ -33,11 +35,13 @@ pub struct Handled {
     pub diverged: usize,
 }
 
-/// A world, its gate and the channel between them.
+/// A world, its gate and the channel between them; and an embedded world
+/// taking the same messages.
 pub struct Harness {
     world: World,
     gate: Gate,
     inbox: Receiver<ToPhysics>,
+    embedded: EmbeddedWorld,
 }
 
 impl Harness {
@@ -52,13 +56,26 @@ impl Harness {
         let (tx, inbox) = mpsc::channel();
         let gate = Gate::new(&config, tx);
         let world = World::new(&config.scene)?;
-        Ok(Harness { world, gate, inbox })
+        // With latency emulation, so that delayed Moves and latency seeds
+        // are explored too.
+        let latency = Latency {
+            max_steps: 3,
+            seed: 0,
+        };
+        let embedded = EmbeddedWorld::new(config.scene.clone(), None, Some(latency))?;
+        Ok(Harness {
+            world,
+            gate,
+            inbox,
+            embedded,
+        })
     }
 
     /// Feeds `bytes` as everything one client sent before closing:
     /// decodes frames as a connection does (a bad frame ends it), passes
     /// each message through the gate, applies what was accepted and steps
-    /// the world on each Advance.
+    /// the world on each Advance. Each message is also sent to the
+    /// embedded world, which answers it as the daemon would.
     ///
     /// # Errors
     /// What a live daemon must never do: a physics failure other than a
@@ -76,6 +93,12 @@ impl Harness {
                 handled.refused += 1;
             }
             self.apply_accepted(&mut handled)?;
+            self.embedded.send(message).map_err(Fault::Step)?;
+            while let Some(answer) = self.embedded.next_message() {
+                if let Some(pb::server_message::Payload::WorldState(state)) = answer.payload {
+                    check_finite_message(&state)?;
+                }
+            }
         }
         Ok(handled)
     }
@@ -240,6 +263,26 @@ fn check_finite(snapshot: &crate::world::Snapshot) -> Result<(), Fault> {
             .chain(&body.ang_vel);
         if !values.all(|v| v.is_finite()) {
             return Err(Fault::NonFinite(body.name.clone()));
+        }
+    }
+    Ok(())
+}
+
+/// [`check_finite`] of a published message.
+fn check_finite_message(state: &pb::WorldState) -> Result<(), Fault> {
+    let models = state.model_v.as_ref().map_or(&[][..], |v| &v.models[..]);
+    for model in models {
+        let pose = model.pose.unwrap_or_default();
+        let vectors = [pose.position, model.lin_vel, model.ang_vel];
+        let q = pose.orientation.unwrap_or_default();
+        let finite = vectors
+            .iter()
+            .flatten()
+            .flat_map(|v| [v.x, v.y, v.z])
+            .chain([q.x, q.y, q.z, q.w])
+            .all(f64::is_finite);
+        if !finite {
+            return Err(Fault::NonFinite(model.name.clone()));
         }
     }
     Ok(())

@@ -21,7 +21,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("memories", &[]),
     ("learner", &["memories", "pushlearn-core"]),
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
-    ("pushlearn-python", &["learner", "pushlearn-core"]),
+    (
+        "pushlearn-python",
+        &["learner", "pushlearn", "pushlearn-core", "sim-plugin"],
+    ),
     (
         "drive",
         &["learner", "pushlearn", "pushlearn-core", "sim-plugin"],

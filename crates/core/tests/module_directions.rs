@@ -111,7 +111,14 @@ const CRATES: &[(&str, Table)] = &[
     ),
     (
         "crates/python/src",
-        &[("args", &[]), ("aitm", &["args"]), ("models", &["args"])],
+        &[
+            ("args", &[]),
+            ("aitm", &["args"]),
+            ("models", &["args"]),
+            // The world of the daemon in the process (the sim-plugin
+            // crate's, so no edges beyond the argument helpers).
+            ("world", &["args"]),
+        ],
     ),
     // The experiment engine.
     (

@@ -8,7 +8,9 @@
 //!   [`learner::Model`] method
 //!   (`models.rs`), configured by the model registry
 //!   (`learner::registry`) as the command line's models are;
-//! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`).
+//! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`);
+//! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
+//!   the process (`world.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
 //! `unsafe_code = "forbid"` and needs no exception. The FFI stays inside pyo3
@@ -16,13 +18,14 @@
 //! macro's own code, which the lint does not flag (`docs/architecture.md`).
 //!
 //! Every class is `Send + Sync` (PyO3 requires it of a class that is not
-//! `unsendable`), so Python may use an object from any thread. No method
-//! releases the GIL, so calls on one object from several threads run one
-//! after another.
+//! `unsendable`), so Python may use an object from any thread. The models'
+//! methods hold the GIL, so calls on one object from several threads run one
+//! after another; the worlds release it while they step.
 
 mod aitm;
 mod args;
 mod models;
+mod world;
 
 use learner::ModelStats;
 use pyo3::prelude::*;
@@ -56,6 +59,41 @@ fn goal_distance(pose: (f64, f64, f64), target: (f64, f64, f64)) -> f64 {
     learner::eval::goal_distance(&state(pose), &state(target))
 }
 
+/// [`goal_distance`] of every block of every row: `achieved` and `desired`
+/// of shape `(n, 3k)` (x, y, θ per block), the result `(n, k)`. The native
+/// vector environment judges all its worlds with one call.
+#[pyfunction]
+fn goal_distances<'py>(
+    py: Python<'py>,
+    achieved: numpy::PyReadonlyArray2<'py, f64>,
+    desired: numpy::PyReadonlyArray2<'py, f64>,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    use numpy::{PyArrayMethods, PyUntypedArrayMethods};
+    let shape = achieved.shape();
+    if shape != desired.shape() || shape[1] % 3 != 0 {
+        return Err(args::value_error(format!(
+            "goals must have one shape (n, 3k); got {} and {}",
+            args::shape_text(shape),
+            args::shape_text(desired.shape())
+        )));
+    }
+    let (n, k) = (shape[0], shape[1] / 3);
+    let (a, d) = (achieved.as_array(), desired.as_array());
+    let state = |row: &numpy::ndarray::ArrayView2<'_, f64>, i: usize, j: usize| {
+        learner::ObjectState::new(row[[i, 3 * j]], row[[i, 3 * j + 1]], row[[i, 3 * j + 2]])
+    };
+    let mut out = Vec::with_capacity(n * k);
+    for i in 0..n {
+        for j in 0..k {
+            out.push(learner::eval::goal_distance(
+                &state(&a, i, j),
+                &state(&d, i, j),
+            ));
+        }
+    }
+    numpy::PyArray1::from_vec(py, out).reshape([n, k])
+}
+
 /// The yaw of the quaternion `(x, y, z, w)` as the learners read it
 /// (`pushlearn_core::orientation::yaw`): the SDK's pure-Python
 /// `quaternion_to_yaw` is tested against this one bit for bit.
@@ -80,7 +118,8 @@ fn is_skipped(name: &str) -> bool {
 
 /// The pushlearn models, implemented in Rust: GateModel, InteractionModel,
 /// HybridModel (with their worlds GateWorld, InteractionWorld and
-/// HybridWorld) and Aitm.
+/// HybridWorld) and Aitm; and World, the world of pushlearn-sim in this
+/// process.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyGateModel>()?;
@@ -90,8 +129,12 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyInteractionWorld>()?;
     m.add_class::<models::PyHybridWorld>()?;
     m.add_class::<aitm::PyAitm>()?;
+    m.add_class::<world::PyWorld>()?;
+    m.add_class::<world::PyWorlds>()?;
+    m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
+    m.add_function(wrap_pyfunction!(goal_distances, m)?)?;
     m.add("GOAL_TOLERANCE", learner::eval::GOAL_TOLERANCE)?;
     // The vocabulary the pure-Python SDK (`pushlearn.learner`) repeats so
     // that it works without the extension; its tests compare the two.

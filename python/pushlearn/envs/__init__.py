@@ -7,13 +7,14 @@ Importing :mod:`pushlearn` registers them when Gymnasium is installed
     import pushlearn
 
     gym.register_envs(pushlearn)              # keeps linters from calling the import unused
-    env = gym.make("pushlearn/PushBlock-v0")  # starts its own pushlearn-sim
+    env = gym.make("pushlearn/PushBlock-v0")  # the world of pushlearn-sim, in this process
 
 ``pushlearn/PushBlock-v0`` is the thesis's Move to Target with one block,
 ``pushlearn/PushTwoBlocks-v0`` the two-block scene with a target per block;
 both are truncated after the thesis's 3000 messages.
 ``gymnasium.make_vec(ID, num_envs=N)`` gives a native vector environment
-(:mod:`pushlearn.envs.vector`): N worlds stepped together from one process.
+(:mod:`pushlearn.envs.vector`): N worlds stepped together from one process,
+in one call into Rust.
 """
 
 from __future__ import annotations

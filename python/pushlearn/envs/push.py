@@ -10,9 +10,11 @@ gymnasium-robotics: a dict observation (``observation``, ``achieved_goal``,
 
 One step is one world message: the action is sent as a Move and the
 environment waits for the first state with it in force, 10 physics steps of
-1 ms later at the built-in scenes' 100 Hz. Underneath runs ``pushlearn-sim``
-in lock-step mode, so the same seed and the same actions give the same
-observations bit for bit.
+1 ms later at the built-in scenes' 100 Hz. Underneath runs the world of
+``pushlearn-sim`` in lock-step mode, in this process by default
+(:class:`pushlearn.World`, the daemon's own code), or a ``pushlearn-sim``
+daemon (``sim=``); either way the same seed and the same actions give the
+same observations bit for bit.
 """
 
 from __future__ import annotations
@@ -26,9 +28,11 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
+from .. import native
+from .._pb import pushlearn_pb2
 from ..learner import ACTUATOR_NAME, State
 from ..local_world import LocalWorld
-from ..sim import SimClient
+from ..sim import SimClient, WorldHello
 from .render import Canvas, Drawn
 
 __all__ = [
@@ -63,6 +67,9 @@ THESIS_TARGETS: tuple[tuple[float, float, float], ...] = (
 
 Observation = dict[str, Any]
 """``observation``, ``achieved_goal`` and ``desired_goal``, each a float64 array."""
+
+Rows = Sequence[Sequence[float]] | npt.NDArray[np.float64]
+"""A state's planar rows, one per body: x, y, yaw, vx, vy and the spin about z."""
 
 
 class TargetRegion:
@@ -185,11 +192,14 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
     * ``latency_max`` (default 2, the experiments' default): the lock-step
       latency emulation's largest delay of a Move in physics steps, ``None``
       for none;
-    * ``sim``: ``"HOST:PORT"`` of a running world to use instead of starting
-      one (its scene and latency must match); ``sim_bin`` the
-      ``pushlearn-sim`` to start (:func:`pushlearn.local_world.find_sim_binary`);
+    * ``sim``: where the world runs. ``None`` (default): in this process
+      (:class:`pushlearn.World`, no daemon, no socket); ``"daemon"``: a
+      ``pushlearn-sim`` of its own, started as a child process (``sim_bin``
+      the binary, :func:`pushlearn.local_world.find_sim_binary`; giving
+      ``sim_bin`` implies it); ``"HOST:PORT"``: a running world (its scene
+      and latency must match);
     * ``show_target``: also publish the targets as the world's target ghosts,
-      which ``pushlearn view --sim ADDRESS`` draws as outlines;
+      which ``pushlearn view --sim ADDRESS`` draws as outlines (with a daemon);
     * ``image_size``: the side of ``rgb_array`` pictures in pixels (480);
       ``timeout``: seconds to wait for the world before an error (30).
 
@@ -249,26 +259,41 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self.show_target = show_target
         self._world: LocalWorld | None = None
         self._client: SimClient | None = None
+        self._native: Any = None
         self._state: State | None = None
+        # The last state's planar rows (x, y, yaw, vx, vy, spin) in the
+        # scene's body order; `None` before the first reset.
+        self._rows: Rows | None = None
         self._target_values: tuple[float, ...] = (0.0,) * (3 * len(self.blocks))
         self._closed = False
 
-        if sim is None:
+        if sim is None and sim_bin is None:
+            self._native = native().World(self.scene, latency_max=latency_max)
+            hello = WorldHello.from_proto(
+                pushlearn_pb2.Hello.FromString(self._native.hello_bytes())
+            )
+        elif sim is None or sim == "daemon":
             self._world = LocalWorld(
                 scene=self.scene, latency_max=latency_max, sim_bin=sim_bin
             )
             self._client = self._world.connect(timeout)
+            hello = self._client.hello
         else:
             host, _, port = sim.rpartition(":")
             if not host or not port.isdigit():
-                raise ValueError(f"sim must be HOST:PORT, got {sim!r}")
+                raise ValueError(
+                    f"sim must be None, 'daemon' or HOST:PORT, got {sim!r}"
+                )
             self._client = SimClient.connect(host.strip("[]"), int(port), timeout)
             self._check_world(sim, latency_max)
-        hello = self._client.hello
+            hello = self._client.hello
         self.latency_max = hello.latency_max_steps
         """The world's latency emulation (largest delay of a Move in steps; ``None``: none)."""
         self._shapes = hello.shapes
         self._starts = {body.name: body for body in hello.bodies}
+        self._names = [body.name for body in hello.bodies]
+        self._actuator_row = self._names.index(ACTUATOR_NAME)
+        self._block_rows = [self._names.index(name) for name in self.blocks]
 
         # Positions and velocities are unbounded (the world has no walls);
         # yaws lie in [−π, π].
@@ -348,13 +373,23 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
     def state(self) -> State:
         """The last world state, with every body as the world sent it (for models
         that parse the world themselves, such as :class:`pushlearn.GateModel`)."""
-        if self._state is None:
+        if self._rows is None:
             raise RuntimeError("no world state yet: call reset() first")
+        if self._state is None:
+            # In-process: built when asked for, not at every step.
+            self._state = State.from_world_state(
+                pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes())
+            )
         return self._state
 
     @property
     def address(self) -> str:
         """The world's ``HOST:PORT`` (``pushlearn view --sim ADDRESS`` watches it)."""
+        if self._native is not None:
+            raise RuntimeError(
+                "this environment's world runs in this process and has no address: "
+                "make it with sim='daemon' for one that pushlearn view can watch"
+            )
         return self._live_client().address
 
     @property
@@ -366,6 +401,16 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         if self._client is None:
             raise RuntimeError("the environment is closed")
         return self._client
+
+    def _live_native(self) -> Any:
+        if self._native is None:
+            raise RuntimeError("the environment is closed")
+        return self._native
+
+    @property
+    def in_process(self) -> bool:
+        """Whether the world runs in this process (:class:`pushlearn.World`)."""
+        return self._native is not None
 
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -379,7 +424,8 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         the actuator's start (x, y) instead of (0, 0), e.g. for training pushes.
         """
         super().reset(seed=seed)
-        client = self._live_client()
+        if self._native is None:
+            self._live_client()
         options = dict(options or {})
         unknown = sorted(set(options) - {"target", "actuator"})
         if unknown:
@@ -399,46 +445,73 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
                 raise ValueError(f"options['actuator'] must be finite, got {(ax, ay)}")
         latency_seed = int(self.np_random.integers(0, 2**63))
         self._target_values = target
+        poses = []
+        if actuator is not None:
+            poses.append((ACTUATOR_NAME, ax, ay, 0.03, 0.0))
+        if self.show_target:
+            for i, name in enumerate(self.blocks):
+                x, y, theta = self._target_values[3 * i : 3 * i + 3]
+                poses.append((f"{name}ShadowTarget", x, y, 0.05, theta))
 
+        if self._native is not None:
+            world = self._native
+            world.move(0.0, 0.0)
+            world.reset()
+            if self.latency_max is not None:
+                world.latency_seed(latency_seed)
+            for name, x, y, z, yaw in poses:
+                half = yaw / 2.0
+                world.set_pose(
+                    name, (x, y, z), (0.0, 0.0, math.sin(half), math.cos(half))
+                )
+            return self._observe_rows(world.advance(planar=True).tolist())
+        client = self._live_client()
         client.move(0.0, 0.0)
         last = client.reset()
         if self.latency_max is not None:
             last = client.latency_seed(latency_seed)
-        if actuator is not None:
-            last = client.set_pose(ACTUATOR_NAME, ax, ay, 0.03)
-        if self.show_target:
-            for i, name in enumerate(self.blocks):
-                x, y, theta = self._target_values[3 * i : 3 * i + 3]
-                last = client.set_pose(f"{name}ShadowTarget", x, y, 0.05, theta)
-        self._state = client.next_state(after=last)
-        return self._observe(self._state)
+        for name, x, y, z, yaw in poses:
+            last = client.set_pose(name, x, y, z, yaw)
+        return self._observe(client.next_state(after=last))
 
     def step(
         self, action: npt.ArrayLike
     ) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
         """Sends the action as a Move of ``ACTUATOR_SPEED · action`` m/s (clipped to
         [−1, 1] first) and returns the first state with it in force."""
+        if self._native is not None:
+            vx, vy = self._velocity(action)
+            rows = self._native.move_and_advance(vx, vy, planar=True).tolist()
+            return self._result(*self._observe_rows(rows))
         return self._finish_step(self._start_step(action))
 
-    def _start_step(self, action: npt.ArrayLike) -> int:
-        """Checks and sends the action (with its Advance, in lock-step); the Move's seq.
-
-        :meth:`step` in two halves, so that a vector environment can start
-        all its worlds stepping before it waits for any.
-        """
-        client = self._live_client()
-        if self._state is None:
+    def _velocity(self, action: npt.ArrayLike) -> tuple[float, float]:
+        """The checked action as the Move's velocity (m/s)."""
+        if self._native is None:
+            self._live_client()
+        if self._rows is None:
             raise RuntimeError("call reset() before step()")
         values = np.asarray(action, dtype=np.float64)
         if values.shape != (2,):
             raise ValueError(f"an action has shape (2,), got {values.shape}")
         # Plain floats from here: numpy's per-call cost on two numbers is
         # most of a step's Python time.
-        ax, ay = float(values[0]), float(values[1])
+        ax, ay = values.tolist()
         if not (math.isfinite(ax) and math.isfinite(ay)):
             raise ValueError(f"an action must be finite, got {[ax, ay]}")
         vx = min(max(ax, -1.0), 1.0) * ACTUATOR_SPEED
         vy = min(max(ay, -1.0), 1.0) * ACTUATOR_SPEED
+        return vx, vy
+
+    def _start_step(self, action: npt.ArrayLike) -> int:
+        """With a daemon: checks and sends the action (with its Advance, in
+        lock-step); the Move's seq.
+
+        :meth:`step` in two halves, so that a vector environment can start
+        all its daemons stepping before it waits for any.
+        """
+        vx, vy = self._velocity(action)
+        client = self._live_client()
         if client.lockstep:
             return client.move_and_advance(vx, vy)
         return client.move(vx, vy)
@@ -447,8 +520,12 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self, move: int
     ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """The step's result once the state with the Move ``move`` in force arrives."""
-        self._state = self._live_client().next_state(after=move)
-        observation, info = self._observe(self._state)
+        return self._result(*self._observe(self._live_client().next_state(after=move)))
+
+    def _result(
+        self, observation: Observation, info: dict[str, Any]
+    ) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        """A step's result from its observation and info."""
         if self.reward_type == "sparse":
             reward = 0.0 if info["is_success"] else -1.0
         else:
@@ -475,7 +552,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         """An ``rgb_array`` picture of the world from above (``None`` without a render mode)."""
         if self._canvas is None:
             return None
-        if self._state is None:
+        if self._rows is None:
             raise RuntimeError("call reset() before render()")
         goal = self._target_values
         things = [
@@ -490,21 +567,14 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
             for i, name in enumerate(self.blocks)
             if name in self._shapes
         ]
-        for body in self._state.bodies:
-            if body.name in self._shapes and "Shadow" not in body.name:
-                things.append(
-                    Drawn(
-                        body.name,
-                        self._shapes[body.name],
-                        body.position[0],
-                        body.position[1],
-                        body.yaw,
-                    )
-                )
+        for name, (x, y, yaw, *_) in zip(self._names, self._rows, strict=True):
+            if name in self._shapes:
+                things.append(Drawn(name, self._shapes[name], x, y, yaw))
         return self._canvas.draw(things)
 
     def close(self) -> None:
         """Disconnects and stops the world this environment started; safe to call again."""
+        self._native = None
         if self._client is not None:
             self._client.close()
             self._client = None
@@ -528,18 +598,33 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         return self.targets[int(self.np_random.integers(len(self.targets)))]
 
     def _observe(self, state: State) -> tuple[Observation, dict[str, Any]]:
-        """The observation of ``state`` and its ``info``: whether every block meets the
-        reached criterion, and the sum of their distances to their targets."""
+        """:meth:`_observe_rows` of a daemon's ``state``, kept as :attr:`state`."""
         by_name = {body.name: body for body in state.bodies}
-        actuator = by_name[ACTUATOR_NAME]
-        row = [*actuator.position[:2], *_planar_velocity(actuator)]
+        rows = []
+        for name in self._names:
+            body = by_name[name]
+            vx, vy = _planar_velocity(body)
+            spin = 0.0 if body.ang_vel is None else body.ang_vel[2]
+            rows.append([body.position[0], body.position[1], body.yaw, vx, vy, spin])
+        observation = self._observe_rows(rows)
+        self._state = state
+        return observation
+
+    def _observe_rows(
+        self, rows: Sequence[Sequence[float]]
+    ) -> tuple[Observation, dict[str, Any]]:
+        """The observation of a state's planar rows (``World.state(planar=True)``,
+        the scene's body order) and its ``info``: whether every block meets
+        the reached criterion, and the sum of their distances to their targets."""
+        self._rows = rows
+        self._state = None
+        actuator = rows[self._actuator_row]
+        row = [actuator[0], actuator[1], actuator[3], actuator[4]]
         goal: list[float] = []
-        for name in self.blocks:
-            block = by_name[name]
-            pose = (block.position[0], block.position[1], block.yaw)
-            goal += pose
-            spin = 0.0 if block.ang_vel is None else block.ang_vel[2]
-            row += [*pose, *_planar_velocity(block), spin]
+        for i in self._block_rows:
+            block = rows[i]
+            goal += block[:3]
+            row += block
         distances = _goal_distances_one(goal, self._target_values)
         observation = {
             "observation": np.array(row, dtype=np.float64),

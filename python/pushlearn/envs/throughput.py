@@ -6,37 +6,42 @@
 
 Measures, each ``--repeats`` times (the median is printed, with the range):
 
-* **physics floor**: the same random actions sent ahead to a lock-step
-  world, eight messages outstanding, so that the world never waits for
-  the client: what stepping these messages costs (:func:`physics_floor`);
-* **client**: :meth:`pushlearn.SimClient.move_and_observe` in a loop against
-  a lock-step world, the socket round trip and the protobuf decoding but no
-  environment;
+* **physics floor**: the environment benchmark's actions stepped by the
+  world library in Rust as Moves and Advances with nothing between them
+  (:func:`pushlearn._native.step_messages`): what stepping these messages
+  costs;
 * **env**: ``PushBlock-v0.step`` with pre-drawn random actions, as
   ``gymnasium.make`` wraps it (time limit, order enforcing, the passive
-  checker), episodes reset as they end;
+  checker), episodes reset as they end: on its in-process world (the
+  default) and on a ``pushlearn-sim`` daemon of its own (``sim="daemon"``;
+  left out when there is no binary);
 * **vector, N envs**: ``gymnasium.make_vec`` of N environments, steps of all
-  N counted: pushlearn's native vector environment (one process, N worlds
-  stepped together, :mod:`pushlearn.envs.vector`) and Gymnasium's
-  ``AsyncVectorEnv`` (a process and a world per environment).
+  N counted: pushlearn's native vector environment (one process, N
+  in-process worlds stepped in one call, :mod:`pushlearn.envs.vector`) and
+  Gymnasium's ``AsyncVectorEnv`` (a process per environment, each with its
+  in-process world).
 
-Every figure is steps (messages) per second and its ratio to the physics
-floor. Machine-dependent: run it on an otherwise idle machine.
+Every figure is steps (messages) per second, its ratio to the physics
+floor and to one environment, measured in the same run. Machine-dependent:
+only the ratios of one run compare.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
 from collections.abc import Callable, Sequence
 from functools import partial
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from ..local_world import LocalWorld
+from .. import native
+from ..local_world import SimNotFound, find_sim_binary
 from . import register_envs
 from .push import ACTUATOR_SPEED
 
@@ -48,42 +53,12 @@ def _median_of(
     return statistics.median(values), min(values), max(values)
 
 
-def physics_floor(steps: int, sim_bin: str | None) -> float:
-    """Messages per second of a world that never waits for its client.
-
-    The environment benchmark's actions, each a Move and an Advance sent
-    ahead, eight messages outstanding, the states read as they come: the
-    same physics as the environment's steps, with the round trip hidden
-    behind the next messages' stepping.
-    """
-    actions = _actions(steps, 1)[:, 0] * ACTUATOR_SPEED
-    ahead = 8
-    with LocalWorld(latency_max=2, sim_bin=sim_bin) as world:
-        client = world.connect()
-        try:
-            start = time.perf_counter()
-            for i in range(steps + ahead):
-                if i < steps:
-                    client.move(float(actions[i, 0]), float(actions[i, 1]))
-                    client.advance()
-                if i >= ahead:
-                    client.next_state(advance=False)
-            return steps / (time.perf_counter() - start)
-        finally:
-            client.close()
-
-
-def client_rate(steps: int, sim_bin: str | None) -> float:
-    """Messages per second of a bare :class:`~pushlearn.SimClient` loop."""
-    with LocalWorld(latency_max=2, sim_bin=sim_bin) as world:
-        client = world.connect()
-        try:
-            start = time.perf_counter()
-            for i in range(steps):
-                client.move_and_observe(0.0, 0.3 if i % 2 else -0.3)
-            return steps / (time.perf_counter() - start)
-        finally:
-            client.close()
+def physics_floor(steps: int) -> float:
+    """Messages per second of the world library stepping the environment
+    benchmark's actions in Rust, a Move and an Advance each, nothing between."""
+    velocities = _actions(steps, 1)[:, 0].astype(np.float64) * ACTUATOR_SPEED
+    seconds: float = native().step_messages(velocities, "one_block", latency_max=2)
+    return steps / seconds
 
 
 def _actions(steps: int, envs: int) -> np.ndarray:
@@ -91,9 +66,9 @@ def _actions(steps: int, envs: int) -> np.ndarray:
     return rng.uniform(-1.0, 1.0, (steps, envs, 2)).astype(np.float32)
 
 
-def env_rate(steps: int, sim_bin: str | None) -> float:
-    """Steps per second of one ``gymnasium.make``'d environment."""
-    env = gym.make("pushlearn/PushBlock-v0", sim_bin=sim_bin)
+def env_rate(steps: int, **kwargs: Any) -> float:
+    """Steps per second of one ``gymnasium.make``'d environment (``kwargs`` its options)."""
+    env = gym.make("pushlearn/PushBlock-v0", **kwargs)
     actions = _actions(steps, 1)[:, 0]
     try:
         env.reset(seed=0)
@@ -107,14 +82,11 @@ def env_rate(steps: int, sim_bin: str | None) -> float:
         env.close()
 
 
-def vector_rate(steps: int, envs: int, sim_bin: str | None, mode: str) -> float:
+def vector_rate(steps: int, envs: int, mode: str) -> float:
     """Steps per second of all environments of a vector environment together;
     ``mode`` is ``gymnasium.make_vec``'s (``"vector_entry_point"``: pushlearn's own)."""
     vector = gym.make_vec(
-        "pushlearn/PushBlock-v0",
-        num_envs=envs,
-        vectorization_mode=mode,
-        sim_bin=sim_bin,
+        "pushlearn/PushBlock-v0", num_envs=envs, vectorization_mode=mode
     )
     rounds = max(1, steps // envs)
     actions = _actions(rounds, envs)
@@ -143,7 +115,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--envs", default="1,2,8", help="vector sizes, comma-separated (default 1,2,8)"
     )
-    parser.add_argument("--sim-bin", default=None, help="the pushlearn-sim to run")
+    parser.add_argument(
+        "--sim-bin", default=None, help="the pushlearn-sim for the daemon row"
+    )
     args = parser.parse_args(argv)
     try:
         sizes = [int(n) for n in args.envs.split(",")]
@@ -152,41 +126,41 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.steps < 1 or args.repeats < 1 or any(n < 1 for n in sizes):
         parser.error("--steps, --repeats and every --envs size must be at least 1")
     register_envs()
-    rows: list[tuple[str, tuple[float, float, float]]] = []
     measured = partial(_median_of, args.repeats)
-    floor = measured(partial(physics_floor, args.steps, args.sim_bin))
-    rows.append(("physics floor (Moves and Advances queued ahead)", floor))
-    rows.append(
-        (
-            "client (SimClient.move_and_observe)",
-            measured(partial(client_rate, args.steps, args.sim_bin)),
+    rows: list[tuple[str, tuple[float, float, float]]] = []
+    floor = measured(partial(physics_floor, args.steps))
+    rows.append(("physics floor (world library, Moves and Advances in Rust)", floor))
+    one = measured(partial(env_rate, args.steps))
+    rows.append(("env (gymnasium.make, 1 env, in-process world)", one))
+    try:
+        sim_bin = str(find_sim_binary(args.sim_bin))
+    except SimNotFound as err:
+        print(f"no daemon row: {err}", file=sys.stderr)
+    else:
+        rows.append(
+            (
+                'env (gymnasium.make, 1 env, sim="daemon")',
+                measured(partial(env_rate, args.steps, sim="daemon", sim_bin=sim_bin)),
+            )
         )
-    )
-    rows.append(
-        (
-            "env (gymnasium.make, 1 env)",
-            measured(partial(env_rate, args.steps, args.sim_bin)),
-        )
-    )
     for label, mode in (
         ("make_vec (native)", "vector_entry_point"),
         ("AsyncVectorEnv", "async"),
     ):
         for n in sizes:
             name = f"{label}, {n} env{'s' if n > 1 else ''}"
-            rows.append(
-                (
-                    name,
-                    measured(partial(vector_rate, args.steps, n, args.sim_bin, mode)),
-                )
-            )
-    print(f"{args.steps} steps per measurement, median of {args.repeats} (range)")
+            rows.append((name, measured(partial(vector_rate, args.steps, n, mode))))
+    print(
+        f"{args.steps} steps per measurement, median of {args.repeats} (range), "
+        f"{os.cpu_count()} cores"
+    )
     print()
-    print("| what | steps/s | range | ratio to the floor |")
-    print("|---|---|---|---|")
+    print("| what | steps/s | range | ratio to the floor | ratio to 1 env |")
+    print("|---|---|---|---|---|")
     for name, (median, low, high) in rows:
         print(
-            f"| {name} | {median:.0f} | {low:.0f} – {high:.0f} | {median / floor[0]:.2f} |"
+            f"| {name} | {median:.0f} | {low:.0f} – {high:.0f} "
+            f"| {median / floor[0]:.2f} | {median / one[0]:.2f} |"
         )
     return 0
 
