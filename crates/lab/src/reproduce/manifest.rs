@@ -414,6 +414,25 @@ pub fn full() -> Vec<Entry> {
             // Only the default setting's figures go on the page.
             entries.push(entry.with_figures(suffix.is_empty()));
         }
+        // The floor beside the curves of the other timings (the default
+        // timing's is `beyond-push-floor`); it learns nothing, so one N.
+        if !suffix.is_empty() {
+            entries.push(
+                Entry::new(
+                    format!("push-task-floor{suffix}"),
+                    Spec::PushTask {
+                        model: LearnerChoice::Floor,
+                        options: ModelOptions::default(),
+                        variant: Variant::Random,
+                        transfer: None,
+                        train_runs: vec![1],
+                        folds: 20,
+                    },
+                )
+                .mode(mode)
+                .latency_max(latency),
+            );
+        }
         if suffix.is_empty() {
             // Beside the default curves: the same world, so the baselines'
             // runs are the curves' recorded ones.

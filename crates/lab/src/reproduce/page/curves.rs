@@ -24,6 +24,21 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
         .iter()
         .map(|n| push_doc(results, n))
         .collect::<Result<_, _>>()?;
+    // The floor of each timing: what no learner can go below there.
+    let floor_names = [
+        "beyond-push-floor",
+        "push-task-floor-latency5",
+        "push-task-floor-lockstep",
+    ];
+    let floors: Vec<&CurveEntry> = floor_names
+        .iter()
+        .map(|n| {
+            push_doc(results, n)?
+                .results
+                .first()
+                .ok_or_else(|| format!("`{n}` has no results"))
+        })
+        .collect::<Result<_, _>>()?;
     let mut out = String::new();
     for interacting in [false, true] {
         let _ = writeln!(
@@ -43,6 +58,29 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
             "| N | block position: {columns} | block orientation: {columns} | actuator: {columns} |"
         );
         let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let pick: [fn(&CurveEntry, bool) -> MeanStd; 3] = [
+            |e, i| {
+                if i {
+                    e.blue.interacting.block_pos_err
+                } else {
+                    e.blue.block_pos_err
+                }
+            },
+            |e, i| {
+                if i {
+                    e.blue.interacting.block_ori_err
+                } else {
+                    e.blue.block_ori_err
+                }
+            },
+            |e, i| {
+                if i {
+                    e.blue.interacting.actuator_pos_err
+                } else {
+                    e.blue.actuator_pos_err
+                }
+            },
+        ];
         for entry in &reports[0].results {
             let n = entry.train_runs;
             let rows: Vec<&CurveEntry> = names
@@ -52,29 +90,6 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
                 .collect::<Result<_, _>>()?;
             let r = reference::curve(model, n);
             let mut line = format!("| {n} ");
-            let pick: [fn(&CurveEntry, bool) -> MeanStd; 3] = [
-                |e, i| {
-                    if i {
-                        e.blue.interacting.block_pos_err
-                    } else {
-                        e.blue.block_pos_err
-                    }
-                },
-                |e, i| {
-                    if i {
-                        e.blue.interacting.block_ori_err
-                    } else {
-                        e.blue.block_ori_err
-                    }
-                },
-                |e, i| {
-                    if i {
-                        e.blue.interacting.actuator_pos_err
-                    } else {
-                        e.blue.actuator_pos_err
-                    }
-                },
-            ];
             for (column, pick) in pick.iter().enumerate() {
                 for row in &rows {
                     let _ = write!(line, "| {} ", ms(pick(row, interacting)));
@@ -93,6 +108,15 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
             line.push_str("|\n");
             out.push_str(&line);
         }
+        let mut line = format!("| {FLOOR_LABEL} ");
+        for pick in &pick {
+            for floor in &floors {
+                let _ = write!(line, "| {} ", ms(pick(floor, interacting)));
+            }
+            line.push_str("| – ");
+        }
+        line.push_str("|\n");
+        out.push_str(&line);
         out.push('\n');
     }
     Ok(out)
