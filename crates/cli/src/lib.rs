@@ -35,4 +35,4 @@ pub use drive::{experiment, external, frame, latency, output, process, results, 
 
 // The experiments, a crate of their own (`crates/lab`), likewise.
 #[cfg(feature = "lab")]
-pub use lab::{report, reproduce, spec, sweep};
+pub use lab::{experiments, report, reproduce, spec, sweep};

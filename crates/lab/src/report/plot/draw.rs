@@ -158,6 +158,8 @@ const ACTUATOR: RGBColor = RGBColor(60, 60, 60);
 const BLUE_BLOCK: RGBColor = RGBColor(40, 90, 220);
 const RED_BLOCK: RGBColor = RGBColor(220, 50, 40);
 pub const TARGET: RGBColor = RGBColor(0, 0, 0);
+/// The floor's line (`drive::floor`), grey: a bound, not a learner.
+pub const FLOOR: RGBColor = RGBColor(128, 128, 128);
 /// Opacity of predicted bodies in the snapshots.
 pub const TRANSLUCENT: f64 = 0.3;
 

@@ -122,6 +122,30 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
     Ok(out)
 }
 
+/// The thesis's models' default learning curves, each with the floor's
+/// errors at that timing, for the §3 figures.
+///
+/// # Errors
+/// A document the reproduction does not have.
+pub fn curves_and_floor(
+    results: &Reproduction,
+) -> Result<Vec<(ModelKind, &PushReport, &CurveEntry)>, String> {
+    let floor = push_doc(results, "beyond-push-floor")?
+        .results
+        .first()
+        .ok_or("`beyond-push-floor` has no results")?;
+    [ModelKind::Gate, ModelKind::Interaction]
+        .into_iter()
+        .map(|model| {
+            Ok((
+                model,
+                push_doc(results, &format!("push-task-{model}"))?,
+                floor,
+            ))
+        })
+        .collect()
+}
+
 /// The curves the baseline table and figure compare: the thesis's models'
 /// default curves and the baselines', each with its label.
 ///

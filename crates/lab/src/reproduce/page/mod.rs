@@ -51,7 +51,7 @@ use objects::{beyond_objects, cross_objects};
 use selectors::selectors;
 use targets::{beyond_targets, targets};
 
-pub use curves::{baseline_curves, beyond_curves};
+pub use curves::{baseline_curves, beyond_curves, curves_and_floor};
 pub use objects::{object_reports, ObjectRow};
 
 /// How a generated block's line starts.

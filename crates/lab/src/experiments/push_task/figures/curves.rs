@@ -3,13 +3,21 @@
 
 use learner::eval::MeanStd;
 
-use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA};
+use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA, FLOOR};
 use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use drive::results::push_task::CurveEntry;
 use learner::registry::ModelKind;
 
-pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: bool) -> Grid {
+/// The curves of `results`, beside the thesis's and, when given, the
+/// floor's errors (`drive::floor`: the world predicting itself, the same at
+/// every N since it learns nothing).
+pub(super) fn curve_grid(
+    model: ModelKind,
+    results: &[CurveEntry],
+    interacting: bool,
+    floor: Option<&CurveEntry>,
+) -> Grid {
     let source = match model {
         ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§3.4",
         ModelKind::Interaction => "§3.2",
@@ -34,6 +42,17 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
                 .map(|e| (e.train_runs as f64, get(e)))
                 .collect(),
         )
+    };
+    let floor_line = |get: fn(&CurveEntry) -> MeanStd| -> Option<Series> {
+        floor.map(|f| Series {
+            label: "floor (the world predicting itself)".to_owned(),
+            colour: FLOOR,
+            points: results
+                .iter()
+                .map(|e| (e.train_runs as f64, get(f).mean, 0.0))
+                .collect(),
+            bars: false,
+        })
     };
     let panel = |title: &str, y: &str, mut series: Vec<Series>, reference: Option<Series>| {
         series.extend(reference);
@@ -67,19 +86,37 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
             panel(
                 "block position",
                 "error [m]",
-                vec![mine(|e| e.blue.interacting.block_pos_err)],
+                {
+                    let get = |e: &CurveEntry| e.blue.interacting.block_pos_err;
+                    [Some(mine(get)), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.pos_interacting),
             ),
             panel(
                 "block orientation",
                 "error [rad]",
-                vec![mine(|e| e.blue.interacting.block_ori_err)],
+                {
+                    let get = |e: &CurveEntry| e.blue.interacting.block_ori_err;
+                    [Some(mine(get)), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.ori_interacting),
             ),
             panel(
                 "actuator position",
                 "error [m]",
-                vec![mine(|e| e.blue.interacting.actuator_pos_err), quirk],
+                {
+                    let get = |e: &CurveEntry| e.blue.interacting.actuator_pos_err;
+                    [Some(mine(get)), Some(quirk), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.actuator_interacting_quirk),
             ),
         ]
@@ -88,19 +125,37 @@ pub(super) fn curve_grid(model: ModelKind, results: &[CurveEntry], interacting: 
             panel(
                 "block position",
                 "error [m]",
-                vec![mine(|e| e.blue.block_pos_err)],
+                {
+                    let get = |e: &CurveEntry| e.blue.block_pos_err;
+                    [Some(mine(get)), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.pos),
             ),
             panel(
                 "block orientation",
                 "error [rad]",
-                vec![mine(|e| e.blue.block_ori_err)],
+                {
+                    let get = |e: &CurveEntry| e.blue.block_ori_err;
+                    [Some(mine(get)), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.ori),
             ),
             panel(
                 "actuator position",
                 "error [m]",
-                vec![mine(|e| e.blue.actuator_pos_err)],
+                {
+                    let get = |e: &CurveEntry| e.blue.actuator_pos_err;
+                    [Some(mine(get)), floor_line(get)]
+                        .into_iter()
+                        .flatten()
+                        .collect()
+                },
                 refs(|r| r.actuator),
             ),
         ]

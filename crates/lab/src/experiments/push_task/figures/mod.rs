@@ -10,6 +10,7 @@ use crate::report::plot::draw::{prepare, write};
 use crate::report::plot::snapshots::{footprints, push_snapshots};
 use crate::report::plot::PlotError;
 use curves::curve_grid;
+use drive::results::push_task::CurveEntry;
 use drive::results::PushReport;
 use learner::registry::ModelKind;
 use positions::positions_grid;
@@ -28,22 +29,7 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
     let shapes = footprints()?;
     let stem = stem(report, model);
     let mut written = Vec::new();
-    if report.results.len() > 1 {
-        write(
-            &curve_grid(model, &report.results, false),
-            dir,
-            &format!("{stem}-curve"),
-            &mut written,
-        )?;
-        if report.variant != "two-objects" {
-            write(
-                &curve_grid(model, &report.results, true),
-                dir,
-                &format!("{stem}-curve-interacting"),
-                &mut written,
-            )?;
-        }
-    }
+    write_curves(report, model, None, dir, &mut written)?;
     for entry in &report.results {
         let n = entry.train_runs;
         write(
@@ -62,6 +48,52 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
         }
     }
     Ok(written)
+}
+
+/// The learning-curve figures of `report` (the same names as [`push`]
+/// writes) with the floor's errors drawn beside them: the reproduction's
+/// page, which runs the floor, shows these.
+///
+/// # Errors
+/// The directory cannot be created or a figure cannot be written.
+pub fn curves_with_floor(
+    report: &PushReport,
+    model: ModelKind,
+    floor: &CurveEntry,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, PlotError> {
+    prepare(dir)?;
+    let mut written = Vec::new();
+    write_curves(report, model, Some(floor), dir, &mut written)?;
+    Ok(written)
+}
+
+fn write_curves(
+    report: &PushReport,
+    model: ModelKind,
+    floor: Option<&CurveEntry>,
+    dir: &Path,
+    written: &mut Vec<PathBuf>,
+) -> Result<(), PlotError> {
+    if report.results.len() < 2 {
+        return Ok(());
+    }
+    let stem = stem(report, model);
+    write(
+        &curve_grid(model, &report.results, false, floor),
+        dir,
+        &format!("{stem}-curve"),
+        written,
+    )?;
+    if report.variant != "two-objects" {
+        write(
+            &curve_grid(model, &report.results, true, floor),
+            dir,
+            &format!("{stem}-curve-interacting"),
+            written,
+        )?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -139,6 +171,23 @@ mod tests {
             results: summarise(&xs, &[BLUE_ID], train_runs, &jobs).unwrap(),
             run: RunInfo::default(),
         }
+    }
+
+    #[test]
+    fn curves_with_the_floor_add_its_line_and_only_the_curves() {
+        let dir = scratch("push-floor");
+        let report = push_report(&[1, 3, 30], 2);
+        let floor = push_report(&[1], 2).results.remove(0);
+        let written = curves_with_floor(&report, ModelKind::Gate, &floor, &dir).unwrap();
+        // The two curves (PNG and SVG each), nothing else.
+        assert_eq!(written.len(), 4);
+        let text = std::fs::read_to_string(dir.join("push-task-gate-random-curve.svg")).unwrap();
+        assert!(text.contains("floor (the world predicting itself)"));
+        // Its line has no bars: still 3 panels × (3 of ours + 3 thesis).
+        assert_eq!(
+            count(&dir.join("push-task-gate-random-curve.svg"), "circle"),
+            18
+        );
     }
 
     #[test]
