@@ -32,6 +32,17 @@ from .push import (
     _PushEnv,
 )
 
+# What a vector environment's step returns: observations, rewards,
+# terminations, truncations and infos, each batched.
+_StepResult = tuple[
+    dict[str, Any],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.bool_],
+    npt.NDArray[np.bool_],
+    dict[str, Any],
+]
+
+
 __all__ = ["PushBlockVectorEnv", "PushTwoBlocksVectorEnv"]
 
 
@@ -121,15 +132,7 @@ class _PushVectorEnv(
         self._started = True
         return _stacked(observations), infos
 
-    def step(
-        self, actions: npt.ArrayLike
-    ) -> tuple[
-        dict[str, Any],
-        npt.NDArray[np.float64],
-        npt.NDArray[np.bool_],
-        npt.NDArray[np.bool_],
-        dict[str, Any],
-    ]:
+    def step(self, actions: npt.ArrayLike) -> _StepResult:
         """Steps every sub-environment: in-process worlds in one call, daemons
         all sent their Moves first, then all states read."""
         batch = np.asarray(actions)
@@ -184,15 +187,7 @@ class _PushVectorEnv(
             _batched(infos),
         )
 
-    def _step_in_process(
-        self, batch: npt.NDArray[Any]
-    ) -> tuple[
-        dict[str, Any],
-        npt.NDArray[np.float64],
-        npt.NDArray[np.bool_],
-        npt.NDArray[np.bool_],
-        dict[str, Any],
-    ]:
+    def _step_in_process(self, batch: npt.NDArray[Any]) -> _StepResult:
         """:meth:`step` of in-process worlds: one call steps them all, and the
         observations, rewards and infos are computed for all at once, with
         the sub-environments' arithmetic (so the same bits as theirs)."""
