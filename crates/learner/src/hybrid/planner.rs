@@ -13,10 +13,10 @@
 //! face it touches, so a push is chosen by where it starts: every
 //! candidate contact around the block's outline is rolled forward with the
 //! model for a short push, and the one that takes the chosen part nearest
-//! zero, helping the rest most, wins. The actuator gets there the way the
-//! thesis's planners do (`docs/spec/planning.md` §2, §4: circling at a
-//! distance, a straight approach) and pushes at the speed the model
-//! predicts best for the next message.
+//! zero, helping the rest most, wins. The pusher goes round the block
+//! along its outline, approaches straight with the thesis's safety check
+//! (`docs/spec/planning.md` §2) and pushes at the speed the model predicts
+//! best for the next message.
 
 use std::f64::consts::{PI, TAU};
 
