@@ -18,7 +18,7 @@ release it while the world steps, and worlds stepped from several threads
 take turns in ODE (one process-wide lock) and stay bit-identical.
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, TypeAlias
 
 import numpy as np
@@ -66,6 +66,43 @@ def is_skipped(name: str) -> bool:
 def check_stats(document: str) -> None:
     """Raises ValueError, with the experiment driver's reason, unless ``document`` (the
     JSON of ``{maps, extra, labels}``) is statistics the driver accepts from a learner."""
+
+# What an experiment gives pushlearn.bench: the report document (JSON), the
+# text ``pushlearn experiment`` prints, and each table as (name, title lines, CSV).
+_Outcome: TypeAlias = tuple[str, str, list[tuple[str, list[str], str]]]
+
+def run_push_task(
+    learner: Any,
+    *,
+    variant: str,
+    train_runs: list[int] | None,
+    folds: int,
+    train_on: list[str] | None,
+    test_on: str | None,
+    mode: str,
+    latency_max: int,
+    seed: int,
+    progress: Callable[[int, int], None] | None,
+) -> _Outcome:
+    """The push task with a built-in model's name or a ``pushlearn.bench._Direct``
+    (``pushlearn.bench.push_task``); ``progress(done, jobs)`` after each job."""
+
+def run_move_to_target(
+    learner: Any,
+    *,
+    targets: list[tuple[float, float, float]] | None,
+    sample_targets: int | None,
+    repetitions: int | None,
+    max_steps: int,
+    mode: str,
+    latency_max: int,
+    seed: int,
+    progress: Callable[[int, int], None] | None,
+) -> _Outcome:
+    """Move to Target, as :func:`run_push_task` (``pushlearn.bench.move_to_target``)."""
+
+def without_timing(document: str) -> str:
+    """A report document's JSON without its machine-dependent part."""
 
 # One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
 _Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]

@@ -767,6 +767,16 @@ def _check_reserved_stats(reply: Any) -> None:
 
 def _check_prediction(prediction: Any, source: StateLike) -> Any:
     """The prediction's message, or ValueError naming what is wrong with it."""
+    _checked_poses(prediction, source)
+    return prediction.to_proto()
+
+
+def _checked_poses(prediction: Any, source: StateLike) -> dict[int, Pose]:
+    """The prediction's poses, or ValueError naming what is wrong with it.
+
+    A prediction must hold a finite pose for exactly the actuator and the
+    blocks of the state it was predicted from.
+    """
     if not isinstance(prediction, Prediction):
         raise TypeError(
             f"predict() returned {type(prediction).__name__}, expected a pushlearn.Prediction"
@@ -798,7 +808,7 @@ def _check_prediction(prediction: Any, source: StateLike) -> Any:
         raise ValueError(
             "predict() returned no pose for " + ", ".join(label(id_) for id_ in missing)
         )
-    return prediction.to_proto()
+    return poses
 
 
 def _check_act(result: Any) -> Any:
@@ -1006,13 +1016,7 @@ class _Session:
                 f"{start.protocol_version}, this learner (pushlearn Python SDK) version "
                 f"{PROTOCOL_VERSION}",
             )
-        source = self._source
-        learner = source if isinstance(source, Learner) else source()
-        if not isinstance(learner, Learner):
-            raise TypeError(
-                f"the learner factory returned {type(learner).__name__}, not a pushlearn.Learner"
-            )
-        learner.start(start.task, int(start.publish_rate_hz))
+        learner = _started(self._source, start.task, int(start.publish_rate_hz))
         self._learner = learner
         capabilities = sorted(int(Capability(c)) for c in learner.capabilities)
         return {
@@ -1024,6 +1028,19 @@ class _Session:
                 ignores_actuator_yaw=bool(learner.ignores_actuator_yaw),
             )
         }
+
+
+def _started(
+    source: Learner | LearnerFactory, task: str, publish_rate_hz: int
+) -> Learner:
+    """The learner ``source`` is or makes, started for ``task``: what a Start does."""
+    learner = source if isinstance(source, Learner) else source()
+    if not isinstance(learner, Learner):
+        raise TypeError(
+            f"the learner factory returned {type(learner).__name__}, not a pushlearn.Learner"
+        )
+    learner.start(task, publish_rate_hz)
+    return learner
 
 
 def _serve_on_streams(

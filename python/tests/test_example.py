@@ -97,3 +97,40 @@ def test_without_protobuf_the_example_says_what_to_install() -> None:
         "error: pushlearn needs the protobuf package (4.21 or newer, as "
         "pyproject.toml says): python3 -m pip install 'protobuf>=4.21'"
     )
+
+
+CURVE = REPO_ROOT / "examples" / "python" / "curve.py"
+
+
+def test_the_curve_example_runs_the_knn_baseline_and_draws_its_curve(
+    tmp_path: Path,
+) -> None:
+    """examples/python/curve.py, reduced: two training settings, two folds."""
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(CURVE),
+            "--train-runs",
+            "1,3",
+            "--folds",
+            "2",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        timeout=4 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    figure = tmp_path / "learning-curve.png"
+    assert done.stdout.strip().endswith(f"wrote {figure}")
+    assert figure.read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
+    # The printed learning curve: a row per N, ours beside the thesis's.
+    rows = [
+        line.split()
+        for line in done.stdout.splitlines()
+        if line.strip()[:2] in ("1 ", "3 ")
+    ]
+    assert [row[0] for row in rows[:2]] == ["1", "3"], done.stdout

@@ -23,7 +23,14 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
     (
         "pushlearn-python",
-        &["learner", "pushlearn", "pushlearn-core", "sim-plugin"],
+        &[
+            "drive",
+            "lab",
+            "learner",
+            "pushlearn",
+            "pushlearn-core",
+            "sim-plugin",
+        ],
     ),
     (
         "drive",

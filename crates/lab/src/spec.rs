@@ -203,78 +203,116 @@ impl Spec {
     /// Invalid options or configuration, or the first failing job.
     pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
         self.validate()?;
+        let Some((model, options, rate_hz)) = self.learner() else {
+            return match self {
+                Spec::DraftTables { folds } => {
+                    Ok(Document::Draft(draft_tables(*folds, plan, progress)?))
+                }
+                _ => Err(SpecError::Invalid(format!(
+                    "{} has no learner",
+                    self.title()
+                ))),
+            };
+        };
         let mut plan = plan.clone();
+        let ready = Ready::new(
+            model,
+            options,
+            (self.task(), self.scene()),
+            rate_hz,
+            &mut plan,
+        )?;
+        ready.dispatch(
+            options,
+            rate_hz,
+            Whole {
+                spec: self,
+                plan: &plan,
+                progress: &progress,
+            },
+        )?
+    }
+
+    /// Runs the experiment with `untrained` as its learner: a model the
+    /// caller made (the Python API's learner objects,
+    /// [`LearnerChoice::InProcess`]), named in the reports by `plan`'s
+    /// `model` and `learner`. Every fold starts from a clone of `untrained`
+    /// ([`Model::start_fold`]), as with the spec's own learners.
+    ///
+    /// # Errors
+    /// The draft's tables (they run their own models), an invalid
+    /// configuration, or the first failing job.
+    pub fn run_with<M: Model + 'static>(
+        &self,
+        plan: &Plan,
+        untrained: M,
+        progress: impl Fn(usize),
+    ) -> Result<Document, SpecError> {
+        self.validate()?;
         Ok(match self {
             Spec::PushTask {
-                model,
-                options,
-                train_runs,
-                folds,
-                ..
+                train_runs, folds, ..
             } => {
                 let protocol = self
                     .push_protocol()
                     .ok_or_else(|| SpecError::Invalid("a push task has a protocol".into()))?;
-                let model = Ready::new(
-                    model,
-                    options,
-                    (self.task(), self.scene()),
-                    protocol.rate_hz,
-                    &mut plan,
-                )?;
-                Document::Push(model.dispatch(
-                    options,
-                    protocol.rate_hz,
-                    Push {
-                        protocol: &protocol,
-                        train_runs,
-                        folds: *folds,
-                        plan: &plan,
-                        progress: &progress,
-                    },
-                )??)
+                Document::Push(run::push_task(
+                    untrained, &protocol, train_runs, *folds, plan, progress,
+                )?)
             }
-            Spec::ConstantFeedback { model, options } => {
+            Spec::ConstantFeedback { .. } => {
                 progress(0);
-                let model = Ready::new(
-                    model,
-                    options,
-                    (self.task(), self.scene()),
-                    LOW_RATE_HZ,
-                    &mut plan,
-                )?;
-                let report = model.dispatch(options, LOW_RATE_HZ, Feedback { plan: &plan })??;
+                let report = run::constant_feedback(untrained, plan)?;
                 progress(1);
                 Document::Feedback(report)
             }
             Spec::MoveToTarget {
-                model,
-                options,
                 targets,
                 repetitions,
                 max_steps,
-            } => Document::MoveToTarget(
-                Ready::new(
-                    model,
-                    options,
-                    (self.task(), self.scene()),
-                    RATE_HZ,
-                    &mut plan,
-                )?
-                .dispatch(
-                    options,
-                    RATE_HZ,
-                    MoveToTarget {
-                        targets,
-                        repetitions: *repetitions,
-                        max_steps: *max_steps,
-                        plan: &plan,
-                        progress: &progress,
-                    },
-                )??,
-            ),
-            Spec::DraftTables { folds } => Document::Draft(draft_tables(*folds, &plan, progress)?),
+                ..
+            } => Document::MoveToTarget(run::move_to_target(
+                untrained,
+                targets,
+                *repetitions,
+                *max_steps,
+                plan,
+                progress,
+            )?),
+            Spec::DraftTables { .. } => {
+                return Err(SpecError::Invalid(
+                    "the draft's tables run the draft's own models, not a given learner".into(),
+                ))
+            }
         })
+    }
+
+    /// An experiment's learner, its model options and the learner's
+    /// publish rate (the push protocol's, 10 Hz for constant feedback);
+    /// `None` for the draft's tables, which run their own models.
+    fn learner(&self) -> Option<(&LearnerChoice, &ModelOptions, u32)> {
+        match self {
+            Spec::PushTask { model, options, .. } => {
+                Some((model, options, self.push_protocol()?.rate_hz))
+            }
+            Spec::ConstantFeedback { model, options } => Some((model, options, LOW_RATE_HZ)),
+            Spec::MoveToTarget { model, options, .. } => Some((model, options, RATE_HZ)),
+            Spec::DraftTables { .. } => None,
+        }
+    }
+}
+
+/// A whole experiment of a spec with the model [`Ready::dispatch`] makes.
+struct Whole<'a> {
+    spec: &'a Spec,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for Whole<'_> {
+    type Output = Result<Document, SpecError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        self.spec.run_with(self.plan, untrained, self.progress)
     }
 }
 
@@ -658,6 +696,12 @@ impl Ready {
                 });
                 Ready::Builtin(*kind)
             }
+            LearnerChoice::InProcess => {
+                return Err(SpecError::Invalid(
+                    "a learner object runs through Spec::run_with, which is handed the object"
+                        .into(),
+                ))
+            }
             LearnerChoice::External(spec) => {
                 options.check_external()?;
                 let model = ExternalModel::connect(spec, task, publish_rate_hz)?;
@@ -706,39 +750,6 @@ impl WithModel for Push<'_> {
             self.protocol,
             self.train_runs,
             self.folds,
-            self.plan,
-            self.progress,
-        )
-    }
-}
-
-struct Feedback<'a> {
-    plan: &'a Plan,
-}
-
-impl WithModel for Feedback<'_> {
-    type Output = Result<FeedbackReport, ExperimentError>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        run::constant_feedback(untrained, self.plan)
-    }
-}
-
-struct MoveToTarget<'a> {
-    targets: &'a [ObjectState],
-    repetitions: usize,
-    max_steps: u64,
-    plan: &'a Plan,
-    progress: &'a dyn Fn(usize),
-}
-
-impl WithModel for MoveToTarget<'_> {
-    type Output = Result<MttReport, ExperimentError>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        run::move_to_target(
-            untrained,
-            self.targets,
-            self.repetitions,
-            self.max_steps,
             self.plan,
             self.progress,
         )

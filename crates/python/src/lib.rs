@@ -10,7 +10,10 @@
 //!   (`learner::registry`) as the command line's models are;
 //! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`);
 //! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
-//!   the process (`world.rs`).
+//!   the process (`world.rs`);
+//! * `run_push_task`, `run_move_to_target`, `without_timing`: the
+//!   experiments of `pushlearn experiment` with a built-in model or a Python
+//!   learner object, for `pushlearn.bench` (`bench.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
 //! `unsafe_code = "forbid"` and needs no exception. The FFI stays inside pyo3
@@ -24,6 +27,7 @@
 
 mod aitm;
 mod args;
+mod bench;
 mod models;
 mod world;
 
@@ -132,6 +136,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<world::PyWorld>()?;
     m.add_class::<world::PyWorlds>()?;
     m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::without_timing, m)?)?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distances, m)?)?;

@@ -534,7 +534,9 @@ impl PushTaskLine {
         let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
         match line.args.learner.choice() {
             LearnerChoice::Builtin(kind) => kind.check(options, rate)?,
-            LearnerChoice::External(_) | LearnerChoice::Floor => options.check_external()?,
+            LearnerChoice::External(_) | LearnerChoice::Floor | LearnerChoice::InProcess => {
+                options.check_external()?;
+            }
         }
         Ok(Self {
             args: line.args,

@@ -53,6 +53,10 @@ pub enum LearnerChoice {
     /// The world as a predictor of itself ([`crate::floor`]): not a
     /// learner, the error no learner can go below.
     Floor,
+    /// A learner object the caller holds and hands to the experiment itself
+    /// (`lab::spec::Spec::run_with`): the Python API's `Learner` objects,
+    /// called directly in the caller's process.
+    InProcess,
 }
 
 /// The choice as `pushlearn experiment` flags: `--model gate`,
@@ -62,6 +66,7 @@ impl std::fmt::Display for LearnerChoice {
         match self {
             LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
             LearnerChoice::Floor => write!(f, "--floor"),
+            LearnerChoice::InProcess => write!(f, "(a learner object in the calling process)"),
             LearnerChoice::External(spec) => {
                 match &spec.source {
                     Source::Command(command) => write!(f, "--learner '{command}'")?,
@@ -462,31 +467,35 @@ fn action(a: Action) -> lp::Action {
 }
 
 /// A prediction's poses, checked: the actuator and exactly the blocks of
-/// the world it was made from, every number finite.
-fn predicted_poses(prediction: &lp::Prediction, from: &Poses) -> Result<Poses, String> {
+/// the world it was made from, every number finite. `bodies` are
+/// `(id, x, y, theta)`, as a learner's reply lists them.
+///
+/// # Errors
+/// What is wrong with the prediction, for people.
+pub fn predicted_poses(
+    bodies: impl IntoIterator<Item = (u32, f64, f64, f64)>,
+    from: &Poses,
+) -> Result<Poses, String> {
     let mut actuator = None;
     let mut blocks = std::collections::BTreeMap::new();
-    for body in &prediction.bodies {
-        let (x, y, theta) = (body.x(), body.y(), body.theta());
+    for (id, x, y, theta) in bodies {
         if ![x, y, theta].iter().all(|v| v.is_finite()) {
             return Err(format!(
-                "predicted a non-finite pose for body {}: ({x}, {y}, {theta})",
-                body.id
+                "predicted a non-finite pose for body {id}: ({x}, {y}, {theta})"
             ));
         }
         let state = ObjectState::new(x, y, theta);
-        let duplicate = if body.id == learner::ACTUATOR_ID {
+        let duplicate = if id == learner::ACTUATOR_ID {
             actuator.replace(state).is_some()
-        } else if from.blocks.contains_key(&body.id) {
-            blocks.insert(body.id, state).is_some()
+        } else if from.blocks.contains_key(&id) {
+            blocks.insert(id, state).is_some()
         } else {
             return Err(format!(
-                "predicted body {}, which the state it predicted from does not have",
-                body.id
+                "predicted body {id}, which the state it predicted from does not have"
             ));
         };
         if duplicate {
-            return Err(format!("predicted body {} twice", body.id));
+            return Err(format!("predicted body {id} twice"));
         }
     }
     let actuator = actuator.ok_or("predicted no actuator (id 8)")?;
@@ -494,6 +503,16 @@ fn predicted_poses(prediction: &lp::Prediction, from: &Poses) -> Result<Poses, S
         return Err(format!("predicted no pose for block {missing}"));
     }
     Ok(Poses { actuator, blocks })
+}
+
+/// A Prediction reply's bodies as [`predicted_poses`] takes them.
+pub(crate) fn bodies_of(
+    prediction: &lp::Prediction,
+) -> impl Iterator<Item = (u32, f64, f64, f64)> + '_ {
+    prediction
+        .bodies
+        .iter()
+        .map(|b| (b.id, b.x(), b.y(), b.theta()))
 }
 
 /// The action an Act reply chose, checked: finite.
@@ -511,7 +530,11 @@ fn chosen_action(reply: &lp::ActionReply) -> Result<Action, String> {
 }
 
 /// Statistics from the protocol's form, read as the reports' serialised form.
-fn stats_of(stats: lp::Stats) -> Result<ModelStats, String> {
+///
+/// # Errors
+/// A non-finite number, or maps under a built-in model's names that are not
+/// that model's complete statistics.
+pub fn stats_of(stats: lp::Stats) -> Result<ModelStats, String> {
     let maps: std::collections::BTreeMap<String, serde_json::Value> = stats
         .maps
         .into_iter()
@@ -587,7 +610,7 @@ impl Model for ExternalModel {
         let Answer::Prediction(prediction) = answer else {
             return neutral();
         };
-        match predicted_poses(&prediction, &world.poses) {
+        match predicted_poses(bodies_of(&prediction), &world.poses) {
             Ok(poses) => {
                 self.last_prediction.set(Some(serial));
                 ExternalWorld {

@@ -11,7 +11,7 @@ use pushlearn::wire::decode_stream;
 use pushlearn::wire::pb::learner::{reply::Answer, request::Call, Reply, Request};
 
 use super::server::{serve_driver, Requests, ServeError};
-use super::{chosen_action, greeting, predicted_poses, stats_of, Source};
+use super::{bodies_of, chosen_action, greeting, predicted_poses, stats_of, Source};
 use learner::registry::{ModelKind, ModelOptions};
 
 /// What a learner daemon made of one connection's bytes.
@@ -155,17 +155,19 @@ pub fn read_untrusted_replies(bytes: &[u8]) -> Result<usize, String> {
     for reply in replies {
         let ok = match reply.answer {
             Some(Answer::Hello(hello)) => greeting(hello, &source).is_ok(),
-            Some(Answer::Prediction(prediction)) => match predicted_poses(&prediction, &from) {
-                Ok(poses) => {
-                    let finite = poses.objects().all(|(_, s)| s.is_finite());
-                    let same = poses.blocks.keys().eq(from.blocks.keys());
-                    if !finite || !same {
-                        return Err(format!("accepted the prediction {prediction:?}"));
+            Some(Answer::Prediction(prediction)) => {
+                match predicted_poses(bodies_of(&prediction), &from) {
+                    Ok(poses) => {
+                        let finite = poses.objects().all(|(_, s)| s.is_finite());
+                        let same = poses.blocks.keys().eq(from.blocks.keys());
+                        if !finite || !same {
+                            return Err(format!("accepted the prediction {prediction:?}"));
+                        }
+                        true
                     }
-                    true
+                    Err(_) => false,
                 }
-                Err(_) => false,
-            },
+            }
             Some(Answer::Action(reply)) => match chosen_action(&reply) {
                 Ok(action) if !action.is_finite() => {
                     return Err(format!("accepted the action {action:?}"));

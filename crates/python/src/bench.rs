@@ -1,0 +1,720 @@
+//! `pushlearn.bench`'s engine: the thesis's experiments run from Python on
+//! the same embedded worlds, seeds, driver and reports as `pushlearn
+//! experiment` (`lab::spec::Spec`), with a built-in model or a Python
+//! `Learner` object called directly.
+//!
+//! A Python learner reaches the driver as [`PyLearner`], a
+//! [`learner::Model`] whose calls go to `pushlearn.bench._Direct`, the
+//! learner protocol's dispatch without the protocol: the same `State` and
+//! `Prediction` objects, the same checks of what the learner returns
+//! (`pushlearn.learner`'s own), in the order the driver makes its calls. So
+//! its reports equal those of the same learner served to `pushlearn
+//! experiment --learner`, bit for bit (`python/tests/test_bench.py`).
+
+use std::cell::{Cell, RefCell};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+
+use drive::experiment::move_to_target::sampled_targets;
+use drive::experiment::push_task::protocol::Variant;
+use drive::experiment::run::Plan;
+use drive::experiment::run_cache::RunCache;
+use drive::experiment::workers::WorldSource;
+use drive::experiment::Mode;
+use drive::external::{predicted_poses, stats_of, LearnerChoice};
+use drive::results::move_to_target::{REPETITIONS, TARGETS};
+use drive::results::LearnerRecord;
+use drive::scene::{Object, Transfer};
+use lab::spec::{Document, Spec};
+use learner::features::{parse_frame, ActuatorYaw, ParseError};
+use learner::registry::{ModelKind, ModelOptions};
+use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError};
+use prost::Message;
+use pushlearn::wire::pb::learner as lp;
+use pushlearn_core::Named;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// What the learner's start said about it (as a Hello would).
+#[derive(Debug)]
+struct Info {
+    name: String,
+    version: String,
+    ignores_actuator_yaw: bool,
+}
+
+/// What every fold's handle on the one learner object shares.
+#[derive(Debug)]
+struct Shared {
+    /// The `_Direct` adapter around the user's learner.
+    direct: Py<PyAny>,
+    info: Info,
+    /// The first exception a learner call raised: re-raised as the cause of
+    /// the experiment's error, with its traceback.
+    raised: Mutex<Option<PyErr>>,
+}
+
+/// A Python learner as a [`Model`]; see the module documentation. A clone
+/// is a fresh handle on the same object, as a fold needs: the learner
+/// forgets on `new_fold`.
+#[derive(Debug)]
+pub struct PyLearner {
+    shared: Arc<Shared>,
+    failure: RefCell<Option<String>>,
+    training: bool,
+    has_target: bool,
+    /// Whether the driver has handed this handle a fold yet.
+    in_fold: Cell<bool>,
+}
+
+impl Clone for PyLearner {
+    fn clone(&self) -> Self {
+        Self::handle(Arc::clone(&self.shared))
+    }
+}
+
+/// The learner lives in Python: there is nothing to save or restore.
+impl Serialize for PyLearner {
+    fn serialize<S: serde::Serializer>(&self, _: S) -> Result<S::Ok, S::Error> {
+        Err(serde::ser::Error::custom(format!(
+            "learner '{}' is a Python object; it cannot be saved",
+            self.shared.info.name
+        )))
+    }
+}
+
+impl<'de> Deserialize<'de> for PyLearner {
+    fn deserialize<D: serde::Deserializer<'de>>(_: D) -> Result<Self, D::Error> {
+        Err(serde::de::Error::custom(
+            "a Python learner object cannot be restored",
+        ))
+    }
+}
+
+/// A world as [`PyLearner`] sees it: the poses the driver checks and
+/// scores, and the Python object the learner gets (`State` or its own
+/// `Prediction`), made when the learner first needs it and the same object
+/// every time after.
+#[derive(Clone, Debug)]
+pub struct PyWorldState {
+    poses: Poses,
+    frame: Option<Arc<Frame>>,
+    object: Arc<OnceLock<Py<PyAny>>>,
+}
+
+impl PyLearner {
+    /// Starts `direct` (a `pushlearn.bench._Direct`) for `task`, reading the
+    /// learner's name, version and capabilities as its hello would give them.
+    fn start(
+        py: Python<'_>,
+        direct: Py<PyAny>,
+        task: &str,
+        publish_rate_hz: u32,
+    ) -> PyResult<Self> {
+        let (name, version, inverse, ignores_actuator_yaw): (String, String, bool, bool) = direct
+            .call_method1(py, "start", (task, publish_rate_hz))?
+            .extract(py)?;
+        if task == "move-to-target" && !inverse {
+            return Err(PyValueError::new_err(format!(
+                "learner '{name}' cannot run move-to-target: it does not declare \
+                 Capability.INVERSE (actions towards a target)"
+            )));
+        }
+        Ok(Self::handle(Arc::new(Shared {
+            direct,
+            info: Info {
+                name,
+                version,
+                ignores_actuator_yaw,
+            },
+            raised: Mutex::new(None),
+        })))
+    }
+
+    fn handle(shared: Arc<Shared>) -> Self {
+        Self {
+            shared,
+            failure: RefCell::new(None),
+            training: true,
+            has_target: false,
+            in_fold: Cell::new(false),
+        }
+    }
+
+    fn failed(&self) -> bool {
+        self.failure.borrow().is_some()
+    }
+
+    /// Keeps the first failure; the driver ends the job with it.
+    fn fail(&self, what: String, err: Option<PyErr>) {
+        let mut failure = self.failure.borrow_mut();
+        if failure.is_some() {
+            return;
+        }
+        *failure = Some(what);
+        if let Some(err) = err {
+            let mut raised = self
+                .shared
+                .raised
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner);
+            raised.get_or_insert(err);
+        }
+    }
+
+    /// Calls `_Direct.method(args)`, reading its answer with `read`; `None`
+    /// once failed, or when the call raised (then recorded as the failure).
+    fn call<T>(
+        &self,
+        method: &str,
+        args: impl FnOnce(Python<'_>) -> PyResult<Py<pyo3::types::PyTuple>>,
+        read: impl FnOnce(Python<'_>, Bound<'_, PyAny>) -> PyResult<T>,
+    ) -> Option<T> {
+        if self.failed() {
+            return None;
+        }
+        if !self.in_fold.get() {
+            self.fail(
+                "the driver called the learner outside a fold (no start_fold)".into(),
+                None,
+            );
+            return None;
+        }
+        let outcome = Python::attach(|py| {
+            let args = args(py)?;
+            let answer = self
+                .shared
+                .direct
+                .bind(py)
+                .call_method1(method, args.bind(py))?;
+            read(py, answer)
+        });
+        match outcome {
+            Ok(value) => Some(value),
+            Err(err) => {
+                let text = Python::attach(|py| describe(py, &err));
+                self.fail(format!("{method}() raised {text}"), Some(err));
+                None
+            }
+        }
+    }
+
+    /// The Python object for `world`: an observed state made into a `State`
+    /// once, a prediction the learner's own object.
+    fn object(&self, py: Python<'_>, world: &PyWorldState) -> PyResult<Py<PyAny>> {
+        if let Some(object) = world.object.get() {
+            return Ok(object.clone_ref(py));
+        }
+        let frame = world
+            .frame
+            .as_ref()
+            .ok_or_else(|| PyRuntimeError::new_err("a prediction without its object"))?;
+        let bodies: Vec<_> = frame
+            .objects
+            .iter()
+            .map(|o| (o.name.clone(), o.id, o.position, o.orientation))
+            .collect();
+        let state = self
+            .shared
+            .direct
+            .bind(py)
+            .call_method1("observed", (bodies,))?
+            .unbind();
+        Ok(world.object.get_or_init(|| state).clone_ref(py))
+    }
+
+    /// The learner's statistics from the protocol's form, which
+    /// `_Direct.stats` makes with the SDK's own checks.
+    fn read_stats(bytes: &[u8]) -> Result<ModelStats, String> {
+        let stats = lp::Stats::decode(bytes).map_err(|e| format!("unreadable statistics: {e}"))?;
+        stats_of(stats)
+    }
+}
+
+/// One body of a prediction as `_Direct.predict` lists them: `(id, x, y, theta)`.
+type PredictedBody = (u32, f64, f64, f64);
+
+/// `TypeName: text` of an exception, as the learner protocol reports one.
+fn describe(py: Python<'_>, err: &PyErr) -> String {
+    let name = err
+        .get_type(py)
+        .name()
+        .map_or_else(|_| "Exception".to_owned(), |n| n.to_string());
+    format!("{name}: {}", err.value(py))
+}
+
+impl Model for PyLearner {
+    type World = PyWorldState;
+
+    fn parse(&self, frame: &Frame) -> Result<PyWorldState, ParseError> {
+        let yaw = if self.shared.info.ignores_actuator_yaw {
+            ActuatorYaw::ForceZero
+        } else {
+            ActuatorYaw::Keep
+        };
+        Ok(PyWorldState {
+            poses: parse_frame(frame, yaw)?,
+            frame: Some(Arc::new(frame.clone())),
+            object: Arc::new(OnceLock::new()),
+        })
+    }
+
+    fn poses(world: &PyWorldState) -> Poses {
+        world.poses.clone()
+    }
+
+    fn reset_objects(&mut self, world: &PyWorldState) {
+        self.call(
+            "reset",
+            |py| {
+                (self.object(py, world)?,)
+                    .into_pyobject(py)
+                    .map(Bound::unbind)
+            },
+            |_, _| Ok(()),
+        );
+    }
+
+    fn update(&mut self, world: &PyWorldState, a: Action) {
+        self.call(
+            "update",
+            |py| {
+                (self.object(py, world)?, a.vx, a.vy)
+                    .into_pyobject(py)
+                    .map(Bound::unbind)
+            },
+            |_, _| Ok(()),
+        );
+    }
+
+    fn predict(&self, world: &PyWorldState, a: Action) -> PyWorldState {
+        let answer = self.call(
+            "predict",
+            |py| {
+                (self.object(py, world)?, a.vx, a.vy)
+                    .into_pyobject(py)
+                    .map(Bound::unbind)
+            },
+            |_, answer| answer.extract::<(Py<PyAny>, Vec<PredictedBody>)>(),
+        );
+        let neutral = || PyWorldState {
+            poses: world.poses.clone(),
+            frame: None,
+            object: world.object.clone(),
+        };
+        let Some((object, bodies)) = answer else {
+            return neutral();
+        };
+        match predicted_poses(bodies, &world.poses) {
+            Ok(poses) => PyWorldState {
+                poses,
+                frame: None,
+                object: Arc::new(OnceLock::from(object)),
+            },
+            Err(what) => {
+                self.fail(format!("predict(): the learner {what}"), None);
+                neutral()
+            }
+        }
+    }
+
+    fn set_training(&mut self, on: bool) {
+        self.training = on;
+        self.call(
+            "set_training",
+            |py| (on,).into_pyobject(py).map(Bound::unbind),
+            |_, _| Ok(()),
+        );
+    }
+
+    fn is_training(&self) -> bool {
+        self.training
+    }
+
+    fn set_target(&mut self, target: Option<Target>) -> Result<(), TargetError> {
+        if let Some(t) = &target {
+            t.check()?;
+        }
+        let goal = target.map(|t| (t.id, t.pose.x, t.pose.y, t.pose.theta));
+        let refusal = self.call(
+            "set_target",
+            |py| (goal,).into_pyobject(py).map(Bound::unbind),
+            |_, answer| answer.extract::<Option<String>>(),
+        );
+        match refusal {
+            Some(None) => {
+                self.has_target = target.is_some();
+                Ok(())
+            }
+            Some(Some(reason)) => {
+                self.fail(format!("the learner refused the target: {reason}"), None);
+                Err(TargetError::UnknownObject {
+                    id: target.map_or(0, |t| t.id),
+                })
+            }
+            // Failed: the driver stops at the end of this message.
+            None => Ok(()),
+        }
+    }
+
+    fn has_target(&self) -> bool {
+        self.has_target
+    }
+
+    /// The learner explores with its own generator (seeded by `new_fold`),
+    /// so `rng` is not drawn from, as with any external learner.
+    fn act(&mut self, _rng: &mut dyn rand::Rng) -> Action {
+        let chosen = self.call(
+            "act",
+            |py| Ok(pyo3::types::PyTuple::empty(py).unbind()),
+            |_, answer| answer.extract::<(f64, f64, bool)>(),
+        );
+        match chosen {
+            Some((vx, vy, has_target)) => {
+                self.has_target = has_target;
+                Action::new(vx, vy)
+            }
+            None => Action::ZERO,
+        }
+    }
+
+    fn stats(&self) -> ModelStats {
+        let bytes = self.call(
+            "stats",
+            |py| Ok(pyo3::types::PyTuple::empty(py).unbind()),
+            |_, answer| answer.extract::<Vec<u8>>(),
+        );
+        match bytes.map(|b| Self::read_stats(&b)) {
+            Some(Ok(stats)) => stats,
+            Some(Err(what)) => {
+                self.fail(format!("stats(): the learner {what}"), None);
+                ModelStats::default()
+            }
+            None => ModelStats::default(),
+        }
+    }
+
+    fn start_fold(&mut self, seed: u64) {
+        self.training = true;
+        self.has_target = false;
+        self.in_fold.set(true);
+        self.call(
+            "new_fold",
+            |py| (seed,).into_pyobject(py).map(Bound::unbind),
+            |_, _| Ok(()),
+        );
+    }
+
+    fn failure(&self) -> Option<String> {
+        self.failure.borrow().as_ref().map(|what| {
+            format!(
+                "learner '{}' (a Python object): {what}",
+                self.shared.info.name
+            )
+        })
+    }
+}
+
+/// Where and how the experiment's worlds run: embedded worlds in this
+/// process, one job at a time (a Python learner is one object; the worker
+/// processes of `pushlearn experiment` are that program re-started, which
+/// an interpreter is not), the run cache of the lock-step modes.
+fn plan(mode: &str, latency_max: u32, seed: u64, scene: &str) -> PyResult<Plan> {
+    let mode = named::<Mode>(mode, "mode")?;
+    if mode == Mode::Realtime {
+        return Err(PyValueError::new_err(
+            "mode 'realtime' needs a world daemon stepping on its own; the Python benchmark \
+             steps embedded worlds: use 'lockstep-jitter' (the default) or 'lockstep'",
+        ));
+    }
+    if !mode.jitter() && latency_max != drive::experiment::LATENCY_MAX_STEPS {
+        return Err(PyValueError::new_err(
+            "latency_max sets the latency emulation of mode 'lockstep-jitter'; drop it or use that mode",
+        ));
+    }
+    let source = WorldSource::embedded(mode, scene, latency_max)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    Ok(Plan {
+        mode,
+        latency_max,
+        workers: 1,
+        source,
+        seed,
+        model: String::new(),
+        learner: None,
+        runs: mode.reuses_runs().then(|| Arc::new(RunCache::new())),
+        processes: None,
+        recipe: None,
+    })
+}
+
+/// `T` by its name, or `ValueError` listing the names there are.
+fn named<T: Named>(name: &str, what: &str) -> PyResult<T> {
+    T::from_name(name).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown {what} '{name}'; expected one of {}",
+            T::names()
+        ))
+    })
+}
+
+/// The built-in learner a name chooses (a model kind, or `floor`).
+fn builtin(name: &str) -> PyResult<LearnerChoice> {
+    if name == "floor" {
+        return Ok(LearnerChoice::Floor);
+    }
+    ModelKind::from_name(name)
+        .map(LearnerChoice::Builtin)
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "unknown model '{name}'; expected one of {}, floor, or a pushlearn.Learner",
+                ModelKind::names()
+            ))
+        })
+}
+
+/// What an experiment gives Python: the report document (JSON), the text
+/// `pushlearn experiment` prints, and each printed table as `(name, title
+/// lines, CSV)`.
+type Outcome = (String, String, Vec<(String, Vec<String>, String)>);
+
+/// Runs `spec` with `learner` — a built-in's name (`str`), or a
+/// `pushlearn.bench._Direct` — calling `progress(done)` after each job.
+fn run(
+    py: Python<'_>,
+    spec: Spec,
+    learner: &Bound<'_, PyAny>,
+    mut plan: Plan,
+    task: &str,
+    rate_hz: u32,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Outcome> {
+    spec.validate()
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let direct = if learner.is_instance_of::<pyo3::types::PyString>() {
+        None
+    } else {
+        let model = PyLearner::start(py, learner.clone().unbind(), task, rate_hz)?;
+        model.shared.info.name.clone_into(&mut plan.model);
+        plan.learner = Some(LearnerRecord {
+            version: model.shared.info.version.clone(),
+            source: "pushlearn.bench, in-process".to_owned(),
+        });
+        Some(model)
+    };
+    // The first exception of the progress callback (Ctrl-C, say) ends the
+    // run once the job under way is done.
+    let interrupted: Mutex<Option<PyErr>> = Mutex::new(None);
+    let jobs = spec.jobs();
+    let report = |done: usize| {
+        let Some(callback) = &progress else { return };
+        Python::attach(|py| {
+            if let Err(err) = callback.call1(py, (done, jobs)) {
+                interrupted
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .get_or_insert(err);
+            }
+        });
+    };
+    let raised = direct.as_ref().map(|d| Arc::clone(&d.shared));
+    let outcome = py.detach(|| match direct {
+        Some(model) => spec.run_with(&plan, model, report),
+        None => spec.run(&plan, report),
+    });
+    if let Some(err) = interrupted
+        .into_inner()
+        .unwrap_or_else(PoisonError::into_inner)
+    {
+        return Err(err);
+    }
+    let document = match outcome {
+        Ok(document) => document,
+        Err(err) => {
+            let error = PyRuntimeError::new_err(err.to_string());
+            let cause = raised.and_then(|shared| {
+                shared
+                    .raised
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .take()
+            });
+            error.set_cause(py, cause);
+            return Err(error);
+        }
+    };
+    outcome_of(&document)
+}
+
+fn outcome_of(document: &Document) -> PyResult<Outcome> {
+    let json = document
+        .to_json()
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))?;
+    let printout = document
+        .printout()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let mut text = Vec::new();
+    printout
+        .write_text(&mut text)
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let tables = printout
+        .tables
+        .iter()
+        .map(|t| (t.name.clone(), t.title.clone(), t.csv()))
+        .collect();
+    Ok((json, String::from_utf8_lossy(&text).into_owned(), tables))
+}
+
+/// The push task (`pushlearn experiment push-task`); see
+/// `pushlearn.bench.push_task`.
+#[pyfunction]
+#[pyo3(signature = (learner, *, variant, train_runs, folds, train_on, test_on, mode, latency_max, seed, progress))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
+pub fn run_push_task(
+    py: Python<'_>,
+    learner: &Bound<'_, PyAny>,
+    variant: &str,
+    train_runs: Option<Vec<usize>>,
+    folds: usize,
+    train_on: Option<Vec<String>>,
+    test_on: Option<String>,
+    mode: &str,
+    latency_max: u32,
+    seed: u64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Outcome> {
+    let variant = named::<Variant>(variant, "variant")?;
+    if variant == Variant::ConstantFeedback {
+        return Err(PyValueError::new_err(
+            "variant 'constant-feedback' has no training runs or folds; run `pushlearn \
+             experiment push-task --variant constant-feedback`",
+        ));
+    }
+    if folds == 0
+        || train_runs
+            .as_ref()
+            .is_some_and(|r| r.is_empty() || r.contains(&0))
+    {
+        return Err(PyValueError::new_err(
+            "folds and every number of training runs must be at least 1",
+        ));
+    }
+    let objects = |names: Vec<String>| -> PyResult<Vec<Object>> {
+        names.iter().map(|n| named::<Object>(n, "object")).collect()
+    };
+    let transfer = match (train_on, test_on) {
+        (None, None) => None,
+        (train, test) => Some(
+            Transfer::new(
+                train.map_or_else(|| Ok(vec![Object::Blue]), objects)?,
+                test.map_or(Ok(Object::Blue), |t| named::<Object>(&t, "object"))?,
+            )
+            .map_err(|e| PyValueError::new_err(e.to_string()))?,
+        ),
+    };
+    let model = learner_choice(learner)?;
+    let spec = Spec::PushTask {
+        model,
+        options: ModelOptions::default(),
+        variant,
+        transfer,
+        train_runs: train_runs.unwrap_or_else(|| variant.default_train_runs()),
+        folds,
+    };
+    let rate_hz = spec
+        .push_protocol()
+        .map_or(drive::scene::RATE_HZ, |p| p.rate_hz);
+    let plan = plan(mode, latency_max, seed, spec.scene())?;
+    run(py, spec, learner, plan, "push-task", rate_hz, progress)
+}
+
+/// Move to Target (`pushlearn experiment move-to-target`); see
+/// `pushlearn.bench.move_to_target`.
+#[pyfunction]
+#[pyo3(signature = (learner, *, targets, sample_targets, repetitions, max_steps, mode, latency_max, seed, progress))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
+pub fn run_move_to_target(
+    py: Python<'_>,
+    learner: &Bound<'_, PyAny>,
+    targets: Option<Vec<(f64, f64, f64)>>,
+    sample_targets: Option<usize>,
+    repetitions: Option<usize>,
+    max_steps: u64,
+    mode: &str,
+    latency_max: u32,
+    seed: u64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Outcome> {
+    let targets = match (targets, sample_targets) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "give targets or sample_targets, not both",
+            ))
+        }
+        (None, Some(n)) if (1..=10_000).contains(&n) => sampled_targets(n, seed),
+        (None, Some(n)) => {
+            return Err(PyValueError::new_err(format!(
+                "sample_targets must be in 1..=10000, not {n}"
+            )))
+        }
+        (Some(list), None) if list.is_empty() => {
+            return Err(PyValueError::new_err("targets is empty"))
+        }
+        (Some(list), None) => {
+            let targets: Vec<ObjectState> = list
+                .into_iter()
+                .map(|(x, y, theta)| ObjectState::new(x, y, theta))
+                .collect();
+            if targets
+                .iter()
+                .any(|t| ![t.x, t.y, t.theta].iter().all(|v| v.is_finite()))
+            {
+                return Err(PyValueError::new_err("a target pose is not finite"));
+            }
+            targets
+        }
+        (None, None) => TARGETS.to_vec(),
+    };
+    let repetitions = repetitions.unwrap_or(REPETITIONS);
+    if repetitions == 0 || max_steps == 0 {
+        return Err(PyValueError::new_err(
+            "repetitions and max_steps must be at least 1",
+        ));
+    }
+    let spec = Spec::MoveToTarget {
+        model: learner_choice(learner)?,
+        options: ModelOptions::default(),
+        targets,
+        repetitions,
+        max_steps,
+    };
+    let plan = plan(mode, latency_max, seed, spec.scene())?;
+    run(
+        py,
+        spec,
+        learner,
+        plan,
+        "move-to-target",
+        drive::scene::RATE_HZ,
+        progress,
+    )
+}
+
+fn learner_choice(learner: &Bound<'_, PyAny>) -> PyResult<LearnerChoice> {
+    match learner.extract::<String>() {
+        Ok(name) => builtin(&name),
+        Err(_) => Ok(LearnerChoice::InProcess),
+    }
+}
+
+/// A report document without its machine-dependent part (wall time,
+/// handling times, workers), so that two runs compare equal; the JSON in,
+/// the JSON out.
+#[pyfunction]
+pub fn without_timing(document: &str) -> PyResult<String> {
+    let document = Document::read(document).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    document
+        .without_timing()
+        .to_json()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))
+}

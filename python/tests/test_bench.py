@@ -1,0 +1,169 @@
+"""``pushlearn.bench``: the experiments from Python, equal to ``pushlearn experiment``'s."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any, ClassVar
+
+import pytest
+from conftest import LIMIT, TESTS_DIR, python_env
+from pushlearn import Capability, Learner, Prediction, StateLike
+from pushlearn.bench import Report, move_to_target, push_task, without_timing
+
+pytest.importorskip("pushlearn._native")
+
+PUSH: dict[str, Any] = {"train_runs": [1, 2], "folds": 2}
+PUSH_FLAGS = ["--train-runs", "1,2", "--folds", "2"]
+MTT: dict[str, Any] = {
+    "targets": [(0.6, 0.7, 0.75)],
+    "repetitions": 2,
+    "max_steps": 400,
+}
+MTT_FLAGS = ["--target", "0.6,0.7,0.75", "--repetitions", "2", "--max-steps", "400"]
+
+
+def cli_document(driver_bin: Path, tmp_path: Path, *args: str) -> dict[str, Any]:
+    """``pushlearn experiment ARGS --json``'s document (embedded worlds, as the bench's)."""
+    path = tmp_path / "cli.json"
+    done = subprocess.run(
+        [str(driver_bin), "experiment", *args, "--json", str(path)],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=TESTS_DIR,
+        timeout=8 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    document: dict[str, Any] = json.loads(path.read_text())
+    return document
+
+
+def comparable(document: dict[str, Any]) -> dict[str, Any]:
+    """Without timing, and without where the learner ran (a command, or this process)."""
+    document = without_timing(document)
+    learner = document.get("learner")
+    if learner is not None:
+        learner.pop("source")
+    return document
+
+
+@pytest.mark.parametrize(
+    ("run", "kwargs", "flags"),
+    [
+        (push_task, PUSH, ["push-task", *PUSH_FLAGS]),
+        (move_to_target, MTT, ["move-to-target", *MTT_FLAGS]),
+    ],
+    ids=["push-task", "move-to-target"],
+)
+def test_a_python_learner_gives_the_report_it_gives_through_learner_bit_for_bit(
+    driver_bin: Path, tmp_path: Path, run: Any, kwargs: dict[str, Any], flags: list[str]
+) -> None:
+    from pushlearn.models import GateLearner
+
+    here = run(GateLearner, progress=False, **kwargs)
+    served = f"{sys.executable} -m pushlearn.serve pushlearn.models:GateLearner"
+    there = cli_document(driver_bin, tmp_path, *flags, "--learner", served)
+    assert here.document["learner"]["source"] == "pushlearn.bench, in-process"
+    assert comparable(here.document) == comparable(there)
+    assert here.document["model"].startswith("gate")
+
+
+@pytest.mark.parametrize("model", ["gate", "hybrid", "floor"])
+def test_a_built_in_models_report_is_the_clis(
+    driver_bin: Path, tmp_path: Path, model: str
+) -> None:
+    here = push_task(model, progress=False, **PUSH)
+    choice = ["--floor"] if model == "floor" else ["--model", model]
+    there = cli_document(driver_bin, tmp_path, "push-task", *PUSH_FLAGS, *choice)
+    assert comparable(here.document) == comparable(there)
+
+
+def test_the_report_has_the_tables_as_rows_and_the_progress_counts_every_job() -> None:
+    seen: list[tuple[int, int]] = []
+    report = push_task(
+        "gate",
+        train_runs=[1],
+        folds=2,
+        mode="lockstep",
+        progress=lambda d, n: seen.append((d, n)),
+    )
+    assert isinstance(report, Report)
+    assert seen[-1] == (2, 2)
+    curve = report.table("learning-curve")
+    assert curve.rows and all(isinstance(row, dict) for row in curve.rows)
+    first = curve.rows[0]
+    assert set(first) == set(curve.columns)
+    numbers = [v for v in first.values() if isinstance(v, float)]
+    assert numbers, f"no numeric cell in {first}"
+    assert report.document["mode"] == "lockstep"
+    assert json.loads(report.to_json()) == report.document
+    with pytest.raises(KeyError, match="learning-curve"):
+        report.table("no such table")
+
+
+class Exploding(Learner):
+    name = "exploding"
+
+    def new_fold(self, seed: int) -> None:
+        pass
+
+    def predict(self, state: StateLike, action: tuple[float, float]) -> Prediction:
+        raise ZeroDivisionError("the model divided by zero")
+
+
+class Wrong(Exploding):
+    name = "wrong"
+
+    def predict(self, state: StateLike, action: tuple[float, float]) -> Prediction:
+        poses = state.poses()
+        poses.pop(8)
+        return Prediction(poses)
+
+
+class ForwardOnly(Exploding):
+    capabilities: ClassVar[frozenset[Capability]] = frozenset({Capability.FORWARD})
+
+
+def test_a_learners_exception_ends_the_run_with_it_as_the_cause() -> None:
+    with pytest.raises(RuntimeError, match="exploding") as caught:
+        push_task(Exploding, train_runs=[1], folds=1, progress=False)
+    assert isinstance(caught.value.__cause__, ZeroDivisionError)
+
+
+def test_a_wrong_prediction_is_named() -> None:
+    with pytest.raises(RuntimeError, match="no pose for body 8"):
+        push_task(Wrong(), train_runs=[1], folds=1, progress=False)
+
+
+@pytest.mark.parametrize(
+    ("call", "message"),
+    [
+        (
+            lambda: push_task("no-such-model", progress=False),
+            "unknown model 'no-such-model'",
+        ),
+        (
+            lambda: push_task("gate", variant="sideways", progress=False),
+            "unknown variant",
+        ),
+        (lambda: push_task("gate", folds=0, progress=False), "at least 1"),
+        (lambda: push_task("gate", mode="realtime", progress=False), "realtime"),
+        (lambda: push_task("gate", test_on="teapot", progress=False), "unknown object"),
+        (lambda: move_to_target(ForwardOnly, progress=False), "INVERSE"),
+        (
+            lambda: move_to_target(
+                "gate", targets=[(float("nan"), 0, 0)], progress=False
+            ),
+            "finite",
+        ),
+        (lambda: move_to_target("floor", progress=False), "floor"),
+        (lambda: push_task(42, progress=False), "expected a pushlearn.Learner"),  # type: ignore[arg-type]
+    ],
+)
+def test_bad_arguments_are_named(call: Any, message: str) -> None:
+    with pytest.raises((ValueError, TypeError), match=message):
+        call()
