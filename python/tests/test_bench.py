@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -167,3 +168,25 @@ def test_a_wrong_prediction_is_named() -> None:
 def test_bad_arguments_are_named(call: Any, message: str) -> None:
     with pytest.raises((ValueError, TypeError), match=message):
         call()
+
+
+def test_the_readmes_bench_example_runs_as_written(tmp_path: Path) -> None:
+    """README.md's pushlearn.bench block, beside its mylearner.py."""
+    readme = (TESTS_DIR.parents[1] / "README.md").read_text()
+    learner = re.findall(r"```python\n(# mylearner\.py.*?)```", readme, flags=re.DOTALL)
+    bench = re.findall(
+        r"```python\n(from pushlearn\.bench.*?)```", readme, flags=re.DOTALL
+    )
+    assert len(learner) == 1 and len(bench) == 1, "README.md lost an example"
+    (tmp_path / "mylearner.py").write_text(learner[0])
+    done = subprocess.run(
+        [sys.executable, "-c", bench[0]],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=tmp_path,
+        timeout=4 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "learner 'still' 1" in done.stdout, done.stdout

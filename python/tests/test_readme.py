@@ -107,3 +107,23 @@ def test_the_readme_native_model_options_run() -> None:
     done = run_snippet(source)
     assert done.returncode == 0, done.stderr
     assert done.stdout == "gate+average-outputs gate+\n"
+
+
+def test_the_readme_bench_example_runs_the_learner_through_the_push_task(
+    tmp_path: Path,
+) -> None:
+    pytest.importorskip("pushlearn._native")
+    (tmp_path / "mymodule.py").write_text(learner_example())
+    (source,) = [b for b in python_blocks() if "pushlearn.bench import" in b]
+    done = subprocess.run(
+        [sys.executable, "-c", source],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=tmp_path,
+        timeout=4 * LIMIT,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "learner 'still' 1" in done.stdout, done.stdout
+    assert "Learning curve, all 21 test positions" in done.stdout
