@@ -161,8 +161,10 @@ gym.register_envs(pushlearn)
 for env_id in ("pushlearn/PushBlock-v0", "pushlearn/PushTwoBlocks-v0"):
     env = gym.make(env_id)
     with warnings.catch_warnings():
-        # The unbounded positions and velocities (the world has no walls),
-        # as python/tests/test_envs.py accepts them.
+        # Any remark of the checker fails, but for the one on the unbounded
+        # positions and velocities (the world has no walls), as
+        # python/tests/test_envs.py has it.
+        warnings.simplefilter("error")
         warnings.filterwarnings("ignore", message=".*infinity.*")
         check_env(env.unwrapped)
     env.close()
