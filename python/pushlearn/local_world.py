@@ -8,12 +8,13 @@
         client = world.connect()                   # a SimClient
         ...
 
-The binary is found as the command line finds it, in this order: the
-``sim_bin`` argument, the environment variable ``PUSHLEARN_SIM_BIN``, next
-to the running Python (a virtual environment's ``bin/``), on ``PATH``, and
-last in ``target/release/`` of the checkout the native extension was built
-from (so that ``cargo build --release`` and then ``pip install .`` need
-nothing more).
+The binary is found in this order: the ``sim_bin`` argument, the
+environment variable ``PUSHLEARN_SIM_BIN``, the one the package carries
+(``pushlearn/_bin/``, in an installed wheel: the world built with the
+extension), next to the running Python (a virtual environment's ``bin/``),
+on ``PATH``, and last in ``target/release/`` of the checkout the native
+extension was built from (for an editable install, after ``cargo build
+--release``).
 
 The world never outlives its owner: :meth:`LocalWorld.close` (idempotent)
 stops it with SIGTERM, and SIGKILL if it does not stop within 5 s; garbage
@@ -37,6 +38,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import IO, Any, Self
 
+from ._launch import packaged
 from .sim import SimClient
 
 __all__ = ["LocalWorld", "SimNotFound", "find_sim_binary"]
@@ -80,8 +82,11 @@ def find_sim_binary(explicit: str | os.PathLike[str] | None = None) -> Path:
                 f"pushlearn-sim not found: PUSHLEARN_SIM_BIN is {from_env}, which is not a file"
             )
         return path
+    carried = packaged(SIM_BIN)
+    if carried.is_file():
+        return carried
     beside = Path(sys.executable).parent / SIM_BIN
-    looked = [str(beside), "PATH"]
+    looked = [str(carried), str(beside), "PATH"]
     if beside.is_file():
         return beside
     on_path = shutil.which(SIM_BIN)

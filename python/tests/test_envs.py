@@ -20,6 +20,7 @@ import pushlearn
 import pytest
 from conftest import LIMIT, Daemon, python_env
 from gymnasium.utils.env_checker import check_env
+from pushlearn import local_world
 from pushlearn.envs import ENV_IDS
 from pushlearn.envs.push import (
     ACTUATOR_SPEED,
@@ -518,12 +519,35 @@ def test_a_missing_binary_says_where_it_looked(
         find_sim_binary()
 
 
+def test_the_binary_the_package_carries_comes_before_path(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    carried = tmp_path / "_bin" / "pushlearn-sim"
+    carried.parent.mkdir()
+    carried.write_text("")
+    on_path = tmp_path / "bin" / "pushlearn-sim"
+    on_path.parent.mkdir()
+    on_path.write_text("#!/bin/sh\n")
+    on_path.chmod(0o755)
+    monkeypatch.delenv("PUSHLEARN_SIM_BIN", raising=False)
+    monkeypatch.setenv("PATH", str(on_path.parent))
+    monkeypatch.setattr(local_world, "packaged", lambda name: tmp_path / "_bin" / name)
+    assert find_sim_binary() == carried
+    carried.unlink()
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "python"))
+    assert find_sim_binary() == on_path
+
+
 def test_without_a_binary_on_path_the_checkout_the_package_was_built_from_is_used(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
     native = pytest.importorskip("pushlearn._native")
     monkeypatch.delenv("PUSHLEARN_SIM_BIN", raising=False)
     monkeypatch.setenv("PATH", str(tmp_path))
+    # Neither the package's own binary (an installed wheel's) nor the console
+    # script beside the venv's Python that runs it.
+    monkeypatch.setattr(local_world, "packaged", lambda name: tmp_path / "_bin" / name)
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "python"))
     expected = (
         Path(native.SOURCE_CHECKOUT).resolve() / "target" / "release" / "pushlearn-sim"
     )
