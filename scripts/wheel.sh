@@ -176,16 +176,48 @@ env.close()
 print("wheel: pushlearn/PushBlock-v0 steps a daemon of the wheel's pushlearn-sim")
 PY
 
-check_bench() {
-  # The reduced `pushlearn.bench.push_task` with a Python learner (issue 36):
-  # that module is not in the package yet. Until it is, the check says so;
-  # once it is, this fails until the call is written here.
-  if in_work python -c 'import pushlearn.bench' >/dev/null 2>&1; then
-    fail "pushlearn.bench is in the wheel: write its reduced push_task check in check_bench (scripts/wheel.sh)"
-  fi
-  echo "wheel: pushlearn.bench is not in the package yet: its push_task check waits for it"
-}
-check_bench
+# The benchmark as a Python API: a reduced push task with a Python learner
+# called in-process (`pushlearn.bench`), and the same learner served to the
+# command line (`--learner`), whose documents must be equal but for timing
+# and where the learner ran.
+cat >"$work/still.py" <<'PY'
+from pushlearn import Learner, Prediction
+
+
+class Still(Learner):
+    """Only the actuator moves, with the action."""
+
+    name, version = "still", "1"
+
+    def new_fold(self, seed: int) -> None:
+        pass
+
+    def predict(self, state, action):
+        poses = state.poses()
+        x, y, theta = poses[8]
+        poses[8] = (x + action[0] / self.publish_rate_hz, y + action[1] / self.publish_rate_hz, theta)
+        return Prediction(poses)
+PY
+in_work pushlearn experiment push-task --train-runs 1 --folds 2 \
+  --learner "python -m pushlearn.serve still:Still" --json "$work/served.json" >/dev/null \
+  || fail "pushlearn experiment push-task --learner 'python -m pushlearn.serve still:Still'"
+in_work python - "$work/served.json" <<'PY' || fail "pushlearn.bench.push_task with a Python learner"
+import json
+import sys
+
+from pushlearn.bench import push_task, without_timing
+from still import Still
+
+report = push_task(Still, train_runs=[1], folds=2, progress=False)
+rows = report.table("learning-curve").rows
+assert [row["N_train"] for row in rows] == [1], rows
+served = json.loads(open(sys.argv[1]).read())
+ours, theirs = without_timing(report.document), without_timing(served)
+assert ours.pop("learner")["source"] == "pushlearn.bench, in-process"
+theirs.pop("learner")
+assert ours == theirs, "the in-process report differs from the one through --learner"
+print("wheel: pushlearn.bench.push_task with a Python learner equals its report through --learner")
+PY
 
 # The command line from PATH: the issue's push task, then two folds on two
 # workers, whose embedded worlds run in worker processes the program starts
