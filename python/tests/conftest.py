@@ -108,6 +108,21 @@ def python_env() -> dict[str, str]:
     return env
 
 
+def run_python(
+    source: str, *, cwd: Path | None = None, timeout: float = LIMIT
+) -> subprocess.CompletedProcess[str]:
+    """Runs ``source`` as its own Python process, as a reader pasting it would."""
+    return subprocess.run(
+        [sys.executable, "-c", source],
+        capture_output=True,
+        text=True,
+        env=python_env(),
+        cwd=cwd,
+        timeout=timeout,
+        check=False,
+    )
+
+
 @dataclass
 class Background:
     """A child process started by a test, killed by pid when the test ends."""

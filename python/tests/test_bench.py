@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any, ClassVar
 
 import pytest
-from conftest import LIMIT, TESTS_DIR, python_env
+from conftest import LIMIT, TESTS_DIR, python_env, run_python
 from pushlearn import Capability, Learner, Prediction, StateLike
 from pushlearn.bench import Report, move_to_target, push_task, without_timing
 
@@ -179,14 +179,6 @@ def test_the_readmes_bench_example_runs_as_written(tmp_path: Path) -> None:
     )
     assert len(learner) == 1 and len(bench) == 1, "README.md lost an example"
     (tmp_path / "mylearner.py").write_text(learner[0])
-    done = subprocess.run(
-        [sys.executable, "-c", bench[0]],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        cwd=tmp_path,
-        timeout=4 * LIMIT,
-        check=False,
-    )
+    done = run_python(bench[0], cwd=tmp_path, timeout=4 * LIMIT)
     assert done.returncode == 0, done.stderr
     assert "learner 'still' 1" in done.stdout, done.stdout

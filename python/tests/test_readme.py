@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from conftest import LIMIT, PYTHON_DIR, Daemon, python_env
+from conftest import LIMIT, PYTHON_DIR, Daemon, python_env, run_python
 from driver import (
     LAST_PREDICTION,
     Script,
@@ -35,18 +35,6 @@ def learner_example() -> str:
     sources = [b for b in python_blocks() if b.startswith("# mymodule.py")]
     assert len(sources) == 1, "README.md lost its mymodule.py example"
     return sources[0]
-
-
-def run_snippet(source: str) -> subprocess.CompletedProcess[str]:
-    """Runs a README block as its own Python process, as a reader pasting it would."""
-    return subprocess.run(
-        [sys.executable, "-c", source],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        timeout=LIMIT,
-        check=False,
-    )
 
 
 @pytest.mark.parametrize("how", ["serve", "script"])
@@ -94,7 +82,7 @@ def test_the_readme_sim_client_example_runs(start_sim: Callable[..., Daemon]) ->
     daemon = start_sim("--mode", "lockstep")
     (source,) = [b for b in python_blocks() if "SimClient.connect" in b]
     source = source.replace("11345", str(daemon.port))
-    done = run_snippet(source)
+    done = run_python(source)
     assert done.returncode == 0, done.stderr
     first, last = done.stdout.strip().splitlines()
     assert first == "one_block lockstep 100"
@@ -104,7 +92,7 @@ def test_the_readme_sim_client_example_runs(start_sim: Callable[..., Daemon]) ->
 def test_the_readme_native_model_options_run() -> None:
     pytest.importorskip("pushlearn._native")
     (source,) = [b for b in python_blocks() if "GateModel(improve" in b]
-    done = run_snippet(source)
+    done = run_python(source)
     assert done.returncode == 0, done.stderr
     assert done.stdout == "gate+average-outputs gate+\n"
 
@@ -115,15 +103,7 @@ def test_the_readme_bench_example_runs_the_learner_through_the_push_task(
     pytest.importorskip("pushlearn._native")
     (tmp_path / "mymodule.py").write_text(learner_example())
     (source,) = [b for b in python_blocks() if "pushlearn.bench import" in b]
-    done = subprocess.run(
-        [sys.executable, "-c", source],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        cwd=tmp_path,
-        timeout=4 * LIMIT,
-        check=False,
-    )
+    done = run_python(source, cwd=tmp_path, timeout=4 * LIMIT)
     assert done.returncode == 0, done.stderr
     assert "learner 'still' 1" in done.stdout, done.stdout
     assert "Learning curve, all 21 test positions" in done.stdout
