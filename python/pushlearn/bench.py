@@ -356,9 +356,7 @@ class _Direct:
     ) -> tuple[Prediction, list[tuple[int, float, float, float]]]:
         prediction = self.learner.predict(state, (vx, vy))
         poses = _checked_poses(prediction, state)
-        return prediction, [
-            (id_, p.x, p.y, p.theta) for id_, p in sorted(poses.items())
-        ]
+        return prediction, [(id_, p.x, p.y, p.theta) for id_, p in poses.items()]
 
     def set_training(self, on: bool) -> None:
         self.learner.set_training(bool(on))

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import subprocess
-import sys
 from pathlib import Path
 
-from conftest import LIMIT, python_env
+from conftest import run_python
 
 
 def launch(bin_dir: Path, script: str, *args: str) -> subprocess.CompletedProcess[str]:
@@ -20,14 +19,7 @@ def launch(bin_dir: Path, script: str, *args: str) -> subprocess.CompletedProces
         f"sys.argv = ['{script}', *{list(args)!r}]\n"
         f"launch.{script}()\n"
     )
-    return subprocess.run(
-        [sys.executable, "-c", source],
-        capture_output=True,
-        text=True,
-        env=python_env(),
-        timeout=LIMIT,
-        check=False,
-    )
+    return run_python(source)
 
 
 def test_the_script_becomes_the_executable_with_its_arguments(tmp_path: Path) -> None:
