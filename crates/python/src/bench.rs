@@ -478,8 +478,10 @@ fn builtin(name: &str) -> PyResult<LearnerChoice> {
 /// lines, CSV)`.
 type Outcome = (String, String, Vec<(String, Vec<String>, String)>);
 
-/// Runs `spec` with `learner` — a built-in's name (`str`), or a
-/// `pushlearn.bench._Direct` — calling `progress(done)` after each job.
+/// Runs `spec` with `learner`: the `pushlearn.bench._Direct` of a learner
+/// object when the spec's choice is [`LearnerChoice::InProcess`] (see
+/// [`learner_choice`]), else the spec's built-in; `progress(done, jobs)`
+/// is called after each job.
 fn run(
     py: Python<'_>,
     spec: Spec,
@@ -491,7 +493,7 @@ fn run(
 ) -> PyResult<Outcome> {
     spec.validate()
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let direct = if learner.is_instance_of::<pyo3::types::PyString>() {
+    let direct = if spec.model() != Some(&LearnerChoice::InProcess) {
         None
     } else {
         let model = PyLearner::start(py, learner.clone().unbind(), task, rate_hz)?;
