@@ -24,6 +24,8 @@ from typing import Any, TypeAlias
 import numpy as np
 import numpy.typing as npt
 
+from .learner import Shape
+
 SOURCE_CHECKOUT: str
 """The repository checkout the extension was built from (its ``target/release``
 holds the ``pushlearn-sim`` the Gymnasium environments look for last)."""
@@ -104,8 +106,12 @@ def run_move_to_target(
 def without_timing(document: str) -> str:
     """A report document's JSON without its machine-dependent part."""
 
-# One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)).
-_Body: TypeAlias = tuple[str, int, Sequence[float], Sequence[float]]
+# One body of a world-state message: (name, id, (x, y, z), (qx, qy, qz, qw)),
+# optionally with its shape as a fifth element.
+_Body: TypeAlias = (
+    tuple[str, int, Sequence[float], Sequence[float]]
+    | tuple[str, int, Sequence[float], Sequence[float], Shape | None]
+)
 
 class GateWorld:
     """A world state of the gate model, parsed or predicted (returned by
@@ -166,12 +172,15 @@ class GateModel:
         ``bodies`` lists every body of the message as
         ``(name, id, (x, y, z), (qx, qy, qz, qw))``: the model's name, its id,
         its position in metres and its orientation quaternion in the order x,
-        y, z, w. The actuator is the body named "actuator" (id 8); blocks need
-        an id of the learner's shape table (15 "blockA", 27 "blockB"). Parsing
-        learns nothing.
+        y, z, w; a fifth element, the body's :class:`pushlearn.Shape` (or
+        None), shows the model the body's shape, as the learner protocol's
+        states do. The actuator is the body named "actuator" (id 8); blocks
+        need an id of the learner's shape table (15 "blockA", 27 "blockB").
+        Parsing learns nothing.
 
         Raises ValueError with the parser's reason when the message has no
-        actuator, an unknown or duplicate id, or a non-finite number.
+        actuator, an unknown or duplicate id, a non-finite number or a shape
+        no world can have.
         """
     def reset_objects(self, world: GateWorld) -> None:
         """Re-synchronise with ``world`` at the first message of a run,

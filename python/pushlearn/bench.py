@@ -51,6 +51,7 @@ from .learner import (
     Learner,
     LearnerFactory,
     Prediction,
+    Shape,
     State,
     StateLike,
     Target,
@@ -324,9 +325,18 @@ class _Direct:
 
     @staticmethod
     def observed(
-        bodies: list[tuple[str, int, Sequence[float], Sequence[float]]],
+        bodies: list[
+            tuple[
+                str,
+                int,
+                Sequence[float],
+                Sequence[float],
+                tuple[str, Sequence[float]] | None,
+            ]
+        ],
     ) -> State:
-        """An observed world state, as the protocol delivers one (no velocities, no counters)."""
+        """An observed world state, as the protocol delivers one (no velocities, no
+        counters; each body with its shape)."""
         return State(
             Body(
                 name=name,
@@ -338,8 +348,9 @@ class _Direct:
                     orientation[2],
                     orientation[3],
                 ),
+                shape=None if shape is None else _shape(name, *shape),
             )
-            for name, id_, position, orientation in bodies
+            for name, id_, position, orientation, shape in bodies
         )
 
     def new_fold(self, seed: int) -> None:
@@ -378,3 +389,12 @@ class _Direct:
         """The statistics in the protocol's form (checked as ``serve`` checks them)."""
         result: bytes = _stats_to_proto(self.learner.stats()).SerializeToString()
         return result
+
+
+def _shape(name: str, kind: str, sizes: Sequence[float]) -> Shape:
+    """The SDK's shape of body ``name`` from the native side's ``(kind, sizes)``."""
+    if kind == "sphere":
+        return Shape(name, sphere_radius=sizes[0])
+    if kind == "box":
+        return Shape(name, box_size=(sizes[0], sizes[1], sizes[2]))
+    return Shape(name, cylinder=(sizes[0], sizes[1]))

@@ -103,6 +103,7 @@ __all__ = [
     "LearnerServer",
     "Pose",
     "Prediction",
+    "Shape",
     "State",
     "StateLike",
     "Target",
@@ -204,6 +205,65 @@ def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
 
 
 @dataclass(frozen=True)
+class Shape:
+    """A body's collision shape, centred on its pose (``Hello.shapes``, ``State.shapes``).
+
+    At most one of ``sphere_radius`` (metres), ``box_size`` (full edge
+    lengths along the body's x, y, z, metres) and ``cylinder`` (radius and
+    length, metres; upright, its axis the body's z) is set; none for a shape
+    this SDK does not know.
+    """
+
+    name: str
+    sphere_radius: float | None = None
+    box_size: tuple[float, float, float] | None = None
+    cylinder: tuple[float, float] | None = None
+
+    @classmethod
+    def from_proto(cls, shape: Any) -> Shape:
+        """A shape from a ``pushlearn.Shape`` message."""
+        geometry = shape.WhichOneof("geometry")
+        if geometry == "sphere_radius":
+            return cls(shape.name, sphere_radius=shape.sphere_radius)
+        if geometry == "box_size":
+            b = shape.box_size
+            return cls(shape.name, box_size=(b.x, b.y, b.z))
+        if geometry == "cylinder":
+            c = shape.cylinder
+            return cls(shape.name, cylinder=(c.radius, c.length))
+        return cls(shape.name)
+
+    def to_proto(self, name: str | None = None) -> Any:
+        """This shape as a ``pushlearn.Shape`` message, for the body ``name``
+        (default: :attr:`name`)."""
+        body = self.name if name is None else name
+        if self.sphere_radius is not None:
+            return pushlearn_pb2.Shape(name=body, sphere_radius=self.sphere_radius)
+        if self.box_size is not None:
+            x, y, z = self.box_size
+            return pushlearn_pb2.Shape(
+                name=body, box_size=pushlearn_pb2.Vector3d(x=x, y=y, z=z)
+            )
+        if self.cylinder is not None:
+            radius, length = self.cylinder
+            return pushlearn_pb2.Shape(
+                name=body,
+                cylinder=pushlearn_pb2.Cylinder(radius=radius, length=length),
+            )
+        return pushlearn_pb2.Shape(name=body)
+
+    def outline(self) -> tuple[float, float] | float | None:
+        """The shape seen from above: a box's half-lengths ``(hx, hy)`` along
+        the body's x and y, a cylinder's or sphere's radius, ``None`` for an
+        unknown shape."""
+        if self.box_size is not None:
+            return (self.box_size[0] / 2.0, self.box_size[1] / 2.0)
+        if self.cylinder is not None:
+            return self.cylinder[0]
+        return self.sphere_radius
+
+
+@dataclass(frozen=True)
 class Body:
     """One body of a world state, as the world sent it.
 
@@ -219,6 +279,10 @@ class Body:
     orientation: tuple[float, float, float, float]
     lin_vel: tuple[float, float, float] | None = None
     ang_vel: tuple[float, float, float] | None = None
+    shape: Shape | None = None
+    """The body's shape as the world described it (the learner protocol's
+    ``State.shapes``, or the world's Hello for states a :class:`pushlearn.SimClient`
+    reads); ``None`` where none was given."""
 
     @property
     def yaw(self) -> float:
@@ -226,8 +290,10 @@ class Body:
         return quaternion_to_yaw(*self.orientation)
 
     @classmethod
-    def from_proto(cls, model: Any, *, velocities: bool = False) -> Body:
-        """A body from a ``pushlearn.ModelState`` message."""
+    def from_proto(
+        cls, model: Any, *, velocities: bool = False, shape: Shape | None = None
+    ) -> Body:
+        """A body from a ``pushlearn.ModelState`` message, with its ``shape`` if known."""
         p, q = model.pose.position, model.pose.orientation
         lin = ang = None
         if velocities:
@@ -240,6 +306,7 @@ class Body:
             orientation=(q.x, q.y, q.z, q.w),
             lin_vel=lin,
             ang_vel=ang,
+            shape=shape,
         )
 
     def to_proto(self) -> Any:
@@ -330,14 +397,26 @@ class State(_PosesView):
 
     @classmethod
     def from_proto(cls, state: Any) -> State:
-        """A state from a ``learner.State`` message."""
-        return cls(Body.from_proto(model) for model in state.bodies)
+        """A state from a ``learner.State`` message, each body with its shape."""
+        shapes: dict[str, Shape] = {}
+        for message in state.shapes:
+            shapes.setdefault(message.name, Shape.from_proto(message))
+        return cls(
+            Body.from_proto(model, shape=shapes.get(model.name)) for model in state.bodies
+        )
 
     @classmethod
-    def from_world_state(cls, world_state: Any) -> State:
-        """A state from a world's ``pushlearn.WorldState`` message, with its counters."""
+    def from_world_state(
+        cls, world_state: Any, shapes: Mapping[str, Shape] | None = None
+    ) -> State:
+        """A state from a world's ``pushlearn.WorldState`` message, with its counters;
+        each body with its shape from ``shapes`` (the world's Hello's, by name)."""
+        known = shapes or {}
         return cls(
-            (Body.from_proto(m, velocities=True) for m in world_state.model_v.models),
+            (
+                Body.from_proto(m, velocities=True, shape=known.get(m.name))
+                for m in world_state.model_v.models
+            ),
             step=world_state.step,
             sim_time=world_state.sim_time,
             publish_seq=world_state.publish_seq,
@@ -346,7 +425,25 @@ class State(_PosesView):
 
     def to_proto(self) -> Any:
         """This state as a ``learner.State`` message."""
-        return learner_pb2.State(bodies=[body.to_proto() for body in self.bodies])
+        return learner_pb2.State(
+            bodies=[body.to_proto() for body in self.bodies],
+            shapes=[
+                body.shape.to_proto(name=body.name)
+                for body in self.bodies
+                if body.shape is not None
+            ],
+        )
+
+    def shapes(self) -> dict[int, Shape]:
+        """The shapes of the bodies :meth:`poses` lists (the actuator and the blocks),
+        by id, where the state gives one: the learner protocol sends each body's
+        shape, and in the new-object experiments the run's object is shown under
+        the blue block's id with its own shape."""
+        return {
+            body.id: body.shape
+            for body in self.bodies
+            if body.shape is not None and not is_skipped(body.name)
+        }
 
     def body(self, name: str) -> Body:
         """The body called ``name``; ``KeyError`` naming the bodies there are if none is."""

@@ -150,7 +150,7 @@ class NativeLearner(Learner):
         ):
             return cached.world
         bodies = [
-            (body.name, body.id, body.position, body.orientation)
+            (body.name, body.id, body.position, body.orientation, body.shape)
             for body in state.bodies
         ]
         world = self.model.parse(bodies)

@@ -34,7 +34,7 @@ from typing import Any, Self
 from . import framing
 from ._pb import pushlearn_pb2
 from .framing import ProtocolError
-from .learner import Body, State
+from .learner import Body, Shape, State
 
 __all__ = ["DEFAULT_PORT", "Shape", "SimClient", "SimError", "WorldHello"]
 
@@ -64,22 +64,6 @@ class SimError(Exception):
         """The ``Error.Kind`` name."""
         what = f"command {seq}" if seq else "the world"
         super().__init__(f"{what} ({kind}): {message}")
-
-
-@dataclass(frozen=True)
-class Shape:
-    """A body's collision shape, centred on its pose (``Hello.shapes``).
-
-    At most one of ``sphere_radius`` (metres), ``box_size`` (full edge
-    lengths along the body's x, y, z, metres) and ``cylinder`` (radius and
-    length, metres; upright, its axis the body's z) is set; none for a shape
-    this client does not know.
-    """
-
-    name: str
-    sphere_radius: float | None = None
-    box_size: tuple[float, float, float] | None = None
-    cylinder: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -116,21 +100,7 @@ class WorldHello:
             mode = "realtime"
         else:  # a world older than timing_kind says it only in the string
             mode = hello.timing_mode
-        shapes: dict[str, Shape] = {}
-        for shape in hello.shapes:
-            geometry = shape.WhichOneof("geometry")
-            if geometry == "sphere_radius":
-                shapes[shape.name] = Shape(
-                    shape.name, sphere_radius=shape.sphere_radius
-                )
-            elif geometry == "box_size":
-                b = shape.box_size
-                shapes[shape.name] = Shape(shape.name, box_size=(b.x, b.y, b.z))
-            elif geometry == "cylinder":
-                c = shape.cylinder
-                shapes[shape.name] = Shape(shape.name, cylinder=(c.radius, c.length))
-            else:
-                shapes[shape.name] = Shape(shape.name)
+        shapes = {shape.name: Shape.from_proto(shape) for shape in hello.shapes}
         return cls(
             scene=hello.scene,
             step_size=hello.step_size,
@@ -510,7 +480,7 @@ class SimClient:
     def _take_state(self, world_state: Any) -> State:
         if self._outstanding_advances:
             self._outstanding_advances -= 1
-        return State.from_world_state(world_state)
+        return State.from_world_state(world_state, self.hello.shapes)
 
     def next_state(
         self, *, after: int | None = None, advance: bool | None = None

@@ -121,7 +121,7 @@ impl BodyState {
         unit_yaw(self.orientation)
     }
 
-    /// The body as a learner sees it published (no outline: that comes
+    /// The body as a learner sees it published (no shape: that comes
     /// from the Hello).
     #[must_use]
     pub fn observation(&self) -> pushlearn_core::Observation {
@@ -130,7 +130,7 @@ impl BodyState {
             id: self.id,
             position: self.position,
             orientation: self.orientation,
-            footprint: None,
+            shape: None,
         }
     }
 }

@@ -33,7 +33,7 @@ pub use codec::{
 };
 pub use connection::{ClientConnection, Connection, FrameReader, FrameWriter, ServerConnection};
 pub use message::TimingMode;
-pub use observation::{frame, Footprints};
+pub use observation::{frame, Shapes};
 pub use speed::clamp_speed;
 pub use validate::{validate, InvalidCommand};
 

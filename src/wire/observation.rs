@@ -4,9 +4,11 @@
 //! `pushlearn serve-learner`, goes through [`frame`], so both refuse the
 //! same states. The rule for a missing pose is the vocabulary's
 //! ([`Observation::published`]). A driver that knows the world's Hello
-//! passes each body's outline on with it ([`Footprints`]).
+//! passes each body's shape on with it ([`Shapes`]), and the learner
+//! protocol carries the same shapes in its `State` (`State.shapes`), read
+//! back by [`Shapes::from_shapes`].
 
-use pushlearn_core::{Footprint, Frame, Observation};
+use pushlearn_core::{BodyShape, Frame, Observation};
 
 use super::pb::{self, shape::Geometry};
 
@@ -31,71 +33,99 @@ impl pb::ModelState {
 /// `docs/spec/features.md` §1).
 #[must_use]
 pub fn frame(bodies: &[pb::ModelState]) -> Frame {
-    Footprints::default().frame(bodies)
+    Shapes::default().frame(bodies)
 }
 
 impl pb::Shape {
-    /// The outline seen from above: a box's rectangle, a sphere's or an
-    /// upright cylinder's circle. `None` for a shape without geometry or
-    /// with sizes that are not finite and positive (no outline rather
-    /// than a wrong one).
+    /// The shape as the vocabulary's [`BodyShape`]. `None` for a shape
+    /// without geometry or with sizes that are not finite and positive (no
+    /// shape rather than a wrong one).
     #[must_use]
-    pub fn footprint(&self) -> Option<Footprint> {
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        match self.geometry.as_ref()? {
-            Geometry::SphereRadius(r) => positive(*r).then_some(Footprint::Disc { radius: *r }),
-            Geometry::Cylinder(c) => {
-                positive(c.radius).then_some(Footprint::Disc { radius: c.radius })
+    pub fn body_shape(&self) -> Option<BodyShape> {
+        let shape = match self.geometry.as_ref()? {
+            Geometry::SphereRadius(radius) => BodyShape::Sphere { radius: *radius },
+            Geometry::Cylinder(c) => BodyShape::Cylinder {
+                radius: c.radius,
+                length: c.length,
+            },
+            Geometry::BoxSize(v) => BodyShape::Box {
+                size: [v.x, v.y, v.z],
+            },
+        };
+        shape.is_valid().then_some(shape)
+    }
+
+    /// `shape` of the body `name`, as the Hello and the learner protocol
+    /// send it.
+    #[must_use]
+    pub fn of_body(name: &str, shape: BodyShape) -> Self {
+        let geometry = match shape {
+            BodyShape::Box { size: [x, y, z] } => Geometry::BoxSize(pb::Vector3d::new(x, y, z)),
+            BodyShape::Cylinder { radius, length } => {
+                Geometry::Cylinder(pb::Cylinder { radius, length })
             }
-            Geometry::BoxSize(v) => (positive(v.x) && positive(v.y)).then_some(Footprint::Box {
-                half_extents: [v.x / 2.0, v.y / 2.0],
-            }),
+            BodyShape::Sphere { radius } => Geometry::SphereRadius(radius),
+        };
+        Self {
+            name: name.to_owned(),
+            geometry: Some(geometry),
         }
     }
 }
 
-/// Each body's outline by name, from the world's Hello (`Hello.shapes`;
-/// empty from a world older than them).
+/// Each body's shape by name: from the world's Hello (`Hello.shapes`; empty
+/// from a world older than them), or from the learner protocol's
+/// `State.shapes`.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Footprints(Vec<(String, Footprint)>);
+pub struct Shapes(Vec<(String, BodyShape)>);
 
-impl Footprints {
+impl Shapes {
+    /// The shapes a world's Hello describes.
     #[must_use]
     pub fn from_hello(hello: &pb::Hello) -> Self {
-        Self(
-            hello
-                .shapes
-                .iter()
-                .filter_map(|shape| Some((shape.name.clone(), shape.footprint()?)))
-                .collect(),
-        )
+        Self::from_shapes(&hello.shapes)
     }
 
-    /// The first body with this outline, if any.
+    /// Shapes as the protocols send them; one without a valid geometry is
+    /// left out, and of a name given twice the first counts.
     #[must_use]
-    pub fn body_with(&self, footprint: Footprint) -> Option<&str> {
+    pub fn from_shapes(shapes: &[pb::Shape]) -> Self {
+        let mut out: Vec<(String, BodyShape)> = Vec::with_capacity(shapes.len());
+        for shape in shapes {
+            if let Some(body) = shape.body_shape() {
+                if !out.iter().any(|(n, _)| *n == shape.name) {
+                    out.push((shape.name.clone(), body));
+                }
+            }
+        }
+        Self(out)
+    }
+
+    /// The first body with this shape, if any.
+    #[must_use]
+    pub fn body_with(&self, shape: BodyShape) -> Option<&str> {
         self.0
             .iter()
-            .find(|(_, f)| *f == footprint)
+            .find(|(_, s)| *s == shape)
             .map(|(n, _)| n.as_str())
     }
 
-    /// The outline of the body `name`, if the world gave one.
+    /// The shape of the body `name`, if the world gave one.
     #[must_use]
-    pub fn of(&self, name: &str) -> Option<Footprint> {
+    pub fn of(&self, name: &str) -> Option<BodyShape> {
         // A handful of bodies: a scan beats a map's hashing.
-        self.0.iter().find(|(n, _)| n == name).map(|&(_, f)| f)
+        self.0.iter().find(|(n, _)| n == name).map(|&(_, s)| s)
     }
 
     /// The learner's view of a world state's `bodies` (as [`frame`]), each
-    /// with its outline.
+    /// with its shape.
     #[must_use]
     pub fn frame(&self, bodies: &[pb::ModelState]) -> Frame {
         Frame {
             objects: bodies
                 .iter()
                 .map(|body| Observation {
-                    footprint: self.of(&body.name),
+                    shape: self.of(&body.name),
                     ..body.observation()
                 })
                 .collect(),
@@ -167,7 +197,7 @@ mod tests {
     }
 
     #[test]
-    fn outlines_come_from_the_hello_by_body_name() {
+    fn shapes_come_from_the_hello_by_body_name() {
         let shape = |name: &str, geometry| pb::Shape {
             name: name.into(),
             geometry: Some(geometry),
@@ -190,29 +220,46 @@ mod tests {
             ],
             ..Default::default()
         };
-        let footprints = Footprints::from_hello(&hello);
-        let seen = footprints.frame(&[
+        let shapes = Shapes::from_hello(&hello);
+        let seen = shapes.frame(&[
             body("cylinder", 3, None),
             body("blockA", 15, None),
             body("actuator", 8, None),
             body("broken", 9, None),
             body("wall", 4, None),
         ]);
-        let outlines: Vec<_> = seen.objects.iter().map(|o| o.footprint).collect();
-        assert_eq!(
-            outlines,
-            [
-                Some(Footprint::Disc { radius: 0.1 }),
-                Some(Footprint::Box {
-                    half_extents: [0.25, 0.05]
-                }),
-                Some(Footprint::Disc { radius: 0.025 }),
-                None,
-                None,
-            ]
-        );
+        let found: Vec<_> = seen.objects.iter().map(|o| o.shape).collect();
+        let expected = [
+            Some(BodyShape::Cylinder {
+                radius: 0.1,
+                length: 0.1,
+            }),
+            Some(BodyShape::Box {
+                size: [0.5, 0.1, 0.1],
+            }),
+            Some(BodyShape::Sphere { radius: 0.025 }),
+            None,
+            None,
+        ];
+        assert_eq!(found, expected);
         assert!(frame(&[body("blockA", 15, None)]).objects[0]
-            .footprint
+            .shape
             .is_none());
+
+        // What the learner protocol sends back reads as the Hello did.
+        let sent: Vec<pb::Shape> = seen
+            .objects
+            .iter()
+            .filter_map(|o| Some(pb::Shape::of_body(&o.name, o.shape?)))
+            .collect();
+        let by_body_order = [&hello.shapes[1], &hello.shapes[0], &hello.shapes[2]];
+        assert_eq!(sent.iter().collect::<Vec<_>>(), by_body_order);
+        assert_eq!(
+            Shapes::from_shapes(&sent)
+                .frame(&[body("blockA", 15, None)])
+                .objects[0]
+                .shape,
+            expected[1]
+        );
     }
 }

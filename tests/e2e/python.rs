@@ -57,7 +57,7 @@ fn render_pb2(generated: &Generated) -> String {
         r#"# Generated from {schema} by pushlearn's test suite. DO NOT EDIT.
 #
 # After changing the schema, regenerate with
-#     PUSHLEARN_BLESS=1 cargo test --test e2e python::
+#     PUSHLEARN_BLESS=1 cargo test -p pushlearn-cli --test e2e python::
 # (the suite fails while this file and the schema disagree).
 """Message classes of {schema}.
 
@@ -96,7 +96,7 @@ fn generated_modules_match_the_schema() {
         assert!(
             actual == expected,
             "{} does not match {}; regenerate it with\n    \
-             PUSHLEARN_BLESS=1 cargo test --test e2e python::",
+             PUSHLEARN_BLESS=1 cargo test -p pushlearn-cli --test e2e python::",
             path.display(),
             generated.schema
         );

@@ -340,7 +340,7 @@ fn observation(name: &str, id: u32, position: [f64; 3]) -> learner::Observation 
         id,
         position,
         orientation: [0.0, 0.0, 0.0, 1.0],
-        footprint: None,
+        shape: None,
     }
 }
 

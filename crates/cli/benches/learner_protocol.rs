@@ -1,6 +1,6 @@
 //! The learner protocol's cost per world message (docs/performance.md §7):
 //! one Update and one Predict, the driver's calls on every training message,
-//! on a trivial learner (the actuator moves by the action, blocks stay), once
+//! on the trivial `still` reference (learner::StillModel: nothing moves), once
 //! in-process and once behind the protocol — a child on stdin/stdout (this
 //! benchmark's own executable, started as the learner) and a learner daemon
 //! on loopback TCP. The difference is what the protocol adds.
@@ -10,71 +10,26 @@ use std::net::TcpListener;
 use std::time::Duration;
 
 use criterion::Criterion;
-use learner::features::{parse_frame, ActuatorYaw, ParseError};
-use learner::{Action, Frame, Model, ModelStats, Poses, Target, TargetError};
+use learner::{Action, Frame, Model, StillModel};
 use pushlearn_cli::external::check::scripted_state;
 use pushlearn_cli::external::server::{serve, Identity, Requests};
 use pushlearn_cli::external::{ExternalModel, LearnerSpec, Source};
-use serde::{Deserialize, Serialize};
 
 /// Set in the child this benchmark starts as its learner.
 const AS_LEARNER: &str = "PUSHLEARN_BENCH_AS_LEARNER";
-
-/// The trivial learner: no memory, one addition per prediction.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
-struct Still {
-    training: bool,
-}
-
-impl Model for Still {
-    type World = Poses;
-    fn parse(&self, frame: &Frame) -> Result<Poses, ParseError> {
-        parse_frame(frame, ActuatorYaw::Keep)
-    }
-    fn poses(world: &Poses) -> Poses {
-        world.clone()
-    }
-    fn reset_objects(&mut self, _: &Poses) {}
-    fn update(&mut self, _: &Poses, _: Action) {}
-    fn predict(&self, world: &Poses, action: Action) -> Poses {
-        let mut next = world.clone();
-        next.actuator.x += action.vx * 0.01;
-        next.actuator.y += action.vy * 0.01;
-        next
-    }
-    fn set_training(&mut self, on: bool) {
-        self.training = on;
-    }
-    fn is_training(&self) -> bool {
-        self.training
-    }
-    fn set_target(&mut self, _: Option<Target>) -> Result<(), TargetError> {
-        Ok(())
-    }
-    fn has_target(&self) -> bool {
-        false
-    }
-    fn act(&mut self, _: &mut dyn rand::Rng) -> Action {
-        Action::ZERO
-    }
-    fn stats(&self) -> ModelStats {
-        ModelStats::default()
-    }
-}
 
 fn identity() -> Identity {
     Identity {
         name: "still".into(),
         version: "bench".into(),
-        ignores_actuator_yaw: false,
     }
 }
 
-/// Serves [`Still`] to one driver on `input`/`output`.
+/// Serves [`StillModel`] to one driver on `input`/`output`.
 fn serve_still(input: impl std::io::Read, output: impl std::io::Write) {
     let mut requests = Requests::new(input);
     if let Ok((seq, _)) = requests.start() {
-        let _ = serve(Still::default(), &identity(), seq, requests, output);
+        let _ = serve(StillModel::default(), &identity(), seq, requests, output);
     }
 }
 
@@ -114,7 +69,7 @@ fn main() {
     // Without plots: criterion's plotters backend needs a system font.
     let mut c = Criterion::default().without_plots().configure_from_args();
     let f = frame(0.1);
-    let mut still = Still::default();
+    let mut still = StillModel::default();
     c.bench_function("message/in-process", |b| {
         b.iter(|| black_box(message(&mut still, &f)));
     });

@@ -28,4 +28,4 @@ pub use body::{
 pub use limits::{MAX_ACTION_SPEED, MAX_POSITION};
 pub use motion::{Action, ObjectState};
 pub use named::Named;
-pub use observation::{Footprint, Frame, Observation};
+pub use observation::{BodyShape, Footprint, Frame, Observation};

@@ -104,8 +104,13 @@ const CRATES: &[(&str, Table)] = &[
                 "hybrid",
                 &["eval", "features", "model", "planning", "stats", "types"],
             ),
+            // The reference that predicts nothing moves.
+            ("still", &["features", "model", "stats", "types"]),
             // The models by name, their options and building them.
-            ("registry", &["flags", "gate", "hybrid", "interaction"]),
+            (
+                "registry",
+                &["flags", "gate", "hybrid", "interaction", "still"],
+            ),
             ("eval", &["features", "keypoints", "model", "types"]),
             ("testing", &["features", "model", "stats", "types"]),
         ],

@@ -15,8 +15,8 @@ use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use learner::features::{is_skipped, parse_frame_at, ActuatorYaw, ParseError, Precision};
 use learner::stats::ModelStats;
-use learner::{Action, Footprint, Frame, Model, Observation, Poses, Target, TargetError};
-use pushlearn::wire::{pb, Footprints};
+use learner::{Action, BodyShape, Frame, Model, Observation, Poses, Target, TargetError};
+use pushlearn::wire::{pb, Shapes};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use sim_plugin::world::{ActuatorMode, Command, Snapshot, World};
@@ -44,7 +44,7 @@ pub struct FloorWorld {
 struct WorldCopy {
     world: Option<World>,
     /// The scene's bodies' outlines.
-    footprints: Footprints,
+    shapes: Shapes,
     token: u64,
 }
 
@@ -104,7 +104,7 @@ impl Floor {
         let copy = &mut *copy;
         if copy.world.is_none() {
             let scene = Scene::builtin(&self.scene).ok()?;
-            copy.footprints = Footprints::from_hello(&pb::Hello {
+            copy.shapes = Shapes::from_hello(&pb::Hello {
                 shapes: sim_plugin::server::shapes(&scene),
                 ..pb::Hello::default()
             });
@@ -112,7 +112,7 @@ impl Floor {
         }
         let world = copy.world.as_mut()?;
         let shown = if from.token == 0 || from.token != copy.token {
-            let shown = shown_bodies(&from.frame, &copy.footprints)?;
+            let shown = shown_bodies(&from.frame, &copy.shapes)?;
             world.apply(Command::Reset).ok()?;
             world.apply(Command::Unpause).ok()?;
             world
@@ -179,7 +179,7 @@ impl Floor {
 struct Shown {
     name: String,
     id: u32,
-    footprint: Option<Footprint>,
+    shape: Option<BodyShape>,
     body: String,
 }
 
@@ -187,20 +187,20 @@ struct Shown {
 /// unless its observed outline is another body's (the new-object view
 /// shows an object under the blue block's name). `None` if an outline
 /// matches no body.
-fn shown_bodies(frame: &Frame, footprints: &Footprints) -> Option<Vec<Shown>> {
+fn shown_bodies(frame: &Frame, shapes: &Shapes) -> Option<Vec<Shown>> {
     frame
         .objects
         .iter()
         .filter(|o| !is_skipped(&o.name))
         .map(|o| {
-            let body = match o.footprint {
-                Some(f) if footprints.of(&o.name) != Some(f) => footprints.body_with(f)?,
+            let body = match o.shape {
+                Some(f) if shapes.of(&o.name) != Some(f) => shapes.body_with(f)?,
                 _ => o.name.as_str(),
             };
             Some(Shown {
                 name: o.name.clone(),
                 id: o.id,
-                footprint: o.footprint,
+                shape: o.shape,
                 body: body.to_owned(),
             })
         })
@@ -217,7 +217,7 @@ fn view_of(snapshot: &Snapshot, shown: &[Shown]) -> Option<Frame> {
             Some(Observation {
                 name: s.name.clone(),
                 id: s.id,
-                footprint: s.footprint,
+                shape: s.shape,
                 ..body.observation()
             })
         })
@@ -280,6 +280,10 @@ impl Model for Floor {
     fn stats(&self) -> ModelStats {
         ModelStats::Other(learner::stats::OtherStats::default())
     }
+
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        ActuatorYaw::ForceZero
+    }
 }
 
 #[cfg(test)]
@@ -333,31 +337,30 @@ mod tests {
     #[test]
     fn an_object_shown_under_the_blue_blocks_name_is_found_by_its_outline() {
         let scene = Scene::builtin(crate::scene::SCENE).unwrap();
-        let footprints = Footprints::from_hello(&pb::Hello {
+        let shapes = Shapes::from_hello(&pb::Hello {
             shapes: sim_plugin::server::shapes(&scene),
             ..pb::Hello::default()
         });
-        let cylinder = footprints.of(Object::Cylinder.body()).unwrap();
-        let shown = |footprint| Observation {
+        let cylinder = shapes.of(Object::Cylinder.body()).unwrap();
+        let shown = |shape| Observation {
             name: learner::BLUE_NAME.into(),
             id: learner::BLUE_ID,
             position: [0.0, 0.3, 0.05],
             orientation: [0.0, 0.0, 0.0, 1.0],
-            footprint,
+            shape,
         };
-        let frame = |footprint| Frame {
-            objects: vec![shown(footprint)],
+        let frame = |shape| Frame {
+            objects: vec![shown(shape)],
         };
-        let body =
-            |footprint| shown_bodies(&frame(footprint), &footprints).map(|s| s[0].body.clone());
+        let body = |shape| shown_bodies(&frame(shape), &shapes).map(|s| s[0].body.clone());
         assert_eq!(
             body(Some(cylinder)).as_deref(),
             Some(Object::Cylinder.body())
         );
         assert_eq!(body(None).as_deref(), Some(learner::BLUE_NAME));
-        let blue = footprints.of(learner::BLUE_NAME);
+        let blue = shapes.of(learner::BLUE_NAME);
         assert_eq!(body(blue).as_deref(), Some(learner::BLUE_NAME));
-        assert_eq!(body(Some(Footprint::Disc { radius: 7.0 })), None);
+        assert_eq!(body(Some(BodyShape::Sphere { radius: 7.0 })), None);
     }
 
     #[test]

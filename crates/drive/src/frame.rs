@@ -10,15 +10,15 @@ use std::collections::BTreeMap;
 use learner::Frame;
 
 use pushlearn::wire::pb;
-pub use pushlearn::wire::Footprints;
+pub use pushlearn::wire::Shapes;
 
 /// The learner's view of one world state: every body in message order, a
 /// body published without a pose given NaN (refused by the models' parsing
-/// if, and only if, it is a body the learner uses), each with its outline
-/// from the world's Hello ([`Footprints::from_hello`]).
+/// if, and only if, it is a body the learner uses), each with its shape
+/// from the world's Hello ([`Shapes::from_hello`]).
 #[must_use]
-pub fn frame_from_state(state: &pb::WorldState, footprints: &Footprints) -> Frame {
-    footprints.frame(state.models())
+pub fn frame_from_state(state: &pb::WorldState, shapes: &Shapes) -> Frame {
+    shapes.frame(state.models())
 }
 
 /// The z to give a SetPose of each body (or of its ghost): the z of its start
@@ -82,7 +82,7 @@ mod tests {
             body("actuator", 8, [0.0, 0.0, 0.03], 0.0),
             body("blockAShadow", 15, [9.0, 9.0, 0.05], 0.0),
         ]);
-        let frame = frame_from_state(&s, &Footprints::default());
+        let frame = frame_from_state(&s, &Shapes::default());
         let names: Vec<&str> = frame.objects.iter().map(|o| o.name.as_str()).collect();
         assert_eq!(names, ["blockA", "actuator", "blockAShadow"]);
         let block = &frame.objects[0];
@@ -102,7 +102,7 @@ mod tests {
     fn a_missing_pose_is_refused_by_parsing_only_where_it_matters() {
         let mut actuator = body("actuator", 8, [0.0, 0.0, 0.03], 0.0);
         actuator.pose = None;
-        let frame = frame_from_state(&state(vec![actuator]), &Footprints::default());
+        let frame = frame_from_state(&state(vec![actuator]), &Shapes::default());
         assert!(matches!(
             parse_frame(&frame, ActuatorYaw::Keep),
             Err(ParseError::NonFinite { ref name, .. }) if name == "actuator"
@@ -112,7 +112,7 @@ mod tests {
         shadow.pose = None;
         let frame = frame_from_state(
             &state(vec![body("actuator", 8, [0.2, 0.0, 0.03], 0.0), shadow]),
-            &Footprints::default(),
+            &Shapes::default(),
         );
         assert_eq!(
             parse_frame(&frame, ActuatorYaw::Keep).unwrap().actuator.x,
@@ -123,7 +123,7 @@ mod tests {
     #[test]
     fn an_empty_state_is_an_empty_frame() {
         assert!(
-            frame_from_state(&pb::WorldState::default(), &Footprints::default())
+            frame_from_state(&pb::WorldState::default(), &Shapes::default())
                 .objects
                 .is_empty()
         );

@@ -454,14 +454,14 @@ mod tests {
                         id: 8,
                         position: [0.0, 0.005 * k as f64, 0.03],
                         orientation: [0.0, 0.0, 0.0, 1.0],
-                        footprint: None,
+                        shape: None,
                     },
                     Observation {
                         name: BLUE_NAME.into(),
                         id: BLUE_ID,
                         position: [0.0, 0.25, 0.05],
                         orientation: [0.0, 0.0, 0.0, 1.0],
-                        footprint: None,
+                        shape: None,
                     },
                 ],
             })

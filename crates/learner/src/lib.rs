@@ -22,6 +22,7 @@
 //!   their checks, and building an untrained model from them (what the
 //!   command line and the Python extension both use);
 //! * [`keypoints`]: the thesis draft's key-point score (draft §6.1.2);
+//! * [`still`]: the reference that predicts nothing moves;
 //! * `testing` (feature `testing`): the [`Model`] test double of every
 //!   crate's tests.
 
@@ -36,6 +37,7 @@ pub mod model;
 pub mod planning;
 pub mod registry;
 pub mod stats;
+pub mod still;
 #[cfg(any(test, feature = "testing"))]
 pub mod testing;
 pub mod types;
@@ -52,8 +54,9 @@ pub use stats::{
     AcStats, GateStats, InteractionStats, LargestAc, MapName, ModelStats, OtherStats, ScriptAc,
     StatsError,
 };
+pub use still::StillModel;
 pub use types::{
-    object_name, Action, Footprint, Frame, ObjectState, Observation, Poses, Target, TargetError,
-    TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME,
-    RED_ID, RED_NAME,
+    object_name, Action, BodyShape, Footprint, Frame, ObjectState, Observation, Poses, Target,
+    TargetError, TrackedObject, ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID,
+    CYLINDER_NAME, RED_ID, RED_NAME,
 };

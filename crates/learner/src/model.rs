@@ -8,7 +8,7 @@ use rand::Rng;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::features::ParseError;
+use crate::features::{ActuatorYaw, ParseError};
 pub use crate::stats::ModelStats;
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 
@@ -138,6 +138,16 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
     /// Node statistics of every map (`docs/spec/experiments.md` §7.5).
     fn stats(&self) -> ModelStats;
 
+    /// How the driver reads the actuator's yaw in the real states it checks
+    /// and scores for this model (`docs/spec/experiments.md` §2: the gate
+    /// model reads it as 0). The driver reads those states itself, at the
+    /// thesis's precision, whatever the model's own parse does, so that a
+    /// learner is scored alike in process and behind the learner protocol
+    /// (whose Hello says the same: `ignores_actuator_yaw`).
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        ActuatorYaw::Keep
+    }
+
     /// Called once on a fresh clone before a fold's first message, with the
     /// fold's seed (the seed of the driver's own generator for the fold,
     /// `docs/spec/experiments.md` §5). In-process models need nothing here:
@@ -182,7 +192,7 @@ mod tests {
             id,
             position: [x, y, 0.03],
             orientation: [0.0, 0.0, 0.0, 1.0],
-            footprint: None,
+            shape: None,
         };
         Frame {
             objects: vec![

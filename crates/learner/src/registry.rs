@@ -34,6 +34,7 @@ pub enum ModelKind {
     #[serde(rename = "gate+")]
     GatePlus,
     Hybrid,
+    Still,
 }
 
 impl Named for ModelKind {
@@ -42,6 +43,7 @@ impl Named for ModelKind {
         ModelKind::Interaction,
         ModelKind::GatePlus,
         ModelKind::Hybrid,
+        ModelKind::Still,
     ];
 
     fn name(self) -> &'static str {
@@ -62,6 +64,10 @@ impl Named for ModelKind {
                 "Pushing mechanics identified online plus a memory of their residual \
                  (`docs/models.md` \"The hybrid model\"); not the thesis's model"
             }
+            ModelKind::Still => {
+                "The reference that predicts nothing moves and never pushes; learns nothing \
+                 (`docs/models.md` \"Reference rows\")"
+            }
         }
     }
 }
@@ -75,19 +81,21 @@ impl ModelKind {
             ModelKind::Interaction => "interaction",
             ModelKind::GatePlus => "gate+",
             ModelKind::Hybrid => "hybrid",
+            ModelKind::Still => "still",
         }
     }
 
     /// The thesis's model this one is, or is built on: the gate model for
     /// `gate+`. Tables, figures and the thesis's reference numbers follow it.
-    /// The hybrid model, built on neither, stands beside the gate model:
-    /// the thesis's forward model of choice, and like it a model of object
-    /// states that ignores the actuator's yaw.
+    /// The hybrid model and the `still` reference, built on neither, stand
+    /// beside the gate model, the thesis's forward model of choice.
     #[must_use]
-    pub fn family(self) -> ModelKind {
+    pub fn family(self) -> ThesisModel {
         match self {
-            ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => ModelKind::Gate,
-            ModelKind::Interaction => ModelKind::Interaction,
+            ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid | ModelKind::Still => {
+                ThesisModel::Gate
+            }
+            ModelKind::Interaction => ThesisModel::Interaction,
         }
     }
 
@@ -136,6 +144,7 @@ impl ModelKind {
             ModelKind::Interaction => options.interaction(publish_rate_hz).map(drop),
             ModelKind::GatePlus => options.gate_plus(publish_rate_hz).map(drop),
             ModelKind::Hybrid => options.hybrid(publish_rate_hz).map(drop),
+            ModelKind::Still => options.still(),
         }
     }
 
@@ -160,7 +169,36 @@ impl ModelKind {
                 job.run(crate::GateModel::new(options.gate_plus(publish_rate_hz)?))
             }
             ModelKind::Hybrid => job.run(crate::HybridModel::new(options.hybrid(publish_rate_hz)?)),
+            ModelKind::Still => {
+                options.still()?;
+                job.run(crate::StillModel::default())
+            }
         })
+    }
+}
+
+/// The thesis's two models: what a model's tables, figures and reference
+/// numbers follow ([`ModelKind::family`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ThesisModel {
+    Gate,
+    Interaction,
+}
+
+impl ThesisModel {
+    /// The built-in model that is this thesis model.
+    #[must_use]
+    pub fn kind(self) -> ModelKind {
+        match self {
+            ThesisModel::Gate => ModelKind::Gate,
+            ThesisModel::Interaction => ModelKind::Interaction,
+        }
+    }
+}
+
+impl std::fmt::Display for ThesisModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.kind().fmt(f)
     }
 }
 
@@ -471,8 +509,8 @@ pub enum ModelOptionsError {
     NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
-    #[error("{option} configures the thesis's models; the hybrid model has none of it")]
-    ThesisOptionOnHybrid { option: String },
+    #[error("{option} configures the thesis's models; the {model} model has none of it")]
+    ThesisOptionOnModel { option: String, model: ModelKind },
     #[error("--parts chooses the hybrid model's parts; it does not apply to the {0} model")]
     PartsNotForModel(ModelKind),
     #[error("--improve adds changes to --model gate; gate+ already has every one")]
@@ -652,12 +690,30 @@ impl ModelOptions {
     /// The first option that does not apply, named.
     pub fn hybrid(&self, publish_rate_hz: u32) -> Result<HybridConfig, ModelOptionsError> {
         if let Some(option) = self.thesis_model_option() {
-            return Err(ModelOptionsError::ThesisOptionOnHybrid { option });
+            return Err(ModelOptionsError::ThesisOptionOnModel {
+                option,
+                model: ModelKind::Hybrid,
+            });
         }
         Ok(HybridConfig {
             parts: self.parts,
             publish_rate_hz,
         })
+    }
+
+    /// Checks that nothing configures the `still` reference: it has no
+    /// options.
+    ///
+    /// # Errors
+    /// The first option set, named.
+    pub fn still(&self) -> Result<(), ModelOptionsError> {
+        if let Some(option) = self.thesis_model_option() {
+            return Err(ModelOptionsError::ThesisOptionOnModel {
+                option,
+                model: ModelKind::Still,
+            });
+        }
+        self.check_no_parts(ModelKind::Still)
     }
 
     /// The first option set that configures only the thesis's models
@@ -784,7 +840,7 @@ mod tests {
             Improvements::ALL
         );
         assert_eq!(all.gate(100).unwrap(), none.gate_plus(100).unwrap());
-        assert_eq!(ModelKind::GatePlus.family(), ModelKind::Gate);
+        assert_eq!(ModelKind::GatePlus.family(), ThesisModel::Gate);
     }
 
     #[test]
@@ -979,7 +1035,10 @@ mod tests {
             (bits, "configuration bits 16 (of --config/--flag)"),
         ] {
             match options.hybrid(100) {
-                Err(ModelOptionsError::ThesisOptionOnHybrid { option }) => {
+                Err(ModelOptionsError::ThesisOptionOnModel {
+                    option,
+                    model: ModelKind::Hybrid,
+                }) => {
                     assert_eq!(option, named);
                 }
                 other => panic!("{other:?}"),

@@ -20,7 +20,7 @@ pub use pushlearn_core::body::{
 };
 // What a driver hands a model: converted from a published body in one place
 // (`pushlearn_core::Observation::published`).
-pub use pushlearn_core::{Footprint, Frame, Observation};
+pub use pushlearn_core::{BodyShape, Footprint, Frame, Observation};
 
 // Actions and object states are the vocabulary's, shared with everyone
 // who drives or scores a model; re-exported where the learner's users find

@@ -4,7 +4,7 @@
 
 use std::borrow::Cow;
 
-use learner::{Action, Frame, Observation};
+use learner::{Action, BodyShape, Frame, Observation};
 use numpy::{AllowTypeChange, PyArrayLikeDyn, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyOverflowError, PyValueError};
 use pyo3::prelude::*;
@@ -64,23 +64,84 @@ where
 }
 
 /// One body of a world-state message as Python passes it:
-/// `(name, id, (x, y, z), (qx, qy, qz, qw))`.
-pub type Body = (String, Unsigned<u32>, [f64; 3], [f64; 4]);
+/// `(name, id, (x, y, z), (qx, qy, qz, qw))`, or with a fifth element, its
+/// shape: a `pushlearn.Shape` (or anything with its attributes
+/// `sphere_radius`, `box_size`, `cylinder`) or `None`.
+#[derive(Clone, Debug)]
+pub struct Body(pub Observation);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Body {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let items: Vec<Bound<'py, PyAny>> = obj.extract().map_err(|_| {
+            value_error("a body is a tuple (name, id, (x, y, z), (qx, qy, qz, qw)[, shape])")
+        })?;
+        if !(4..=5).contains(&items.len()) {
+            return Err(value_error(format!(
+                "a body is a tuple (name, id, (x, y, z), (qx, qy, qz, qw)[, shape]), not one of \
+                 {} elements",
+                items.len()
+            )));
+        }
+        let name: String = items[0].extract()?;
+        let Unsigned(id) = items[1].extract::<Unsigned<u32>>()?;
+        let shape = match items.get(4) {
+            Some(shape) if !shape.is_none() => Some(body_shape(&name, shape)?),
+            _ => None,
+        };
+        Ok(Self(Observation {
+            position: items[2].extract()?,
+            orientation: items[3].extract()?,
+            name,
+            id,
+            shape,
+        }))
+    }
+}
+
+/// The shape `shape` of body `name`, read from the SDK's `Shape` by its
+/// attributes; a `ValueError` naming the body unless it is one geometry
+/// with finite, positive sizes.
+fn body_shape(name: &str, shape: &Bound<'_, PyAny>) -> PyResult<BodyShape> {
+    let attribute = |field: &str| -> PyResult<Option<Vec<f64>>> {
+        let value = shape.getattr(field).map_err(|_| {
+            value_error(format!(
+                "the shape of body '{name}' is not a pushlearn.Shape (it has no '{field}')"
+            ))
+        })?;
+        if value.is_none() {
+            return Ok(None);
+        }
+        if let Ok(number) = value.extract::<f64>() {
+            return Ok(Some(vec![number]));
+        }
+        value.extract().map(Some)
+    };
+    let found = match (
+        attribute("sphere_radius")?.as_deref(),
+        attribute("box_size")?.as_deref(),
+        attribute("cylinder")?.as_deref(),
+    ) {
+        (Some(&[radius]), None, None) => Some(BodyShape::Sphere { radius }),
+        (None, Some(&[x, y, z]), None) => Some(BodyShape::Box { size: [x, y, z] }),
+        (None, None, Some(&[radius, length])) => Some(BodyShape::Cylinder { radius, length }),
+        _ => None,
+    };
+    found.filter(|s| s.is_valid()).ok_or_else(|| {
+        value_error(format!(
+            "the shape of body '{name}' is not one a world can have: exactly one of \
+             sphere_radius (r), box_size ((x, y, z)) or cylinder ((radius, length)), with \
+             finite, positive sizes"
+        ))
+    })
+}
 
 /// The bodies as a [`Frame`], in the order given (the model's parser checks
 /// names, ids and finiteness and refuses with a `ParseError`).
 pub fn frame(bodies: Vec<Body>) -> Frame {
     Frame {
-        objects: bodies
-            .into_iter()
-            .map(|(name, Unsigned(id), position, orientation)| Observation {
-                name,
-                id,
-                position,
-                orientation,
-                footprint: None,
-            })
-            .collect(),
+        objects: bodies.into_iter().map(|Body(o)| o).collect(),
     }
 }
 

@@ -27,7 +27,9 @@ use drive::scene::{Object, Transfer};
 use lab::spec::{Document, Spec};
 use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::registry::{ModelKind, ModelOptions};
-use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError};
+use learner::{
+    Action, BodyShape, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError,
+};
 use prost::Message;
 use pushlearn::wire::pb::learner as lp;
 use pushlearn_core::Named;
@@ -212,7 +214,14 @@ impl PyLearner {
         let bodies: Vec<_> = frame
             .objects
             .iter()
-            .map(|o| (o.name.clone(), o.id, o.position, o.orientation))
+            .map(|o| {
+                let shape = o.shape.map(|shape| match shape {
+                    BodyShape::Sphere { radius } => ("sphere", vec![radius]),
+                    BodyShape::Box { size } => ("box", size.to_vec()),
+                    BodyShape::Cylinder { radius, length } => ("cylinder", vec![radius, length]),
+                });
+                (o.name.clone(), o.id, o.position, o.orientation, shape)
+            })
             .collect();
         let state = self
             .shared
@@ -247,13 +256,8 @@ impl Model for PyLearner {
     type World = PyWorldState;
 
     fn parse(&self, frame: &Frame) -> Result<PyWorldState, ParseError> {
-        let yaw = if self.shared.info.ignores_actuator_yaw {
-            ActuatorYaw::ForceZero
-        } else {
-            ActuatorYaw::Keep
-        };
         Ok(PyWorldState {
-            poses: parse_frame(frame, yaw)?,
+            poses: parse_frame(frame, self.actuator_yaw())?,
             frame: Some(Arc::new(frame.clone())),
             object: Arc::new(OnceLock::new()),
         })
@@ -391,6 +395,14 @@ impl Model for PyLearner {
                 ModelStats::default()
             }
             None => ModelStats::default(),
+        }
+    }
+
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        if self.shared.info.ignores_actuator_yaw {
+            ActuatorYaw::ForceZero
+        } else {
+            ActuatorYaw::Keep
         }
     }
 

@@ -207,13 +207,16 @@ macro_rules! model_class {
             /// `bodies` lists every body of the message as
             /// `(name, id, (x, y, z), (qx, qy, qz, qw))`: the model's name,
             /// its id, its position in metres and its orientation quaternion
-            /// in the order x, y, z, w. The actuator is the body named
-            /// "actuator" (id 8); blocks need an id of the learner's shape
-            /// table (15 "blockA", 27 "blockB"). Parsing learns nothing.
+            /// in the order x, y, z, w; a fifth element, the body's
+            /// `pushlearn.Shape` (or None), shows the model the body's
+            /// shape, as the learner protocol's states do. The actuator is
+            /// the body named "actuator" (id 8); blocks need an id of the
+            /// learner's shape table (15 "blockA", 27 "blockB"). Parsing
+            /// learns nothing.
             ///
             /// Raises ValueError with the parser's reason when the message
-            /// has no actuator, an unknown or duplicate id, or a non-finite
-            /// number.
+            /// has no actuator, an unknown or duplicate id, a non-finite
+            /// number or a shape no world can have.
             fn parse(&self, bodies: Vec<Body>) -> PyResult<$PyWorld> {
                 self.model
                     .parse(&args::frame(bodies))

@@ -1,7 +1,7 @@
 # Generated from proto/pushlearn.proto by pushlearn's test suite. DO NOT EDIT.
 #
 # After changing the schema, regenerate with
-#     PUSHLEARN_BLESS=1 cargo test --test e2e python::
+#     PUSHLEARN_BLESS=1 cargo test -p pushlearn-cli --test e2e python::
 # (the suite fails while this file and the schema disagree).
 """Message classes of proto/pushlearn.proto.
 

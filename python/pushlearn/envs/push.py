@@ -30,7 +30,7 @@ from gymnasium import spaces
 
 from .. import native
 from .._pb import pushlearn_pb2
-from ..learner import ACTUATOR_NAME, State
+from ..learner import ACTUATOR_NAME, Shape, State
 from ..local_world import LocalWorld
 from ..sim import SimClient, WorldHello
 from .render import Canvas, Drawn
@@ -290,6 +290,14 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self.latency_max = hello.latency_max_steps
         """The world's latency emulation (largest delay of a Move in steps; ``None``: none)."""
         self._shapes = hello.shapes
+        self.shapes: dict[str, Shape] = {
+            name: hello.shapes[name]
+            for name in (ACTUATOR_NAME, *self.blocks)
+            if name in hello.shapes
+        }
+        """The shapes of the actuator and of every block, by body name, as the
+        world's Hello gives them (what the learner protocol shows a learner):
+        the observation's vectors carry poses only."""
         self._starts = {body.name: body for body in hello.bodies}
         self._names = [body.name for body in hello.bodies]
         self._actuator_row = self._names.index(ACTUATOR_NAME)

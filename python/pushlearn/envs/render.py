@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from ..sim import Shape
+from ..learner import Shape
 
 __all__ = ["Canvas", "Drawn", "colour_of"]
 

@@ -19,7 +19,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::frame::{frame_from_state, Footprints, StartHeights};
+use crate::frame::{frame_from_state, Shapes, StartHeights};
 use crate::latency::{budget, Latencies, LatencySummary};
 use pushlearn::client::{ClientError, SimClient};
 use pushlearn::wire::pb::{self, client_message::Payload};
@@ -443,7 +443,7 @@ pub async fn serve(
     let lockstep = client.hello().timing() == Ok(TimingMode::Lockstep);
     let budget = budget(client.hello().publish_rate);
     let heights = StartHeights::from_hello(client.hello());
-    let footprints = Footprints::from_hello(client.hello());
+    let shapes = Shapes::from_hello(client.hello());
     // A world can be quiet for long (paused, or waiting for another client).
     client.set_timeout(None);
     let mut times = WorkTimes::default();
@@ -475,7 +475,7 @@ pub async fn serve(
         };
         reset_seq = None;
         let received = Instant::now();
-        let frame = frame_from_state(&state, &footprints);
+        let frame = frame_from_state(&state, &shapes);
         let modelled = Instant::now();
         let ended_before = learner.episodes().map_or(0, |e| e.ended.len());
         let commands = match learner.on_state(&frame, &heights) {

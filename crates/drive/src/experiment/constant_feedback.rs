@@ -5,7 +5,7 @@
 //! the error of every chained prediction against the state it predicted.
 
 use learner::eval::{RunErrors, PUSH_ACTION};
-use learner::{Action, Model};
+use learner::{Action, Model, Poses};
 
 use super::driver::{Core, Task};
 use crate::results::constant_feedback::FeedbackRun;
@@ -42,14 +42,13 @@ impl<M: Model> Task<M> for FeedbackTask {
         format!("test run {} of {n_test}", (self.test_run + 1).min(n_test))
     }
 
-    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
+    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World, poses: &Poses) {
         let n_test = self.test_positions.len();
-        let poses = M::poses(world);
         if core.run_started {
             if let (Some(p), Some(run)) = (&core.last_prediction, self.runs.last_mut()) {
-                run.errors.push(RunErrors::score(&poses, &M::poses(p)));
+                run.errors.push(RunErrors::score(poses, &M::poses(p)));
             }
-            if core.run_ended(&poses) {
+            if core.run_ended(poses) {
                 core.reset_world();
                 core.run_started = false;
             }

@@ -11,6 +11,7 @@
 use std::collections::BTreeMap;
 
 use learner::eval::{actuator_left_area, RunStepper, MESSAGES_PER_RUN};
+use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID, ACTUATOR_NAME};
 
 use super::push_task::objects::View;
@@ -168,11 +169,14 @@ impl<M: Model> Core<M> {
 }
 
 /// One experiment's handler (`docs/spec/experiments.md` §3–§4): called for every
-/// message that passed the common checks, with the model's parse of it.
+/// message that passed the common checks, with the model's parse of it and
+/// the driver's own reading of it.
 pub trait Task<M: Model> {
-    /// Handles one message. Commands go through `core`; the job ends with
-    /// [`Core::finish`].
-    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World);
+    /// Handles one message: `world` is the model's parse, for the model;
+    /// `actual` the driver's reading of the same state ([`read_state`]), for
+    /// everything the task decides or scores by the real state. Commands go
+    /// through `core`; the job ends with [`Core::finish`].
+    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World, actual: &Poses);
 
     /// What the learner is shown of the world states before the task
     /// first changes it ([`Core::set_view`]); `None`: everything.
@@ -185,6 +189,21 @@ pub trait Task<M: Model> {
     fn run_name(&self) -> String {
         String::new()
     }
+}
+
+/// The driver's reading of a real world state: the poses it checks start
+/// positions, ends runs and scores predictions by (`docs/spec/experiments.md`
+/// §2, §7), read at the thesis's precision (3 decimals, as the thesis's
+/// driver read them through its model) with the learner's rule for the
+/// actuator's yaw. It is the driver's, not the model's, so that a learner is
+/// judged alike however it runs — in process, behind the learner protocol,
+/// from Python — and whatever its own parse keeps.
+///
+/// # Errors
+/// A state without an actuator, with an unknown or duplicate id, or a
+/// non-finite number.
+pub fn read_state(frame: &Frame, actuator_yaw: ActuatorYaw) -> Result<Poses, ParseError> {
+    parse_frame(frame, actuator_yaw)
 }
 
 /// The state machine of `docs/spec/experiments.md` §2 for one job: a fresh model and
@@ -228,16 +247,19 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
             core.counters.ignored += 1;
         } else {
             let shown = core.view.map(|view| view.apply(frame));
-            match self.model.parse(shown.as_ref().unwrap_or(frame)) {
+            let shown = shown.as_ref().unwrap_or(frame);
+            let parsed = read_state(shown, self.model.actuator_yaw())
+                .and_then(|actual| Ok((self.model.parse(shown)?, actual)));
+            match parsed {
                 Err(err) => {
                     core.counters.parse_errors += 1;
                     tracing::warn!(%err, "a world state the model cannot parse was skipped");
                 }
-                Ok(world) => {
+                Ok((world, actual)) => {
                     let checked = !std::mem::take(&mut core.started_run)
-                        || core.check_start_positions(&M::poses(&world));
+                        || core.check_start_positions(&actual);
                     if checked {
-                        self.task.handle(core, &mut self.model, &world);
+                        self.task.handle(core, &mut self.model, &world, &actual);
                     }
                 }
             }
@@ -324,7 +346,7 @@ pub mod test_support {
             id,
             position: [x, y, z],
             orientation: learner::features::yaw_to_quaternion(yaw),
-            footprint: None,
+            shape: None,
         };
         let mut objects = vec![obs("actuator", 8, actuator.0, actuator.1, 0.0, 0.03)];
         for (id, s) in blocks {
@@ -384,7 +406,13 @@ mod tests {
     }
 
     impl Task<Probe> for Recorder {
-        fn handle(&mut self, core: &mut Core<Probe>, _model: &mut Probe, world: &Poses) {
+        fn handle(
+            &mut self,
+            core: &mut Core<Probe>,
+            _model: &mut Probe,
+            world: &Poses,
+            _actual: &Poses,
+        ) {
             core.step_counter += 1;
             if !core.run_started {
                 core.start_run((0.1, 0.0), &push_task_blocks(), true);

@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use super::driver::{Driver, Task};
 use super::run_cache::{Cursor, Next, Path, RunCache, RunCacheError};
 use super::ExperimentError;
-use crate::frame::{frame_from_state, Footprints};
+use crate::frame::{frame_from_state, Shapes};
 use crate::latency::budget;
 use crate::results::run_info::Timing;
 use pushlearn::client::{ClientError, ClientOptions, SimClient};
@@ -520,7 +520,7 @@ async fn drive_tracked<M: Model, T: Task<M>, W: Wire>(
         sent.send_all(client, std::mem::take(&mut pending)).await?;
     }
     let budget = budget(driver.publish_rate_hz());
-    let footprints = Footprints::from_hello(client.hello());
+    let shapes = Shapes::from_hello(client.hello());
     let mut timing = Timing::default();
     while !driver.is_done() {
         let state = match pacing {
@@ -533,7 +533,7 @@ async fn drive_tracked<M: Model, T: Task<M>, W: Wire>(
             Pacing::Realtime => client.next_state().await?,
         };
         let received = Instant::now();
-        let commands = driver.on_state(&frame_from_state(&state, &footprints));
+        let commands = driver.on_state(&frame_from_state(&state, &shapes));
         match pacing {
             Pacing::Lockstep => pending = commands,
             Pacing::Realtime => {
@@ -560,7 +560,7 @@ async fn drive_replaying<M: Model, T: Task<M>, W: Wire>(
     sent: &mut Sent<'_>,
 ) -> Result<Timing, ExperimentError> {
     let budget = budget(driver.publish_rate_hz());
-    let footprints = Footprints::from_hello(client.hello());
+    let shapes = Shapes::from_hello(client.hello());
     let mut timing = Timing::default();
     while !driver.is_done() {
         let frame = match cursor.next(std::mem::take(pending)) {
@@ -570,7 +570,7 @@ async fn drive_replaying<M: Model, T: Task<M>, W: Wire>(
                     resync_world(client, cursor, path, sent).await?;
                 }
                 let state = send_and_advance(client, cursor, batch, sent).await?;
-                cursor.simulated(frame_from_state(&state, &footprints))?
+                cursor.simulated(frame_from_state(&state, &shapes))?
             }
         };
         let received = Instant::now();
@@ -601,7 +601,7 @@ async fn resync_world<W: Wire>(
     path: Path,
     sent: &mut Sent<'_>,
 ) -> Result<(), ExperimentError> {
-    let footprints = Footprints::from_hello(client.hello());
+    let shapes = Shapes::from_hello(client.hello());
     if let Some(rate) = path.rate.filter(|&rate| cursor.needs_rate(rate)) {
         let set_rate = Payload::publish_rate(rate);
         cursor.sent(std::slice::from_ref(&set_rate));
@@ -610,7 +610,7 @@ async fn resync_world<W: Wire>(
     for (step, (batch, expected)) in (path.first_step..).zip(path.steps) {
         let state = send_and_advance(client, cursor, batch, sent).await?;
         cursor.resimulated();
-        if frame_from_state(&state, &footprints) != *expected {
+        if frame_from_state(&state, &shapes) != *expected {
             return Err(RunCacheError::Diverged { step }.into());
         }
     }

@@ -14,7 +14,7 @@
 use std::collections::BTreeMap;
 
 use learner::eval::{goal_reached, wrapped_angle_error};
-use learner::{Action, Model, ModelStats, ObjectState, Target, BLUE_ID, RED_ID};
+use learner::{Action, Model, ModelStats, ObjectState, Poses, Target, BLUE_ID, RED_ID};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -208,10 +208,10 @@ impl<M: Model> Task<M> for MttTask {
         }
     }
 
-    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
+    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World, actual: &Poses) {
         core.step_counter += 1;
         if core.run_started {
-            if self.train_run < TRAINING_RUN_COUNT && core.run_ended(&M::poses(world)) {
+            if self.train_run < TRAINING_RUN_COUNT && core.run_ended(actual) {
                 core.reset_world();
                 core.run_started = false;
             }
@@ -251,7 +251,7 @@ impl<M: Model> Task<M> for MttTask {
         core.last_action = Some(action);
         core.send_move(action);
         let steps = core.step_counter - 1;
-        let block = M::poses(world).blocks.get(&BLUE_ID).copied();
+        let block = actual.blocks.get(&BLUE_ID).copied();
         let errors = target_errors(block, self.target);
         let reached = block.is_some_and(|b| goal_reached(&b, &self.target));
         let running = !reached && model.has_target() && core.step_counter <= self.max_steps;

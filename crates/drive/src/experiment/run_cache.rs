@@ -546,7 +546,7 @@ mod tests {
             id: 8,
             position: [x, 0.0, 0.03],
             orientation: [0.0, 0.0, 0.0, 1.0],
-            footprint: None,
+            shape: None,
         });
         f
     }

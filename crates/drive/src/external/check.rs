@@ -84,7 +84,7 @@ pub fn scripted_state(actuator: (f64, f64), block: (f64, f64)) -> Frame {
         id,
         position: [x, y, z],
         orientation: [0.0, 0.0, 0.0, 1.0],
-        footprint: None,
+        shape: None,
     };
     Frame {
         objects: vec![

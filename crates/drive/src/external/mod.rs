@@ -357,6 +357,15 @@ impl ExternalModel {
         &self.shared.info
     }
 
+    /// The learner's actuator-yaw rule, as its hello announced it.
+    fn actuator_yaw_rule(&self) -> ActuatorYaw {
+        if self.shared.info.ignores_actuator_yaw {
+            ActuatorYaw::ForceZero
+        } else {
+            ActuatorYaw::Keep
+        }
+    }
+
     fn next_serial(&self) -> u64 {
         let serial = self.serial.get() + 1;
         self.serial.set(serial);
@@ -431,9 +440,15 @@ impl ExternalModel {
     }
 }
 
-/// The world message's bodies as the protocol sends them.
+/// The world message's bodies as the protocol sends them, with the shape
+/// each was observed with.
 fn state_of(frame: &Frame) -> lp::State {
     lp::State {
+        shapes: frame
+            .objects
+            .iter()
+            .filter_map(|o| Some(pb::Shape::of_body(&o.name, o.shape?)))
+            .collect(),
         bodies: frame
             .objects
             .iter()
@@ -563,14 +578,7 @@ impl Model for ExternalModel {
 
     fn parse(&self, frame: &Frame) -> Result<ExternalWorld, ParseError> {
         Ok(ExternalWorld {
-            poses: parse_frame(
-                frame,
-                if self.shared.info.ignores_actuator_yaw {
-                    ActuatorYaw::ForceZero
-                } else {
-                    ActuatorYaw::Keep
-                },
-            )?,
+            poses: parse_frame(frame, self.actuator_yaw_rule())?,
             serial: self.next_serial(),
             origin: Origin::Observed(Arc::new(frame.clone())),
         })
@@ -701,6 +709,10 @@ impl Model for ExternalModel {
             }),
             _ => ModelStats::default(),
         }
+    }
+
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        self.actuator_yaw_rule()
     }
 
     fn start_fold(&mut self, seed: u64) {

@@ -12,6 +12,7 @@
 use std::io::{Read, Write};
 
 use bytes::BytesMut;
+use learner::features::ActuatorYaw;
 use learner::{Action, Model, ObjectState, Target};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -20,7 +21,9 @@ use tokio_util::codec::Decoder;
 use pushlearn::wire::pb::learner::{
     self as lp, reply::Answer, request::Call, state_ref::State, Reply, Request,
 };
-use pushlearn::wire::{encode_frame, FrameDecoder, WireError, MAX_ACTION_SPEED, MAX_POSITION};
+use pushlearn::wire::{
+    encode_frame, FrameDecoder, Shapes, WireError, MAX_ACTION_SPEED, MAX_POSITION,
+};
 
 use learner::registry::{ModelKind, ModelOptions, WithModel};
 
@@ -35,14 +38,12 @@ pub enum ServeError {
     Request { seq: u64, why: String },
 }
 
-/// What a served model says in its hello.
+/// What a served model says in its hello (its actuator-yaw rule it says
+/// itself, [`Model::actuator_yaw`]).
 #[derive(Clone, Debug)]
 pub struct Identity {
     pub name: String,
     pub version: String,
-    /// `Hello.ignores_actuator_yaw`: true for a model that parses the
-    /// actuator's yaw as 0 (the gate model).
-    pub ignores_actuator_yaw: bool,
 }
 
 /// One connection's learner.
@@ -70,7 +71,32 @@ fn within_the_world(state: &lp::State) -> Result<(), String> {
             }
         }
     }
-    Ok(())
+    shapes_of(state).map(drop)
+}
+
+/// The shapes `state` sends, each a valid geometry of a body it lists, no
+/// body twice: a shape a world cannot have is refused like an absurd
+/// position, rather than dropped so that the model falls back on another.
+fn shapes_of(state: &lp::State) -> Result<Shapes, String> {
+    for (i, shape) in state.shapes.iter().enumerate() {
+        if shape.body_shape().is_none() {
+            return Err(format!(
+                "the shape of body '{}' is not one a world can have (a box, a cylinder or a \
+                 sphere with finite, positive sizes): {:?}",
+                shape.name, shape.geometry
+            ));
+        }
+        if !state.bodies.iter().any(|b| b.name == shape.name) {
+            return Err(format!(
+                "a shape for body '{}', which the state does not list",
+                shape.name
+            ));
+        }
+        if state.shapes[..i].iter().any(|s| s.name == shape.name) {
+            return Err(format!("two shapes for body '{}'", shape.name));
+        }
+    }
+    Ok(Shapes::from_shapes(&state.shapes))
 }
 
 /// The call's action; a non-finite one, or one faster than
@@ -101,11 +127,13 @@ impl<M: Model> Served<M> {
         match state.and_then(|s| s.state) {
             Some(State::Observed(observed)) => {
                 within_the_world(&observed)?;
+                let shapes = shapes_of(&observed)?;
                 let world = self
                     .model
                     // The in-process driver's conversion: a body without a pose
-                    // is refused, never read as one at the origin.
-                    .parse(&pushlearn::wire::frame(&observed.bodies))
+                    // is refused, never read as one at the origin; each body
+                    // with the shape it was sent with.
+                    .parse(&shapes.frame(&observed.bodies))
                     .map_err(|e| format!("the state cannot be parsed: {e}"))?;
                 self.observed = Some(world.clone());
                 Ok(world)
@@ -391,7 +419,9 @@ pub fn serve<M: Model>(
                 lp::Capability::Forward as i32,
                 lp::Capability::Inverse as i32,
             ],
-            ignores_actuator_yaw: identity.ignores_actuator_yaw,
+            // The driver reads states as the model would have it read them
+            // in process.
+            ignores_actuator_yaw: served.untrained.actuator_yaw() == ActuatorYaw::ForceZero,
         }),
     )?;
     while let Some(request) = requests.next_request()? {
@@ -429,8 +459,6 @@ pub fn serve_driver(
         identity: Identity {
             name: options.report_name(kind),
             version: env!("CARGO_PKG_VERSION").to_owned(),
-            // `learner::features::ActuatorYaw`: the gate model's rule.
-            ignores_actuator_yaw: kind.family() == ModelKind::Gate,
         },
         seq,
         requests,

@@ -243,6 +243,12 @@ mod tests {
                     body("actuator", 8, x, -0.5),
                     body("blockA", BLUE_ID, 0.0, -0.3),
                 ],
+                shapes: vec![pb::Shape::of_body(
+                    "blockA",
+                    learner::BodyShape::Box {
+                        size: [0.5, 0.1, 0.1],
+                    },
+                )],
             })),
         }
     }
@@ -324,6 +330,61 @@ mod tests {
         );
     }
 
+    /// A shape no world can have, a shape of a body the state does not
+    /// list, or two shapes of one body are refused naming the body: a
+    /// model that reads shapes must not silently fall back on its table.
+    #[test]
+    fn a_state_with_a_shape_no_world_has_is_refused_naming_the_body() {
+        let bad = |shapes: Vec<pb::Shape>| {
+            let mut state = observed(0.0);
+            if let Some(lp::state_ref::State::Observed(observed)) = &mut state.state {
+                observed.shapes = shapes;
+            }
+            let mut bytes = start();
+            bytes.extend(frame(
+                2,
+                Call::Update(lp::Update {
+                    state: Some(state),
+                    action: Some(lp::Action {
+                        vx: Some(0.0),
+                        vy: Some(0.5),
+                    }),
+                }),
+            ));
+            serve_untrusted_requests(ModelKind::Hybrid, &bytes)
+                .unwrap()
+                .ended
+                .unwrap_or_default()
+        };
+        let sphere = |name: &str, radius: f64| pb::Shape {
+            name: name.into(),
+            geometry: Some(pb::shape::Geometry::SphereRadius(radius)),
+        };
+        for (shapes, expected) in [
+            (vec![sphere("blockA", -0.1)], "shape of body 'blockA'"),
+            (vec![sphere("blockA", f64::NAN)], "shape of body 'blockA'"),
+            (
+                vec![pb::Shape {
+                    name: "blockA".into(),
+                    geometry: None,
+                }],
+                "shape of body 'blockA'",
+            ),
+            (vec![sphere("ghost", 0.1)], "body 'ghost', which the state"),
+            (
+                vec![sphere("blockA", 0.1), sphere("blockA", 0.2)],
+                "two shapes for body 'blockA'",
+            ),
+        ] {
+            let ended = bad(shapes);
+            assert!(
+                ended.contains("message 2") && ended.contains(expected),
+                "{expected}: {ended}"
+            );
+        }
+        assert_eq!(bad(vec![sphere("blockA", 0.1)]), "");
+    }
+
     /// A body the learner uses, published without a pose (or half of one),
     /// is refused naming it, with the in-process driver's own parse error:
     /// `pushlearn serve-learner` once read a missing pose as zeros and
@@ -349,7 +410,7 @@ mod tests {
                         }),
                         ..pb::WorldState::default()
                     },
-                    &crate::frame::Footprints::default(),
+                    &crate::frame::Shapes::default(),
                 ),
                 learner::features::ActuatorYaw::ForceZero,
             )

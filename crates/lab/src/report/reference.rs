@@ -80,11 +80,9 @@ pub struct MttRef {
 /// The learning curve of `model` for `train_runs`, if the thesis has it.
 #[must_use]
 pub fn curve(model: learner::registry::ModelKind, train_runs: usize) -> Option<&'static CurveRef> {
-    let table: &[CurveRef] = match model {
-        learner::registry::ModelKind::Gate
-        | learner::registry::ModelKind::GatePlus
-        | learner::registry::ModelKind::Hybrid => &GATE_CURVE,
-        learner::registry::ModelKind::Interaction => &INTERACTION_CURVE,
+    let table: &[CurveRef] = match model.family() {
+        learner::registry::ThesisModel::Gate => &GATE_CURVE,
+        learner::registry::ThesisModel::Interaction => &INTERACTION_CURVE,
     };
     table.iter().find(|r| r.train_runs == train_runs)
 }
@@ -92,11 +90,9 @@ pub fn curve(model: learner::registry::ModelKind, train_runs: usize) -> Option<&
 /// The per-position table of the three selected training runs for `model`.
 #[must_use]
 pub fn fixed_three(model: learner::registry::ModelKind) -> &'static [PositionRef; 21] {
-    match model {
-        learner::registry::ModelKind::Gate
-        | learner::registry::ModelKind::GatePlus
-        | learner::registry::ModelKind::Hybrid => &GATE_FIXED_THREE,
-        learner::registry::ModelKind::Interaction => &INTERACTION_FIXED_THREE,
+    match model.family() {
+        learner::registry::ThesisModel::Gate => &GATE_FIXED_THREE,
+        learner::registry::ThesisModel::Interaction => &INTERACTION_FIXED_THREE,
     }
 }
 
@@ -113,11 +109,9 @@ pub fn two_objects(train_runs: usize) -> Option<&'static [TwoObjectRef; 21]> {
 /// The Move-to-Target table of `model`, targets 1–4 in order.
 #[must_use]
 pub fn move_to_target(model: learner::registry::ModelKind) -> &'static [MttRef; 4] {
-    match model {
-        learner::registry::ModelKind::Gate
-        | learner::registry::ModelKind::GatePlus
-        | learner::registry::ModelKind::Hybrid => &GATE_MTT,
-        learner::registry::ModelKind::Interaction => &INTERACTION_MTT,
+    match model.family() {
+        learner::registry::ThesisModel::Gate => &GATE_MTT,
+        learner::registry::ThesisModel::Interaction => &INTERACTION_MTT,
     }
 }
 

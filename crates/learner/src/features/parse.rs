@@ -197,7 +197,7 @@ mod tests {
             id,
             position: [x, y, 0.05],
             orientation: q,
-            footprint: None,
+            shape: None,
         }
     }
 

@@ -489,6 +489,10 @@ impl Model for GateModel {
             hard_coded_gate: params.hard_coded_gate,
         })
     }
+
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        ActuatorYaw::ForceZero
+    }
 }
 
 /// The serialised form, validated before it becomes a [`GateModel`] so that

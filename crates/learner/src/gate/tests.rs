@@ -602,7 +602,7 @@ fn parse_forces_the_actuator_yaw_to_zero_and_starts_fresh() {
         id,
         position: [x, y, 0.03],
         orientation: crate::features::yaw_to_quaternion(yaw),
-        footprint: None,
+        shape: None,
     };
     let frame = Frame {
         objects: vec![
@@ -1100,7 +1100,7 @@ fn frame_at(actuator: (f64, f64), block: (f64, f64)) -> Frame {
         id,
         position: [x, y, 0.03],
         orientation: [0.0, 0.0, 0.0, 1.0],
-        footprint: None,
+        shape: None,
     };
     Frame {
         objects: vec![

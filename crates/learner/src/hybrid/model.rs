@@ -580,7 +580,7 @@ impl HybridModel {
             .objects
             .iter()
             .filter(|o| poses.blocks.contains_key(&o.id) && !is_skipped(&o.name))
-            .filter_map(|o| Some((o.id, Outline::of_footprint(o.footprint?))))
+            .filter_map(|o| Some((o.id, Outline::of_footprint(o.shape?.footprint()))))
             .collect();
         Ok(HybridWorld {
             poses,
@@ -719,5 +719,9 @@ impl Model for HybridModel {
             .labels
             .insert("parts".into(), self.config.parts.as_str().into());
         ModelStats::Other(stats)
+    }
+
+    fn actuator_yaw(&self) -> ActuatorYaw {
+        ActuatorYaw::ForceZero
     }
 }

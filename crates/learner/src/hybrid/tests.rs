@@ -32,14 +32,14 @@ fn frame(actuator: Vector2<f64>, block: ObjectState) -> Frame {
                 id: 8,
                 position: [actuator.x, actuator.y, 0.03],
                 orientation: quaternion(0.0),
-                footprint: None,
+                shape: None,
             },
             Observation {
                 name: "blockA".into(),
                 id: BLUE_ID,
                 position: [block.x, block.y, 0.05],
                 orientation: quaternion(block.theta),
-                footprint: None,
+                shape: None,
             },
         ],
     }
@@ -199,13 +199,16 @@ fn targets_for_the_actuator_or_unknown_objects_are_refused() {
 
 #[test]
 fn the_observed_outline_decides_contact_and_the_shape_table_stands_in_without_one() {
-    use crate::types::Footprint;
+    use crate::types::BodyShape;
     let m = model(Parts::Mechanics);
     // Beside the blue block's long face, 3 cm off its axis: a box there is
     // touched by a push across it, a disc of 0.1 m radius is not.
     let plain = frame(Vector2::new(0.2, 0.15), ObjectState::new(0.0, 0.25, 0.0));
     let mut disc = plain.clone();
-    disc.objects[1].footprint = Some(Footprint::Disc { radius: 0.1 });
+    disc.objects[1].shape = Some(BodyShape::Cylinder {
+        radius: 0.1,
+        length: 0.1,
+    });
     let as_box = m.parse(&plain).unwrap();
     let as_disc = m.parse(&disc).unwrap();
     assert_eq!(as_box.outline(BLUE_ID), Outline::Box { half: [0.25, 0.05] });

@@ -125,7 +125,7 @@ fn parse_keeps_the_actuator_yaw_and_builds_one_state_per_pair() {
         id,
         position: [x, y, 0.03],
         orientation: [0.0, 0.0, (yaw / 2.0).sin(), (yaw / 2.0).cos()],
-        footprint: None,
+        shape: None,
     };
     let frame = Frame {
         objects: vec![

@@ -118,7 +118,7 @@ pub fn decode_entry(payload: &[u8]) -> Option<Entry> {
                     id,
                     position: [v[0], v[1], v[2]],
                     orientation: [v[3], v[4], v[5], v[6]],
-                    footprint: None,
+                    shape: None,
                 });
             }
             Entry::State(Frame { objects })
@@ -239,7 +239,7 @@ mod tests {
             id: 8,
             position: [0.0, 0.25, 0.03],
             orientation: [0.0, 0.0, 0.0, 1.0],
-            footprint: None,
+            shape: None,
         };
         let mut bytes = Vec::new();
         encode_record(
@@ -308,7 +308,7 @@ mod tests {
                 id: i as u32,
                 position: [0, 1, 2].map(|k| f64::from_bits(values[7 * i + k])),
                 orientation: [3, 4, 5, 6].map(|k| f64::from_bits(values[7 * i + k])),
-                footprint: None,
+                shape: None,
             }).collect();
             let f = Frame { objects };
             let mut bytes = Vec::new();

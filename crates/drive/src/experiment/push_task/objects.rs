@@ -71,7 +71,7 @@ mod tests {
             id,
             position: [x, 0.25, 0.05],
             orientation: [0.0, 0.0, 0.0, 1.0],
-            footprint: None,
+            shape: None,
         }
     }
 

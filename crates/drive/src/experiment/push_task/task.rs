@@ -133,15 +133,15 @@ impl<M: Model> Task<M> for PushTask {
         }
     }
 
-    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World) {
+    fn handle(&mut self, core: &mut Core<M>, model: &mut M, world: &M::World, actual: &Poses) {
         let n_test = self.test_positions.len();
         core.step_counter += 1;
         if core.run_started {
-            if core.run_ended(&M::poses(world)) {
+            if core.run_ended(actual) {
                 let testing = self.train_run == self.n_train && self.test_run < n_test;
                 if testing {
                     // Scored before `reset_world` forgets the prediction (§7.2).
-                    let actual = M::poses(world);
+                    let actual = actual.clone();
                     let predicted = core.stepper.last_prediction().map(M::poses);
                     self.errors
                         .push(predicted.as_ref().map(|p| RunErrors::score(&actual, p)));
@@ -194,7 +194,7 @@ impl<M: Model> Task<M> for PushTask {
         } else if self.test_run < n_test {
             if core.run_started {
                 let predicted = core.stepper.last_prediction().map(M::poses);
-                self.score_test_message(model, M::poses(world), predicted);
+                self.score_test_message(model, actual.clone(), predicted);
                 let action = core.stepper.test(model, world, PUSH_ACTION);
                 core.send_move(action);
             } else {

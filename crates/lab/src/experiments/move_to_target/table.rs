@@ -9,7 +9,7 @@ use crate::report::table::{composed, learner_title, run_info};
 use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::results::MttReport;
 use learner::eval::GOAL_TOLERANCE;
-use learner::registry::ModelKind;
+use learner::registry::{ModelKind, ThesisModel};
 
 /// The Move-to-Target report in the layout of the thesis's §8 tables.
 ///
@@ -26,9 +26,9 @@ pub fn move_to_target(
 /// The Move-to-Target report's table.
 #[must_use]
 pub fn move_to_target_printout(report: &MttReport, model: ModelKind) -> Printout {
-    let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§8.2",
-        ModelKind::Interaction => "§8.1",
+    let source = match model.family() {
+        ThesisModel::Gate => "§8.2",
+        ThesisModel::Interaction => "§8.1",
     };
     let head = vec![format!(
         "Move to Target, {}, {}, at most {} steps, mode {}, seed {}",

@@ -12,7 +12,7 @@ use crate::report::table::{
 use drive::results::nodes::{MapSummary, NodeSummary};
 use drive::results::push_task::{BlockCurve, CurveEntry};
 use drive::results::PushReport;
-use learner::registry::ModelKind;
+use learner::registry::{ModelKind, ThesisModel};
 use learner::{MapName, BLUE_ID};
 
 /// The terminal report of a push-task experiment.
@@ -62,9 +62,9 @@ pub fn push_printout(report: &PushReport, model: ModelKind) -> Printout {
 }
 
 fn curve(results: &[CurveEntry], model: ModelKind, thesis: bool) -> Vec<Table> {
-    let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§3.4",
-        ModelKind::Interaction => "§3.2",
+    let source = match model.family() {
+        ThesisModel::Gate => "§3.4",
+        ThesisModel::Interaction => "§3.2",
     };
     let mut all = Table::new(
         "learning-curve",
@@ -139,11 +139,9 @@ fn curve(results: &[CurveEntry], model: ModelKind, thesis: bool) -> Vec<Table> {
 }
 
 fn positions(entry: &CurveEntry, model: ModelKind) -> Table {
-    let (source, table) = match model {
-        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => {
-            ("§5.3", reference::fixed_three(model))
-        }
-        ModelKind::Interaction => ("§5.2", reference::fixed_three(model)),
+    let (source, table) = match model.family() {
+        ThesisModel::Gate => ("§5.3", reference::fixed_three(model)),
+        ThesisModel::Interaction => ("§5.2", reference::fixed_three(model)),
     };
     // The thesis's table is for its three selected runs only.
     let table = (entry.train_runs == 3).then_some(table);
@@ -255,8 +253,8 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
         folds,
         thesis,
     };
-    match model {
-        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => {
+    match model.family() {
+        ThesisModel::Gate => {
             let mut t = Table::new(
                 "nodes",
                 "Node counts when training ended: mean (population std) over folds [§4.2; thesis: random training data]",
@@ -302,7 +300,7 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
             }
             t
         }
-        ModelKind::Interaction => {
+        ThesisModel::Interaction => {
             let mut t = Table::new(
                 "nodes",
                 "Node counts when training ended: mean (population std) over folds [§4.1; thesis: random \

@@ -7,7 +7,7 @@ use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA, FLOOR}
 use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use drive::results::push_task::CurveEntry;
-use learner::registry::ModelKind;
+use learner::registry::{ModelKind, ThesisModel};
 
 /// The curves of `results`, beside the thesis's and, when given, the
 /// floor's errors (`drive::floor`: the world predicting itself, the same at
@@ -18,9 +18,9 @@ pub(super) fn curve_grid(
     interacting: bool,
     floor: Option<&CurveEntry>,
 ) -> Grid {
-    let source = match model {
-        ModelKind::Gate | ModelKind::GatePlus | ModelKind::Hybrid => "§3.4",
-        ModelKind::Interaction => "§3.2",
+    let source = match model.family() {
+        ThesisModel::Gate => "§3.4",
+        ThesisModel::Interaction => "§3.2",
     };
     let n_max = results.iter().map(|e| e.train_runs).max().unwrap_or(1) as f64;
     let folds = results.iter().map(|e| e.folds).max().unwrap_or(0);
