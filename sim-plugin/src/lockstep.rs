@@ -58,39 +58,106 @@ pub struct Latency {
     pub seed: u64,
 }
 
-/// Moves waiting for their drawn step offset.
-struct Delays {
+/// When, within an interval, each command a lock-step world receives takes
+/// effect under latency emulation: a Move draws its delay, uniform in
+/// `0..=max_steps`, from a generator seeded by the latency seed; other
+/// commands take none; and no command takes effect before one that arrived
+/// earlier. Arrival order stays application order, as without latency: the
+/// learner's Move(0, 0) before a Reset must not turn into a Reset followed
+/// by a stale Move.
+///
+/// The world's stepper draws with it, and so can anyone who sends the world
+/// its commands and wants to know their delays (the experiments' oracle
+/// that knows the latency): the same seed and the same commands give the
+/// same offsets.
+#[derive(Debug)]
+pub struct DelayDraws {
     max_steps: u32,
     rng: ChaCha8Rng,
+    /// The next Move's own delay, drawn ahead so that it can be known
+    /// before the Move is sent; Moves still take the draws in order.
+    next_move: u32,
+    /// The latest offset given in the current interval.
+    floor: u32,
+}
+
+impl DelayDraws {
+    /// The draws of `latency`'s generator from its seed on.
+    #[must_use]
+    pub fn new(latency: Latency) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(latency.seed);
+        Self {
+            max_steps: latency.max_steps,
+            next_move: rng.random_range(0..=latency.max_steps),
+            rng,
+            floor: 0,
+        }
+    }
+
+    /// Restarts the generator (`SimControl.latency_seed`); the commands
+    /// after it in this interval still wait for those before it.
+    pub fn reseed(&mut self, seed: u64) {
+        let floor = self.floor;
+        *self = Self::new(Latency {
+            max_steps: self.max_steps,
+            seed,
+        });
+        self.floor = floor;
+    }
+
+    /// The step offset, within the current interval, of the next command:
+    /// a Move (`is_move`) takes its draw.
+    pub fn offset(&mut self, is_move: bool) -> u32 {
+        self.floor = self.peek(is_move);
+        if is_move {
+            self.next_move = self.rng.random_range(0..=self.max_steps);
+        }
+        self.floor
+    }
+
+    /// The offset [`DelayDraws::offset`] would give the next command, without
+    /// drawing.
+    #[must_use]
+    pub fn peek(&self, is_move: bool) -> u32 {
+        let own = if is_move { self.next_move } else { 0 };
+        own.max(self.floor)
+    }
+
+    /// An Advance: the next command starts a new interval.
+    pub fn next_interval(&mut self) {
+        self.floor = 0;
+    }
+}
+
+/// Moves waiting for their drawn step offset.
+struct Delays {
+    draws: DelayDraws,
     /// Commands received since the last Advance, with their step offsets
-    /// within the next interval (never decreasing, see [`Delays::schedule`]).
+    /// within the next interval (never decreasing, see [`DelayDraws`]).
     pending: Vec<(u32, Accepted)>,
 }
 
 impl Delays {
     fn new(latency: Latency) -> Delays {
         Delays {
-            max_steps: latency.max_steps,
-            rng: ChaCha8Rng::seed_from_u64(latency.seed),
+            draws: DelayDraws::new(latency),
             pending: Vec::new(),
         }
     }
 
-    /// Gives `accepted` its offset: a Move draws one, other commands 0, but
-    /// none is applied before a command that arrived earlier. Arrival order
-    /// stays application order, as without latency: the learner's Move(0, 0)
-    /// before a Reset must not turn into a Reset followed by a stale Move.
+    /// Gives `accepted` its offset ([`DelayDraws::offset`]).
     fn schedule(&mut self, accepted: Accepted) {
         if let Op::LatencySeed(seed) = accepted.op {
-            self.rng = ChaCha8Rng::seed_from_u64(seed);
+            self.draws.reseed(seed);
         }
-        let own = if accepted.op.is_move() {
-            self.rng.random_range(0..=self.max_steps)
-        } else {
-            0
-        };
-        let earliest = self.pending.last().map_or(0, |(offset, _)| *offset);
-        self.pending.push((own.max(earliest), accepted));
+        let offset = self.draws.offset(accepted.op.is_move());
+        self.pending.push((offset, accepted));
+    }
+
+    /// The commands of the interval an Advance starts, with their offsets.
+    fn take_interval(&mut self) -> Vec<(u32, Accepted)> {
+        self.draws.next_interval();
+        std::mem::take(&mut self.pending)
     }
 }
 
@@ -195,7 +262,7 @@ impl Stepper {
         let pending = self
             .delays
             .as_mut()
-            .map(|delays| std::mem::take(&mut delays.pending))
+            .map(Delays::take_interval)
             .unwrap_or_default();
         let mut pending = pending.into_iter().peekable();
         let mut offset = 0;
@@ -332,7 +399,7 @@ mod tests {
     #[test]
     fn reseeding_repeats_the_delays() {
         let draw = |delays: &mut Delays| -> Vec<u32> {
-            delays.pending.clear();
+            delays.take_interval();
             for seq in 1..=20 {
                 delays.schedule(accepted(
                     seq,
@@ -355,5 +422,40 @@ mod tests {
             op: Op::LatencySeed(9),
         });
         assert_eq!(draw(&mut delays), first);
+    }
+
+    /// A sender that mirrors the draws knows each Move's offset before it
+    /// sends it: what the oracle that knows the latency relies on.
+    #[test]
+    fn a_mirror_of_the_draws_knows_each_offset_before_the_world_draws_it() {
+        let latency = Latency {
+            max_steps: 5,
+            seed: 11,
+        };
+        let mut world = Delays::new(latency);
+        let mut mirror = DelayDraws::new(latency);
+        let mut seq = 0;
+        for interval in 0..50 {
+            for command in 0..(interval % 3) + 1 {
+                seq += 1;
+                let is_move = command != 1;
+                let expected = mirror.peek(is_move);
+                assert_eq!(mirror.offset(is_move), expected);
+                world.schedule(accepted(
+                    seq,
+                    if is_move {
+                        Command::Actuator {
+                            mode: ActuatorMode::Move,
+                            velocity: [0.0; 3],
+                        }
+                    } else {
+                        Command::Reset
+                    },
+                ));
+                assert_eq!(world.pending.last().map(|(o, _)| *o), Some(expected));
+            }
+            world.take_interval();
+            mirror.next_interval();
+        }
     }
 }

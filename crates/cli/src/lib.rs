@@ -31,7 +31,7 @@ pub mod view;
 
 // The experiment engine, a crate of its own (`crates/drive`), under the
 // paths the application has always used.
-pub use drive::{experiment, external, frame, latency, output, process, results, scene};
+pub use drive::{experiment, external, frame, latency, oracle, output, process, results, scene};
 
 // The experiments, a crate of their own (`crates/lab`), likewise.
 #[cfg(feature = "lab")]

@@ -140,17 +140,17 @@ const CRATES: &[(&str, Table)] = &[
             ("scene", &[]),
             // The world predicting itself, a model on the world library
             // (the new-object scene's parking places).
-            ("floor", &["scene"]),
+            ("oracle", &["scene"]),
             // The learner protocol's client and server, and which learner
             // an experiment runs.
             ("external", &["frame", "process"]),
             // What the experiments measured, as plain data.
-            ("results", &["floor", "latency", "scene"]),
+            ("results", &["latency", "oracle", "scene"]),
             // The driver, the tasks, the links and workers, and whole
             // experiments into documents.
             (
                 "experiment",
-                &["external", "floor", "frame", "latency", "results", "scene"],
+                &["external", "frame", "latency", "oracle", "results", "scene"],
             ),
         ],
     ),

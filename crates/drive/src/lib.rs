@@ -23,9 +23,9 @@
 
 pub mod experiment;
 pub mod external;
-pub mod floor;
 pub mod frame;
 pub mod latency;
+pub mod oracle;
 pub mod output;
 pub mod process;
 pub mod results;

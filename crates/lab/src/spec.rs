@@ -15,8 +15,9 @@ use crate::report::plot::PlotError;
 use drive::experiment::processes::Recipe;
 use drive::experiment::push_task::protocol::{Protocol, PushJob, Variant};
 use drive::experiment::run::{self, Plan};
-use drive::experiment::ExperimentError;
+use drive::experiment::{ExperimentError, Mode};
 use drive::external::{ExternalModel, LearnerChoice, LearnerError};
+use drive::oracle::{Oracle, OracleError};
 use drive::results::push_task::PushJobResult;
 use drive::results::run_info::RunInfo;
 use drive::results::LearnerRecord;
@@ -187,10 +188,11 @@ impl Spec {
                 )));
             }
         }
-        if self.model() == Some(&LearnerChoice::Floor) && matches!(self, Spec::MoveToTarget { .. })
+        if matches!(self.model(), Some(LearnerChoice::Oracle(_)))
+            && matches!(self, Spec::MoveToTarget { .. })
         {
             return Err(SpecError::Invalid(
-                "the floor (--floor) predicts but does not plan: it has no Move to Target".into(),
+                "an oracle (--oracle) predicts but does not plan: it has no Move to Target".into(),
             ));
         }
         Ok(())
@@ -662,7 +664,7 @@ impl From<AnyReport> for Document {
 enum Ready {
     Builtin(ModelKind),
     External(Box<ExternalModel>),
-    Floor(drive::floor::Floor),
+    Oracle(Oracle),
 }
 
 impl Ready {
@@ -674,17 +676,27 @@ impl Ready {
         plan: &mut Plan,
     ) -> Result<Self, SpecError> {
         Ok(match choice {
-            LearnerChoice::Floor => {
+            LearnerChoice::Oracle(latency) => {
                 options.check_external()?;
-                let floor = drive::floor::Floor::new(scene, publish_rate_hz)
+                if plan.mode == Mode::Realtime {
+                    return Err(SpecError::Invalid(OracleError::Realtime.to_string()));
+                }
+                let latency_max = if plan.mode.jitter() {
+                    plan.latency_max
+                } else {
+                    0
+                };
+                let oracle = Oracle::new(scene, publish_rate_hz, *latency, latency_max)
                     .map_err(|err| SpecError::Invalid(err.to_string()))?;
-                drive::floor::NAME.clone_into(&mut plan.model);
+                latency.report_name().clone_into(&mut plan.model);
                 plan.learner = None;
-                plan.recipe = Some(Recipe::Floor {
+                plan.recipe = Some(Recipe::Oracle {
                     scene: scene.to_owned(),
                     publish_rate_hz,
+                    latency: *latency,
+                    latency_max,
                 });
-                Ready::Floor(floor)
+                Ready::Oracle(oracle)
             }
             LearnerChoice::Builtin(kind) => {
                 plan.model = options.report_name(*kind);
@@ -729,7 +741,7 @@ impl Ready {
         match self {
             Ready::Builtin(kind) => kind.dispatch(options, publish_rate_hz, job),
             Ready::External(model) => Ok(job.run(*model)),
-            Ready::Floor(floor) => Ok(job.run(floor)),
+            Ready::Oracle(oracle) => Ok(job.run(oracle)),
         }
     }
 }

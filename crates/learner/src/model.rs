@@ -148,6 +148,15 @@ pub trait Model: Clone + Debug + Send + Serialize + DeserializeOwned {
         ActuatorYaw::Keep
     }
 
+    /// What only the harness knows, told to the references that may know
+    /// it and to no learner: after how many physics steps of the coming
+    /// interval the world will apply the Move the driver sends next (the
+    /// world's latency emulation, which the harness seeds). The driver
+    /// calls it before every message it hands the model; the oracle that
+    /// knows the latency reads it (`drive::oracle`), every other model
+    /// ignores it, and the learner protocol has no such call.
+    fn next_move_delay(&mut self, _steps: u32) {}
+
     /// Called once on a fresh clone before a fold's first message, with the
     /// fold's seed (the seed of the driver's own generator for the fold,
     /// `docs/spec/experiments.md` §5). In-process models need nothing here:

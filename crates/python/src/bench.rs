@@ -21,6 +21,7 @@ use drive::experiment::run_cache::RunCache;
 use drive::experiment::workers::WorldSource;
 use drive::experiment::Mode;
 use drive::external::{predicted_poses, stats_of, LearnerChoice};
+use drive::oracle::OracleLatency;
 use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::results::LearnerRecord;
 use drive::scene::{Object, Transfer};
@@ -470,16 +471,18 @@ fn named<T: Named>(name: &str, what: &str) -> PyResult<T> {
     })
 }
 
-/// The built-in learner a name chooses (a model kind, or `floor`).
+/// The built-in learner a name chooses: a model kind, or an oracle by its
+/// report name (`oracle-known`, `oracle-unknown`).
 fn builtin(name: &str) -> PyResult<LearnerChoice> {
-    if name == "floor" {
-        return Ok(LearnerChoice::Floor);
+    if let Some(latency) = OracleLatency::of_report_name(name) {
+        return Ok(LearnerChoice::Oracle(latency));
     }
     ModelKind::from_name(name)
         .map(LearnerChoice::Builtin)
         .ok_or_else(|| {
             PyValueError::new_err(format!(
-                "unknown model '{name}'; expected one of {}, floor, or a pushlearn.Learner",
+                "unknown model '{name}'; expected one of {}, oracle-known, oracle-unknown, or a \
+                 pushlearn.Learner",
                 ModelKind::names()
             ))
         })

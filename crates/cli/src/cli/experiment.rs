@@ -19,6 +19,7 @@ use pushlearn_cli::experiment::{Mode, LATENCY_MAX_STEPS};
 use pushlearn_cli::external::LearnerChoice;
 use pushlearn_cli::external::{LearnerSpec, Source, DEFAULT_TIMEOUT};
 use pushlearn_cli::models::{named, ModelArgs, ModelKind, ModelOptions};
+use pushlearn_cli::oracle::OracleLatency;
 use pushlearn_cli::results::move_to_target::{REPETITIONS, TARGETS};
 use pushlearn_cli::scene::RATE_HZ;
 use pushlearn_cli::scene::{Object, Transfer};
@@ -154,13 +155,15 @@ struct LearnerArgs {
     #[arg(long, value_name = "HOST:PORT", conflicts_with_all = ["model", "learner"])]
     learner_connect: Option<String>,
 
-    /// Run the floor instead of a learner: the world predicting itself (a
-    /// latency-free copy of the experiment's world stepped under the same
-    /// actions, docs/models.md "The floor"), the error no learner can go
-    /// below. Push task (new objects included) and constant feedback;
+    /// Run an oracle instead of a learner: a copy of the experiment's world
+    /// (its true masses, frictions and shapes) stepped under the same
+    /// actions, told when each Move takes effect (known) or predicting the
+    /// median outcome over the delays the world may draw (unknown);
+    /// docs/models.md "Reference rows". A reference, not a bound. Push
+    /// task (new objects included) and constant feedback in lock-step;
     /// refused for Move to Target.
-    #[arg(long, conflicts_with_all = ["model", "learner", "learner_connect"])]
-    floor: bool,
+    #[arg(long, value_name = "LATENCY", value_parser = named::<OracleLatency>(), conflicts_with_all = ["model", "learner", "learner_connect"])]
+    oracle: Option<OracleLatency>,
 
     /// How long an external learner may take over one answer (its hello
     /// included) before the job fails, in seconds.
@@ -175,8 +178,10 @@ impl LearnerArgs {
         match (&self.learner, &self.learner_connect) {
             (Some(command), _) => external(Source::Command(command.clone())),
             (None, Some(addr)) => external(Source::Connect(addr.clone())),
-            (None, None) if self.floor => LearnerChoice::Floor,
-            (None, None) => LearnerChoice::Builtin(self.model),
+            (None, None) => match self.oracle {
+                Some(latency) => LearnerChoice::Oracle(latency),
+                None => LearnerChoice::Builtin(self.model),
+            },
         }
     }
 }
@@ -534,7 +539,7 @@ impl PushTaskLine {
         let rate = spec.push_protocol().map_or(RATE_HZ, |p| p.rate_hz);
         match line.args.learner.choice() {
             LearnerChoice::Builtin(kind) => kind.check(options, rate)?,
-            LearnerChoice::External(_) | LearnerChoice::Floor | LearnerChoice::InProcess => {
+            LearnerChoice::External(_) | LearnerChoice::Oracle(_) | LearnerChoice::InProcess => {
                 options.check_external()?;
             }
         }

@@ -336,15 +336,18 @@ fn draw_figures(root: &Path, results: &Reproduction, page: &str) -> Result<usize
             .plot(&scratch)
             .with_context(|| format!("drawing the figures of {}", p.entry.name))?;
     }
-    // Figures across documents: the §3 curves redrawn with the floor, the
-    // baselines beside the thesis's models, and every model of "Beyond
-    // the thesis" on one plot.
-    if let Ok(curves) = page::curves_and_floor(results) {
-        for (model, report, floor) in curves {
-            pushlearn_cli::experiments::push_task::figures::curves_with_floor(
-                report, model, floor, &scratch,
+    // Figures across documents: the §3 curves redrawn with the reference
+    // rows, the baselines beside the thesis's models, and every model of
+    // "Beyond the thesis" on one plot.
+    if let Ok(curves) = page::curves_and_references(results) {
+        for (model, report, references) in curves {
+            pushlearn_cli::experiments::push_task::figures::curves_with_references(
+                report,
+                model,
+                &references,
+                &scratch,
             )
-            .with_context(|| format!("drawing the {model} model's curves with the floor"))?;
+            .with_context(|| format!("drawing the {model} model's curves with the references"))?;
         }
     }
     if let Ok(curves) = page::baseline_curves(results) {

@@ -17,7 +17,8 @@ use learner::{object_name, Action, Frame, Model, ObjectState, Poses, ACTUATOR_ID
 use super::push_task::objects::View;
 use crate::results::run_info::Counters;
 use crate::scene::{ACTUATOR_Z, BLOCK_Z};
-use pushlearn::wire::pb::client_message::Payload;
+use pushlearn::wire::pb::{self, client_message::Payload};
+use sim_plugin::lockstep::{DelayDraws, Latency};
 
 /// `docs/spec/experiments.md` §2: a start pose farther than this (norm over x, y, θ,
 /// unwrapped) from the expected one is corrected.
@@ -52,6 +53,9 @@ pub struct Core<M: Model> {
     out: Vec<Payload>,
     /// What the learner is shown of each world state; `None`: all of it.
     view: Option<View>,
+    /// The world's latency draws, followed command by command, where the
+    /// harness seeded them ([`Driver::knowing_latency`]).
+    delays: Option<DelayDraws>,
 }
 
 impl<M: Model> Core<M> {
@@ -71,6 +75,7 @@ impl<M: Model> Core<M> {
             counters: Counters::default(),
             out: Vec::new(),
             view: None,
+            delays: None,
         }
     }
 
@@ -82,6 +87,13 @@ impl<M: Model> Core<M> {
 
     /// Queues a command for the world.
     pub fn send(&mut self, payload: Payload) {
+        if let Some(delays) = &mut self.delays {
+            let is_move = matches!(
+                &payload,
+                Payload::Actuator(a) if a.cmd == pb::actuator_command::Command::Move as i32
+            );
+            delays.offset(is_move);
+        }
         self.out.push(payload);
     }
 
@@ -231,6 +243,16 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
         }
     }
 
+    /// A driver whose world emulates `latency`, seeded just before the
+    /// driver's first command: it follows the world's draws for every
+    /// command it sends, and tells the model the delay of its next Move
+    /// ([`Model::next_move_delay`]) before each message.
+    #[must_use]
+    pub fn knowing_latency(mut self, latency: Option<Latency>) -> Self {
+        self.core.delays = latency.map(DelayDraws::new);
+        self
+    }
+
     /// `on_world_state(msg)`: returns the commands to send, in order.
     pub fn on_state(&mut self, frame: &Frame) -> Vec<Payload> {
         let core = &mut self.core;
@@ -238,6 +260,10 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
             return Vec::new();
         }
         core.counters.messages += 1;
+        // Everything sent now goes out with one Advance: one interval.
+        if let Some(delays) = &mut core.delays {
+            delays.next_interval();
+        }
         if core.startup {
             core.send(Payload::publish_rate(core.publish_rate_hz));
             core.reset_world();
@@ -259,6 +285,9 @@ impl<M: Model, T: Task<M>> Driver<M, T> {
                     let checked = !std::mem::take(&mut core.started_run)
                         || core.check_start_positions(&actual);
                     if checked {
+                        if let Some(delays) = &core.delays {
+                            self.model.next_move_delay(delays.peek(true));
+                        }
                         self.task.handle(core, &mut self.model, &world, &actual);
                     }
                 }

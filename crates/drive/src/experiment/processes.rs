@@ -36,6 +36,7 @@ use super::workers::{in_job_order, Worker, WorldSource};
 use super::{ExperimentError, Mode};
 use crate::external::{ExternalModel, LearnerSpec};
 use crate::latency::Latencies;
+use crate::oracle::{Oracle, OracleLatency};
 use crate::results::move_to_target::MttJobResult;
 use crate::results::push_task::PushJobResult;
 use crate::results::run_info::Timing;
@@ -56,8 +57,14 @@ pub enum Recipe {
         task: String,
         publish_rate_hz: u32,
     },
-    /// The floor ([`crate::floor::Floor`]) of `scene`.
-    Floor { scene: String, publish_rate_hz: u32 },
+    /// An oracle ([`crate::oracle::Oracle`]) of `scene`, its world's
+    /// latency emulation delaying a Move by at most `latency_max` steps.
+    Oracle {
+        scene: String,
+        publish_rate_hz: u32,
+        latency: OracleLatency,
+        latency_max: u32,
+    },
 }
 
 impl Recipe {
@@ -71,7 +78,7 @@ impl Recipe {
             | Recipe::External {
                 publish_rate_hz, ..
             }
-            | Recipe::Floor {
+            | Recipe::Oracle {
                 publish_rate_hz, ..
             } => *publish_rate_hz,
         }
@@ -531,8 +538,13 @@ impl Kept {
             Recipe::Builtin { kind, options, .. } => kind
                 .dispatch(options, rate_hz, job)
                 .map_err(|err| ExperimentError::InWorker(err.to_string()))??,
-            Recipe::Floor { scene, .. } => job.run(
-                crate::floor::Floor::new(scene, rate_hz)
+            Recipe::Oracle {
+                scene,
+                latency,
+                latency_max,
+                ..
+            } => job.run(
+                Oracle::new(scene, rate_hz, *latency, *latency_max)
                     .map_err(|err| ExperimentError::InWorker(err.to_string()))?,
             )?,
             Recipe::External { spec, task, .. } => {

@@ -22,6 +22,7 @@ use crate::results::run_info::{Counters, RunInfo, Timing};
 use crate::results::{FeedbackReport, MttReport, PushReport, Setup, TargetEntry};
 use crate::scene::{LOW_RATE_HZ, RATE_HZ};
 use pushlearn::wire::pb::client_message::Payload;
+use sim_plugin::lockstep::Latency;
 
 /// When an experiment began, for [`Plan::run_info`].
 struct Started {
@@ -188,13 +189,27 @@ impl Plan {
     /// Commands sent before a job's first Advance: with latency emulation
     /// the job's latency seed, so that the world's jitter does not depend on
     /// earlier jobs or on which worker runs the job (`docs/spec/experiments.md` §5).
-    fn job_setup(&self, latency_seed: u64) -> Vec<Payload> {
+    fn job_setup(&self, latency_seed: u64) -> JobSetup {
         if self.mode.jitter() {
-            vec![Payload::latency_seed(latency_seed)]
+            JobSetup {
+                commands: vec![Payload::latency_seed(latency_seed)],
+                latency: Some(Latency {
+                    max_steps: self.latency_max,
+                    seed: latency_seed,
+                }),
+            }
         } else {
-            Vec::new()
+            JobSetup::default()
         }
     }
+}
+
+/// What a job sends its world before its driver's first command, and the
+/// latency emulation that seeds (the driver follows its draws).
+#[derive(Debug, Default)]
+struct JobSetup {
+    commands: Vec<Payload>,
+    latency: Option<Latency>,
 }
 
 /// Which job a driver runs, for [`drive`]: its seed and its name in errors.
@@ -210,7 +225,7 @@ fn drive<M: Model, T: Task<M>>(
     untrained: &Mutex<M>,
     task: T,
     rate_hz: u32,
-    setup: Vec<Payload>,
+    setup: JobSetup,
     fold: Fold,
 ) -> Result<(T, Timing, Counters), ExperimentError> {
     // A fold starts from an untrained instance (`docs/spec/experiments.md` §2 new_fold).
@@ -219,8 +234,8 @@ fn drive<M: Model, T: Task<M>>(
         .unwrap_or_else(std::sync::PoisonError::into_inner)
         .clone();
     model.start_fold(fold.seed);
-    let mut driver = Driver::new(model, task, rate_hz);
-    let timing = match worker.link.drive(&mut driver, setup) {
+    let mut driver = Driver::new(model, task, rate_hz).knowing_latency(setup.latency);
+    let timing = match worker.link.drive(&mut driver, setup.commands) {
         Ok(timing) => timing,
         Err(err) => {
             return Err(match worker.world_death() {

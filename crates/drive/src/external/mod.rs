@@ -25,6 +25,7 @@ use std::time::Duration;
 
 use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError};
+use pushlearn_core::Named;
 use serde::{Deserialize, Serialize};
 
 use learner::registry::ModelKind;
@@ -50,9 +51,9 @@ pub struct LearnerSpec {
 pub enum LearnerChoice {
     Builtin(ModelKind),
     External(LearnerSpec),
-    /// The world as a predictor of itself ([`crate::floor`]): not a
-    /// learner, the error no learner can go below.
-    Floor,
+    /// The world as a predictor of itself ([`crate::oracle`]): not a
+    /// learner, the reference at the other end of the scale from `still`.
+    Oracle(crate::oracle::OracleLatency),
     /// A learner object the caller holds and hands to the experiment itself
     /// (`lab::spec::Spec::run_with`): the Python API's `Learner` objects,
     /// called directly in the caller's process.
@@ -60,12 +61,12 @@ pub enum LearnerChoice {
 }
 
 /// The choice as `pushlearn experiment` flags: `--model gate`,
-/// `--learner 'CMD'`, `--learner-connect ADDR` or `--floor`.
+/// `--learner 'CMD'`, `--learner-connect ADDR` or `--oracle known|unknown`.
 impl std::fmt::Display for LearnerChoice {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             LearnerChoice::Builtin(kind) => write!(f, "--model {kind}"),
-            LearnerChoice::Floor => write!(f, "--floor"),
+            LearnerChoice::Oracle(latency) => write!(f, "--oracle {}", latency.name()),
             LearnerChoice::InProcess => write!(f, "(a learner object in the calling process)"),
             LearnerChoice::External(spec) => {
                 match &spec.source {

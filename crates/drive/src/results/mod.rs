@@ -58,7 +58,7 @@ impl Setup {
     /// The built-in model the document is shown against (its tables,
     /// figures and the thesis's reference numbers): the one `model` names
     /// ([`ModelKind::of_report_name`]), or for an external learner of
-    /// another name (`knn`) and the floor the gate model, whose thesis
+    /// another name (`knn`) and the oracles the gate model, whose thesis
     /// numbers every learner is compared with.
     ///
     /// # Errors
@@ -66,7 +66,9 @@ impl Setup {
     pub fn reference_model(&self) -> Result<ModelKind, UnknownModel> {
         match ModelKind::of_report_name(&self.model) {
             Some(kind) => Ok(kind),
-            None if self.learner.is_some() || self.model == crate::floor::NAME => {
+            None if self.learner.is_some()
+                || crate::oracle::OracleLatency::of_report_name(&self.model).is_some() =>
+            {
                 Ok(ModelKind::Gate)
             }
             None => Err(UnknownModel(self.model.clone())),

@@ -11,6 +11,7 @@ use drive::experiment::move_to_target::{sampled_targets, MAX_STEPS};
 use drive::experiment::push_task::protocol::Variant;
 use drive::experiment::{Mode, LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use drive::external::LearnerChoice;
+use drive::oracle::OracleLatency;
 use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::scene::{Object, Transfer};
 use learner::registry::{Improvement, ModelKind, ModelOptions, Parts};
@@ -246,17 +247,6 @@ fn beyond() -> Vec<Entry> {
         ));
     }
     entries.push(Entry::new(
-        "beyond-push-floor",
-        Spec::PushTask {
-            model: LearnerChoice::Floor,
-            options: ModelOptions::default(),
-            variant: Variant::Random,
-            transfer: None,
-            train_runs: BEYOND_RUNS.to_vec(),
-            folds: 20,
-        },
-    ));
-    entries.push(Entry::new(
         "beyond-mtt-hybrid",
         Spec::MoveToTarget {
             model: ModelKind::Hybrid.into(),
@@ -414,18 +404,18 @@ pub fn full() -> Vec<Entry> {
             // Only the default setting's figures go on the page.
             entries.push(entry.with_figures(suffix.is_empty()));
         }
-        // The floor beside the curves of the other timings (the default
-        // timing's is `beyond-push-floor`); it learns nothing, so one N.
-        if !suffix.is_empty() {
+        // The reference rows of this timing, on the curves' own runs (the
+        // same world and jobs, so nothing is simulated twice).
+        for (name, learner) in references() {
             entries.push(
                 Entry::new(
-                    format!("push-task-floor{suffix}"),
+                    reference_entry_name(name, suffix),
                     Spec::PushTask {
-                        model: LearnerChoice::Floor,
+                        model: learner,
                         options: ModelOptions::default(),
                         variant: Variant::Random,
                         transfer: None,
-                        train_runs: vec![1],
+                        train_runs: curve(),
                         folds: 20,
                     },
                 )
@@ -571,13 +561,44 @@ pub fn transfers() -> Vec<Transfer> {
     .collect()
 }
 
+/// The reference rows of every table (`docs/models.md` "Reference rows"):
+/// (document name part, learner): `still`, which predicts that nothing
+/// moves, and the oracles, copies of the world with its true parameters
+/// that know the latency draws or predict their median outcome. The
+/// tables' normalised score is a learner's place between `still` (0) and
+/// the oracle that does not know the latency (1).
+#[must_use]
+pub fn references() -> [(&'static str, LearnerChoice); 3] {
+    [
+        (STILL, ModelKind::Still.into()),
+        (
+            OracleLatency::Known.report_name(),
+            LearnerChoice::Oracle(OracleLatency::Known),
+        ),
+        (
+            OracleLatency::Unknown.report_name(),
+            LearnerChoice::Oracle(OracleLatency::Unknown),
+        ),
+    ]
+}
+
+/// The reference that predicts nothing moves, by its document name part.
+pub const STILL: &str = "still";
+
+/// The document name of a reference row of the learning curves at one
+/// timing (`suffix`: "", "-lockstep" or "-latency5").
+#[must_use]
+pub fn reference_entry_name(reference: &str, suffix: &str) -> String {
+    format!("reference-{reference}{suffix}")
+}
+
 /// The learners of the new-object table: (document name part, learner):
 /// both faithful models, gate+, the hybrid model, every baseline and the
-/// floor.
+/// reference rows.
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
     let [(_, knn, knn_timeout), (_, gp, gp_timeout), (_, mlp, mlp_timeout)] = BASELINES;
-    vec![
+    let mut learners = vec![
         ("gate", ModelKind::Gate.into()),
         ("interaction", ModelKind::Interaction.into()),
         ("gate-plus", ModelKind::GatePlus.into()),
@@ -585,8 +606,9 @@ pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
         ("knn", baseline(knn, knn_timeout)),
         ("gp", baseline(gp, gp_timeout)),
         ("mlp", baseline(mlp, mlp_timeout)),
-        ("floor", LearnerChoice::Floor),
-    ]
+    ];
+    learners.extend(references());
+    learners
 }
 
 /// The document name of one learner on one new-object condition.
@@ -618,10 +640,18 @@ pub fn cross_transfers() -> Vec<Transfer> {
 
 /// The learners of the cross-object table (names as in
 /// [`object_learners`]): the thesis's gate model, the hybrid model, the
-/// kNN and MLP baselines and the floor. The interaction model, gate+ and
-/// the GP are in the new-object table; here they would add a third to the
-/// reproduction's time and nothing the table is for.
-pub const CROSS_LEARNERS: [&str; 5] = ["gate", "hybrid", "knn", "mlp", "floor"];
+/// kNN and MLP baselines and the reference rows. The interaction model,
+/// gate+ and the GP are in the new-object table; here they would add a
+/// third to the reproduction's time and nothing the table is for.
+pub const CROSS_LEARNERS: [&str; 7] = [
+    "gate",
+    "hybrid",
+    "knn",
+    "mlp",
+    STILL,
+    "oracle-known",
+    "oracle-unknown",
+];
 
 /// The document name of one learner on one cross-object condition.
 #[must_use]
@@ -851,8 +881,30 @@ mod tests {
             "pushlearn experiment push-task --model hybrid --train-runs 1,3,10,30 --parts mechanics --json d/beyond-push-hybrid-mechanics.json"
         );
         assert_eq!(
-            find("beyond-push-floor"),
-            "pushlearn experiment push-task --floor --train-runs 1,3,10,30 --json d/beyond-push-floor.json"
+            find("reference-oracle-unknown-latency5"),
+            "pushlearn experiment push-task --oracle unknown --latency-max 5 --json d/reference-oracle-unknown-latency5.json"
+        );
+        assert_eq!(
+            find("reference-still-lockstep"),
+            "pushlearn experiment push-task --model still --mode lockstep --json d/reference-still-lockstep.json"
+        );
+    }
+
+    #[test]
+    fn every_reference_is_in_every_table_of_learners() {
+        let names: Vec<String> = full().into_iter().map(|e| e.name).collect();
+        let objects: Vec<&str> = object_learners().into_iter().map(|(n, _)| n).collect();
+        for (reference, _) in references() {
+            for (suffix, ..) in TIMINGS {
+                let entry = reference_entry_name(reference, suffix);
+                assert!(names.contains(&entry), "{entry} is not run");
+            }
+            assert!(objects.contains(&reference), "{reference}");
+            assert!(CROSS_LEARNERS.contains(&reference), "{reference}");
+        }
+        assert!(
+            !names.iter().any(|n| n.contains("floor")),
+            "the floor is gone"
         );
     }
 }

@@ -158,8 +158,14 @@ const ACTUATOR: RGBColor = RGBColor(60, 60, 60);
 const BLUE_BLOCK: RGBColor = RGBColor(40, 90, 220);
 const RED_BLOCK: RGBColor = RGBColor(220, 50, 40);
 pub const TARGET: RGBColor = RGBColor(0, 0, 0);
-/// The floor's line (`drive::floor`), grey: a bound, not a learner.
-pub const FLOOR: RGBColor = RGBColor(128, 128, 128);
+/// The reference rows' lines, in the manifest's order (`still`, the oracle
+/// that knows the latency, the one that does not), greys: references, not
+/// learners.
+pub const REFERENCES: [RGBColor; 3] = [
+    RGBColor(70, 70, 70),
+    RGBColor(165, 165, 165),
+    RGBColor(120, 120, 120),
+];
 /// Opacity of predicted bodies in the snapshots.
 pub const TRANSLUCENT: f64 = 0.3;
 

@@ -5,9 +5,12 @@ use std::fmt::Write as _;
 
 use learner::eval::MeanStd;
 
-use super::objects::{learner_label, FLOOR_LABEL};
+use super::objects::learner_label;
+use super::references::{reference_label, References};
 use super::{entry_at, ms, push_doc, thesis_ms};
+use crate::experiments::push_task::figures::ReferenceLine;
 use crate::report::reference;
+use crate::reproduce::manifest::{references, STILL};
 use crate::reproduce::Reproduction;
 use drive::experiment::{LATENCY_MAX_STEPS, LATENCY_MAX_STEPS_HARSH};
 use drive::results::push_task::CurveEntry;
@@ -24,20 +27,10 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
         .iter()
         .map(|n| push_doc(results, n))
         .collect::<Result<_, _>>()?;
-    // The floor of each timing: what no learner can go below there.
-    let floor_names = [
-        "beyond-push-floor",
-        "push-task-floor-latency5",
-        "push-task-floor-lockstep",
-    ];
-    let floors: Vec<&CurveEntry> = floor_names
-        .iter()
-        .map(|n| {
-            push_doc(results, n)?
-                .results
-                .first()
-                .ok_or_else(|| format!("`{n}` has no results"))
-        })
+    // The reference rows of each timing, in the columns' order.
+    let timings: Vec<References> = ["", "-latency5", "-lockstep"]
+        .into_iter()
+        .map(|suffix| References::of_timing(results, suffix))
         .collect::<Result<_, _>>()?;
     let mut out = String::new();
     for interacting in [false, true] {
@@ -55,9 +48,12 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
         );
         let _ = writeln!(
             out,
-            "| N | block position: {columns} | block orientation: {columns} | actuator: {columns} |"
+            "| N | block position: {columns} | block orientation: {columns} | actuator: {columns} | normalised, L_max {LATENCY_MAX_STEPS}: position / orientation |"
         );
-        let _ = writeln!(out, "|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(
+            out,
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        );
         let pick: [fn(&CurveEntry, bool) -> MeanStd; 3] = [
             |e, i| {
                 if i {
@@ -105,42 +101,99 @@ pub(super) fn curves(results: &Reproduction, model: ModelKind) -> Result<String,
                 });
                 let _ = write!(line, "| {} ", thesis.unwrap_or_else(|| "–".into()));
             }
-            line.push_str("|\n");
+            let _ = writeln!(
+                line,
+                "| {} |",
+                normalised(&timings[0], rows[0], n, interacting)?
+            );
             out.push_str(&line);
         }
-        let mut line = format!("| {FLOOR_LABEL} ");
-        for pick in &pick {
-            for floor in &floors {
-                let _ = write!(line, "| {} ", ms(pick(floor, interacting)));
+        // The references learn nothing: one row each, at one training run.
+        let n = 1;
+        for (i, (reference, _)) in references().into_iter().enumerate() {
+            let rows: Vec<&CurveEntry> = timings
+                .iter()
+                .map(|t| entry_at(t.reports()[i], reference, n))
+                .collect::<Result<_, _>>()?;
+            let label = reference_label(reference).unwrap_or(reference);
+            let mut line = format!("| {label} (N = {n}) ");
+            for pick in &pick {
+                for row in &rows {
+                    let _ = write!(line, "| {} ", ms(pick(row, interacting)));
+                }
+                line.push_str("| – ");
             }
-            line.push_str("| – ");
+            let _ = writeln!(
+                line,
+                "| {} |",
+                normalised(&timings[0], rows[0], n, interacting)?
+            );
+            out.push_str(&line);
         }
-        line.push_str("|\n");
-        out.push_str(&line);
         out.push('\n');
     }
     Ok(out)
 }
 
-/// The thesis's models' default learning curves, each with the floor's
-/// errors at that timing, for the §3 figures.
+/// The normalised score of a curve's row (all 21 positions, or the 15
+/// interacting ones against the references' same positions).
+fn normalised(
+    references: &References,
+    e: &CurveEntry,
+    n: usize,
+    interacting: bool,
+) -> Result<String, String> {
+    if !interacting {
+        return references.normalised(e, n);
+    }
+    let at = |reference: &str| {
+        let report = references
+            .reports()
+            .iter()
+            .find(|r| r.setup.model == reference)
+            .ok_or_else(|| format!("no reference `{reference}`"))?;
+        entry_at(report, reference, n)
+    };
+    let (still, oracle) = (at(STILL)?, at("oracle-unknown")?);
+    let score = |get: fn(&CurveEntry) -> f64| {
+        super::references::normalised(get(e), get(still), get(oracle))
+            .map_or_else(|| "–".to_owned(), |v| format!("{v:.2}"))
+    };
+    Ok(format!(
+        "{} / {}",
+        score(|e| e.blue.interacting.block_pos_err.mean),
+        score(|e| e.blue.interacting.block_ori_err.mean)
+    ))
+}
+
+/// A thesis model's learning curve and the reference rows drawn beside it.
+pub type CurveWithReferences<'r> = (ModelKind, &'r PushReport, Vec<ReferenceLine<'r>>);
+
+/// The thesis's models' default learning curves, each with the reference
+/// rows of that timing, for the §3 figures.
 ///
 /// # Errors
 /// A document the reproduction does not have.
-pub fn curves_and_floor(
+pub fn curves_and_references(
     results: &Reproduction,
-) -> Result<Vec<(ModelKind, &PushReport, &CurveEntry)>, String> {
-    let floor = push_doc(results, "beyond-push-floor")?
-        .results
-        .first()
-        .ok_or("`beyond-push-floor` has no results")?;
+) -> Result<Vec<CurveWithReferences<'_>>, String> {
+    let references = References::of_timing(results, "")?;
+    let lines: Vec<ReferenceLine<'_>> = references
+        .reports()
+        .iter()
+        .map(|r| ReferenceLine {
+            label: reference_label(&r.setup.model).unwrap_or("reference"),
+            results: &r.results,
+            actuator: r.setup.model != STILL,
+        })
+        .collect();
     [ModelKind::Gate, ModelKind::Interaction]
         .into_iter()
         .map(|model| {
             Ok((
                 model,
                 push_doc(results, &format!("push-task-{model}"))?,
-                floor,
+                lines.clone(),
             ))
         })
         .collect()
@@ -158,32 +211,42 @@ pub fn baseline_curves(results: &Reproduction) -> Result<Vec<(String, &PushRepor
         "beyond-push-hybrid",
     ]
     .into_iter()
+    .map(str::to_owned)
     .chain(
         crate::reproduce::manifest::BASELINES
             .iter()
-            .map(|(name, ..)| *name),
+            .map(|(name, ..)| (*name).to_owned()),
     )
-    .chain(["beyond-push-floor"]);
+    .chain(reference_names());
     names
         .map(|name| {
-            let report = push_doc(results, name)?;
+            let report = push_doc(results, &name)?;
             let label = match (&report.setup.learner, report.setup.model.as_str()) {
                 (Some(l), model) => format!("{model} {} (Python)", l.version),
                 (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model, Rust)"),
-                (None, drive::floor::NAME) => FLOOR_LABEL.to_owned(),
-                (None, model) => format!("{model} (Rust)"),
+                (None, model) => {
+                    reference_label(model).map_or_else(|| format!("{model} (Rust)"), str::to_owned)
+                }
             };
             Ok((label, report))
         })
         .collect()
 }
 
+/// The default timing's reference documents, in the manifest's order.
+fn reference_names() -> impl Iterator<Item = String> {
+    references()
+        .into_iter()
+        .map(|(name, _)| crate::reproduce::manifest::reference_entry_name(name, ""))
+}
+
 /// Gate, interaction and every baseline (kNN, GP, MLP ensemble) at the
 /// baseline table's training runs, all 21 positions: one row per learner
 /// and N.
 pub(super) fn baselines(results: &Reproduction) -> Result<String, String> {
+    let references = References::of_timing(results, "")?;
     let mut out = String::from(
-        "| learner | N | block position [m] | block orientation [rad] | actuator [m] | folds |\n|---|---|---|---|---|---|\n",
+        "| learner | N | block position [m] | block orientation [rad] | actuator [m] | normalised: position / orientation | folds |\n|---|---|---|---|---|---|---|\n",
     );
     for (label, report) in baseline_curves(results)? {
         let name = &report.setup.model;
@@ -191,10 +254,11 @@ pub(super) fn baselines(results: &Reproduction) -> Result<String, String> {
             let e = entry_at(report, name, n)?;
             let _ = writeln!(
                 out,
-                "| {label} | {n} | {} | {} | {} | {} |",
+                "| {label} | {n} | {} | {} | {} | {} | {} |",
                 ms(e.blue.block_pos_err),
                 ms(e.blue.block_ori_err),
                 ms(e.blue.actuator_pos_err),
+                references.normalised(e, n)?,
                 report.folds
             );
         }
@@ -224,7 +288,7 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
             .iter()
             .map(|(n, ..)| (*n).to_owned()),
     );
-    names.push("beyond-push-floor".to_owned());
+    names.extend(reference_names());
     names
         .iter()
         .map(|name| {
@@ -235,16 +299,22 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
 }
 
 /// One row per curve of [`beyond_curves`]: block position / orientation
-/// at each of `manifest::BEYOND_RUNS`, and the actuator at the first and
-/// the third.
+/// at each of `manifest::BEYOND_RUNS`, the actuator at the first and the
+/// third, and the normalised scores at the first and the last.
 pub(super) fn beyond_ablation(results: &Reproduction) -> Result<String, String> {
     let runs = crate::reproduce::manifest::BEYOND_RUNS;
+    let references = References::of_timing(results, "")?;
+    let (first, last) = (runs[0], runs[runs.len() - 1]);
     let mut out = String::from("| model |");
     for n in runs {
         let _ = write!(out, " N = {n}: position [m] / orientation [rad] |");
     }
-    let _ = writeln!(out, " actuator [m], N = {} / {} |", runs[0], runs[2]);
-    out.push_str(&"|---".repeat(runs.len() + 2));
+    let _ = writeln!(
+        out,
+        " actuator [m], N = {} / {} | normalised, N = {first}: position / orientation | normalised, N = {last} |",
+        runs[0], runs[2]
+    );
+    out.push_str(&"|---".repeat(runs.len() + 4));
     out.push_str("|\n");
     for (label, report) in beyond_curves(results)? {
         let name = &report.setup.model;
@@ -263,8 +333,11 @@ pub(super) fn beyond_ablation(results: &Reproduction) -> Result<String, String> 
         );
         let _ = writeln!(
             out,
-            " {:.4} / {:.4} |",
-            a.blue.actuator_pos_err.mean, b.blue.actuator_pos_err.mean
+            " {:.4} / {:.4} | {} | {} |",
+            a.blue.actuator_pos_err.mean,
+            b.blue.actuator_pos_err.mean,
+            references.normalised(a, first)?,
+            references.normalised(entry_at(report, name, last)?, last)?
         );
     }
     Ok(out)

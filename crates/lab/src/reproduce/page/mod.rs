@@ -18,7 +18,8 @@
 //! by a module of its own: `targets` (the targets and those beyond
 //! the thesis), `calibration`, `curves` (learning curves, baselines,
 //! the changes beyond the thesis, the actuator's folds), `ablation` (the
-//! sweep), `objects` (the new-object experiments), `move_to_target`,
+//! sweep), `objects` (the new-object experiments), `references` (the
+//! reference rows and the normalised score), `move_to_target`,
 //! `latency`, `selectors` and `documents` (a document's report and
 //! every command).
 
@@ -29,6 +30,7 @@ mod documents;
 mod latency;
 mod move_to_target;
 mod objects;
+mod references;
 mod selectors;
 mod targets;
 
@@ -51,7 +53,7 @@ use objects::{beyond_objects, cross_objects};
 use selectors::selectors;
 use targets::{beyond_targets, targets};
 
-pub use curves::{baseline_curves, beyond_curves, curves_and_floor};
+pub use curves::{baseline_curves, beyond_curves, curves_and_references};
 pub use objects::{object_reports, ObjectRow};
 
 /// How a generated block's line starts.

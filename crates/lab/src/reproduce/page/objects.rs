@@ -2,24 +2,22 @@
 
 use std::fmt::Write as _;
 
+use super::references::{reference_label, References};
 use super::{entry_at, push_doc};
 use crate::reproduce::Reproduction;
 use drive::results::{PushReport, Setup};
-
-/// The floor's label: not a learner (`drive::floor`).
-pub(super) const FLOOR_LABEL: &str = "floor (the world predicting itself)";
 
 /// A learner's label and its report on each new-object condition.
 pub type ObjectRow<'r> = (String, Vec<&'r PushReport>);
 
 /// A learner as the page's tables and figures name it: a Python learner by
-/// its model and version, the thesis's models as such, the others by name.
+/// its model and version, the thesis's models as such, the reference rows
+/// by what they are, the others by name.
 pub(super) fn learner_label(setup: &Setup) -> String {
     match (&setup.learner, setup.model.as_str()) {
         (Some(l), model) => format!("{model} {} (Python)", l.version),
         (None, model @ ("gate" | "interaction")) => format!("{model} (thesis model)"),
-        (None, drive::floor::NAME) => FLOOR_LABEL.to_owned(),
-        (None, model) => model.to_owned(),
+        (None, model) => reference_label(model).map_or_else(|| model.to_owned(), str::to_owned),
     }
 }
 
@@ -47,9 +45,14 @@ pub fn object_reports(results: &Reproduction) -> Result<(Vec<String>, Vec<Object
 
 /// One row per learner of [`object_reports`], one column per condition:
 /// block position / orientation error after `manifest::OBJECT_RUNS`
-/// training runs.
+/// training runs, and its normalised score against that condition's
+/// reference rows.
 pub(super) fn beyond_objects(results: &Reproduction) -> Result<String, String> {
     let (conditions, rows) = object_reports(results)?;
+    let references = crate::reproduce::manifest::transfers()
+        .iter()
+        .map(|t| References::of_objects(results, t))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut out = String::from("| learner |");
     for c in &conditions {
         let _ = write!(out, " {c} |");
@@ -59,10 +62,11 @@ pub(super) fn beyond_objects(results: &Reproduction) -> Result<String, String> {
     out.push_str("|\n");
     for (label, reports) in rows {
         let _ = write!(out, "| {label} |");
-        for report in reports {
+        for (report, references) in reports.iter().zip(&references) {
             out.push_str(&block_cell(
                 report,
                 crate::reproduce::manifest::OBJECT_RUNS,
+                references,
             )?);
         }
         out.push('\n');
@@ -71,12 +75,14 @@ pub(super) fn beyond_objects(results: &Reproduction) -> Result<String, String> {
 }
 
 /// A table cell: the block's position / orientation error after `n`
-/// training runs.
-fn block_cell(report: &PushReport, n: usize) -> Result<String, String> {
+/// training runs, with the normalised scores in brackets.
+fn block_cell(report: &PushReport, n: usize, references: &References) -> Result<String, String> {
     let e = entry_at(report, &report.setup.model, n)?;
     Ok(format!(
-        " {:.3} / {:.3} |",
-        e.blue.block_pos_err.mean, e.blue.block_ori_err.mean
+        " {:.3} / {:.3} ({}) |",
+        e.blue.block_pos_err.mean,
+        e.blue.block_ori_err.mean,
+        references.normalised(e, n)?
     ))
 }
 
@@ -88,6 +94,10 @@ pub(super) fn cross_objects(results: &Reproduction) -> Result<String, String> {
         cross_entry_name, cross_transfers, CROSS_LEARNERS, CROSS_RUNS,
     };
     let conditions = cross_transfers();
+    let references = conditions
+        .iter()
+        .map(|t| References::of_cross(results, t))
+        .collect::<Result<Vec<_>, _>>()?;
     let mut out = String::from("| learner | N |");
     for c in &conditions {
         let _ = write!(out, " {} |", c.label());
@@ -103,8 +113,8 @@ pub(super) fn cross_objects(results: &Reproduction) -> Result<String, String> {
         let label = learner_label(&reports[0].setup);
         for n in CROSS_RUNS {
             let _ = write!(out, "| {label} | {n} |");
-            for report in &reports {
-                out.push_str(&block_cell(report, n)?);
+            for (report, references) in reports.iter().zip(&references) {
+                out.push_str(&block_cell(report, n, references)?);
             }
             out.push('\n');
         }

@@ -3,20 +3,30 @@
 
 use learner::eval::MeanStd;
 
-use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA, FLOOR};
+use crate::report::plot::draw::{ours, thesis, Grid, Panel, Series, EXTRA, REFERENCES};
 use crate::report::plural;
 use crate::report::reference::{self, Ms};
 use drive::results::push_task::CurveEntry;
 use learner::registry::{ModelKind, ThesisModel};
 
-/// The curves of `results`, beside the thesis's and, when given, the
-/// floor's errors (`drive::floor`: the world predicting itself, the same at
-/// every N since it learns nothing).
+/// A reference row drawn beside a learning curve: its label and its
+/// errors at the curve's numbers of training runs.
+#[derive(Clone, Copy, Debug)]
+pub struct ReferenceLine<'a> {
+    pub label: &'a str,
+    pub results: &'a [CurveEntry],
+    /// Drawn in the actuator's panel too: `still`'s actuator, which never
+    /// moves, is off that panel's scale.
+    pub actuator: bool,
+}
+
+/// The curves of `results`, beside the thesis's and the `references`'
+/// errors (`docs/models.md` "Reference rows"), which learn nothing.
 pub(super) fn curve_grid(
     model: ModelKind,
     results: &[CurveEntry],
     interacting: bool,
-    floor: Option<&CurveEntry>,
+    references: &[ReferenceLine<'_>],
 ) -> Grid {
     let source = match model.family() {
         ThesisModel::Gate => "§3.4",
@@ -43,16 +53,24 @@ pub(super) fn curve_grid(
                 .collect(),
         )
     };
-    let floor_line = |get: fn(&CurveEntry) -> MeanStd| -> Option<Series> {
-        floor.map(|f| Series {
-            label: "floor (the world predicting itself)".to_owned(),
-            colour: FLOOR,
-            points: results
-                .iter()
-                .map(|e| (e.train_runs as f64, get(f).mean, 0.0))
-                .collect(),
-            bars: false,
-        })
+    let reference_lines = |get: fn(&CurveEntry) -> MeanStd, actuator: bool| -> Vec<Series> {
+        references
+            .iter()
+            .zip(REFERENCES.iter().cycle())
+            .filter(|(r, _)| r.actuator || !actuator)
+            .map(|(r, &colour)| Series {
+                label: r.label.to_owned(),
+                colour,
+                points: results
+                    .iter()
+                    .filter_map(|e| {
+                        let at = r.results.iter().find(|f| f.train_runs == e.train_runs)?;
+                        Some((e.train_runs as f64, get(at).mean, 0.0))
+                    })
+                    .collect(),
+                bars: false,
+            })
+            .collect()
     };
     let panel = |title: &str, y: &str, mut series: Vec<Series>, reference: Option<Series>| {
         series.extend(reference);
@@ -88,10 +106,9 @@ pub(super) fn curve_grid(
                 "error [m]",
                 {
                     let get = |e: &CurveEntry| e.blue.interacting.block_pos_err;
-                    [Some(mine(get)), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get)];
+                    series.extend(reference_lines(get, false));
+                    series
                 },
                 refs(|r| r.pos_interacting),
             ),
@@ -100,10 +117,9 @@ pub(super) fn curve_grid(
                 "error [rad]",
                 {
                     let get = |e: &CurveEntry| e.blue.interacting.block_ori_err;
-                    [Some(mine(get)), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get)];
+                    series.extend(reference_lines(get, false));
+                    series
                 },
                 refs(|r| r.ori_interacting),
             ),
@@ -112,10 +128,9 @@ pub(super) fn curve_grid(
                 "error [m]",
                 {
                     let get = |e: &CurveEntry| e.blue.interacting.actuator_pos_err;
-                    [Some(mine(get)), Some(quirk), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get), quirk];
+                    series.extend(reference_lines(get, true));
+                    series
                 },
                 refs(|r| r.actuator_interacting_quirk),
             ),
@@ -127,10 +142,9 @@ pub(super) fn curve_grid(
                 "error [m]",
                 {
                     let get = |e: &CurveEntry| e.blue.block_pos_err;
-                    [Some(mine(get)), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get)];
+                    series.extend(reference_lines(get, false));
+                    series
                 },
                 refs(|r| r.pos),
             ),
@@ -139,10 +153,9 @@ pub(super) fn curve_grid(
                 "error [rad]",
                 {
                     let get = |e: &CurveEntry| e.blue.block_ori_err;
-                    [Some(mine(get)), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get)];
+                    series.extend(reference_lines(get, false));
+                    series
                 },
                 refs(|r| r.ori),
             ),
@@ -151,10 +164,9 @@ pub(super) fn curve_grid(
                 "error [m]",
                 {
                     let get = |e: &CurveEntry| e.blue.actuator_pos_err;
-                    [Some(mine(get)), floor_line(get)]
-                        .into_iter()
-                        .flatten()
-                        .collect()
+                    let mut series = vec![mine(get)];
+                    series.extend(reference_lines(get, true));
+                    series
                 },
                 refs(|r| r.actuator),
             ),

@@ -10,7 +10,7 @@ use crate::report::plot::draw::{prepare, write};
 use crate::report::plot::snapshots::{footprints, push_snapshots};
 use crate::report::plot::PlotError;
 use curves::curve_grid;
-use drive::results::push_task::CurveEntry;
+pub use curves::ReferenceLine;
 use drive::results::PushReport;
 use learner::registry::ModelKind;
 use positions::positions_grid;
@@ -29,7 +29,7 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
     let shapes = footprints()?;
     let stem = stem(report, model);
     let mut written = Vec::new();
-    write_curves(report, model, None, dir, &mut written)?;
+    write_curves(report, model, &[], dir, &mut written)?;
     for entry in &report.results {
         let n = entry.train_runs;
         write(
@@ -51,27 +51,27 @@ pub fn push(report: &PushReport, model: ModelKind, dir: &Path) -> Result<Vec<Pat
 }
 
 /// The learning-curve figures of `report` (the same names as [`push`]
-/// writes) with the floor's errors drawn beside them: the reproduction's
-/// page, which runs the floor, shows these.
+/// writes) with the reference rows drawn beside them: the reproduction's
+/// page, which runs the references, shows these.
 ///
 /// # Errors
 /// The directory cannot be created or a figure cannot be written.
-pub fn curves_with_floor(
+pub fn curves_with_references(
     report: &PushReport,
     model: ModelKind,
-    floor: &CurveEntry,
+    references: &[ReferenceLine<'_>],
     dir: &Path,
 ) -> Result<Vec<PathBuf>, PlotError> {
     prepare(dir)?;
     let mut written = Vec::new();
-    write_curves(report, model, Some(floor), dir, &mut written)?;
+    write_curves(report, model, references, dir, &mut written)?;
     Ok(written)
 }
 
 fn write_curves(
     report: &PushReport,
     model: ModelKind,
-    floor: Option<&CurveEntry>,
+    references: &[ReferenceLine<'_>],
     dir: &Path,
     written: &mut Vec<PathBuf>,
 ) -> Result<(), PlotError> {
@@ -80,14 +80,14 @@ fn write_curves(
     }
     let stem = stem(report, model);
     write(
-        &curve_grid(model, &report.results, false, floor),
+        &curve_grid(model, &report.results, false, references),
         dir,
         &format!("{stem}-curve"),
         written,
     )?;
     if report.variant != "two-objects" {
         write(
-            &curve_grid(model, &report.results, true, floor),
+            &curve_grid(model, &report.results, true, references),
             dir,
             &format!("{stem}-curve-interacting"),
             written,
@@ -174,16 +174,29 @@ mod tests {
     }
 
     #[test]
-    fn curves_with_the_floor_add_its_line_and_only_the_curves() {
-        let dir = scratch("push-floor");
+    fn curves_with_references_add_their_lines_and_only_the_curves() {
+        let dir = scratch("push-references");
         let report = push_report(&[1, 3, 30], 2);
-        let floor = push_report(&[1], 2).results.remove(0);
-        let written = curves_with_floor(&report, ModelKind::Gate, &floor, &dir).unwrap();
+        let reference = push_report(&[1, 3, 30], 2);
+        let lines = [
+            ReferenceLine {
+                label: "still: nothing moves",
+                results: &reference.results,
+                actuator: false,
+            },
+            ReferenceLine {
+                label: "oracle: true parameters, latency unknown",
+                results: &reference.results[..2],
+                actuator: true,
+            },
+        ];
+        let written = curves_with_references(&report, ModelKind::Gate, &lines, &dir).unwrap();
         // The two curves (PNG and SVG each), nothing else.
         assert_eq!(written.len(), 4);
         let text = std::fs::read_to_string(dir.join("push-task-gate-random-curve.svg")).unwrap();
-        assert!(text.contains("floor (the world predicting itself)"));
-        // Its line has no bars: still 3 panels × (3 of ours + 3 thesis).
+        assert!(text.contains("still: nothing moves"));
+        assert!(text.contains("latency unknown"));
+        // Their lines have no bars: still 3 panels × (3 of ours + 3 thesis).
         assert_eq!(
             count(&dir.join("push-task-gate-random-curve.svg"), "circle"),
             18
