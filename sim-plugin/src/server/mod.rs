@@ -64,11 +64,13 @@ pub const DEFAULT_CLIENT_QUEUE: usize = 1024;
 /// disconnected, by default.
 pub const DEFAULT_SLOW_CLIENT_LIMIT: Duration = Duration::from_secs(5);
 
-/// Accepted commands waiting for the physics thread, over all clients. In
-/// realtime mode the physics thread takes every waiting command at each step
-/// boundary and in lock-step mode between intervals, so this is only reached
-/// by a client flooding a lock-step world with latency emulation without
-/// ever advancing it; commands beyond it are refused.
+/// Accepted commands waiting to be applied, over all clients: on the
+/// channel to the physics thread and held by the latency emulation for the
+/// next Advance. In realtime mode the physics thread applies every waiting
+/// command at each step boundary and in lock-step mode between intervals,
+/// so this is only reached by a client flooding a lock-step world with
+/// latency emulation without ever advancing it; commands beyond it are
+/// refused (`busy:`), in the daemon and in an [`EmbeddedWorld`] alike.
 pub const MAX_QUEUED_COMMANDS: usize = 65_536;
 
 /// How the world paces its steps (`docs/spec/world.md` §8).
