@@ -161,7 +161,9 @@ impl Stepper {
     /// they count against the daemon's bound on waiting commands until they
     /// are applied, not merely until they left the channel.
     pub fn pending(&self) -> usize {
-        self.delays.as_ref().map_or(0, |delays| delays.pending.len())
+        self.delays
+            .as_ref()
+            .map_or(0, |delays| delays.pending.len())
     }
 
     #[cfg(feature = "testing")]

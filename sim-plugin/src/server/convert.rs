@@ -90,7 +90,10 @@ fn describe(command: &Command) -> String {
     match command {
         Command::Actuator { .. } => "actuator".into(),
         Command::SetPose { name, .. } => {
-            format!("set_pose: body {}", pushlearn::wire::quoted(&name.to_string()))
+            format!(
+                "set_pose: body {}",
+                pushlearn::wire::quoted(&name.to_string())
+            )
         }
         Command::SetPublishRate(_) => "publish_rate_hz".into(),
         Command::Pause | Command::Unpause => "pause".into(),

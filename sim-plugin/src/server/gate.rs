@@ -220,7 +220,10 @@ impl Admission {
                         && self.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
                     {
                         return Err(Refusal::World {
-                            command: format!("set_pose: body {}", pushlearn::wire::quoted(&ghost.to_string())),
+                            command: format!(
+                                "set_pose: body {}",
+                                pushlearn::wire::quoted(&ghost.to_string())
+                            ),
                             error: CommandError::TooManyGhosts,
                         });
                     }

@@ -454,7 +454,10 @@ fn world_can_move_to_a_physics_thread() {
 fn only_regular_scene_files_of_bounded_size_are_read() {
     use sim_plugin::scene::MAX_SCENE_FILE_BYTES;
     let err = Scene::load("/dev/zero").expect_err("a device");
-    assert!(err.to_string().contains("a device, not a regular file"), "{err}");
+    assert!(
+        err.to_string().contains("a device, not a regular file"),
+        "{err}"
+    );
     let dir = std::env::temp_dir().join(format!("pushlearn-scenes-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let fifo = dir.join("scene.fifo");
@@ -465,7 +468,10 @@ fn only_regular_scene_files_of_bounded_size_are_read() {
     assert!(made.success());
     // Before the fix this open waited for a writer that never comes.
     let err = Scene::load(fifo.to_str().expect("utf-8")).expect_err("a FIFO");
-    assert!(err.to_string().contains("a FIFO, not a regular file"), "{err}");
+    assert!(
+        err.to_string().contains("a FIFO, not a regular file"),
+        "{err}"
+    );
     let big = dir.join("big.toml");
     let mut text = ONE_BLOCK.to_owned();
     while (text.len() as u64) <= MAX_SCENE_FILE_BYTES {
@@ -473,7 +479,10 @@ fn only_regular_scene_files_of_bounded_size_are_read() {
     }
     std::fs::write(&big, &text).expect("writable");
     let err = Scene::load(big.to_str().expect("utf-8")).expect_err("too large");
-    assert!(err.to_string().contains("larger than 1048576 bytes"), "{err}");
+    assert!(
+        err.to_string().contains("larger than 1048576 bytes"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -495,8 +504,14 @@ fn a_scene_has_at_most_max_bodies_with_names_of_bounded_length() {
     Scene::from_toml_str(&at_cap).expect("MAX_BODIES bodies are fine");
     let over = at_cap + &block(MAX_BODIES);
     let err = scene_error(&over);
-    assert!(err.contains("65 entries; a scene has at most 64 bodies"), "{err}");
-    let long = ONE_BLOCK.replace("name = \"blockA\"", &format!("name = \"{}\"", "b".repeat(300)));
+    assert!(
+        err.contains("65 entries; a scene has at most 64 bodies"),
+        "{err}"
+    );
+    let long = ONE_BLOCK.replace(
+        "name = \"blockA\"",
+        &format!("name = \"{}\"", "b".repeat(300)),
+    );
     let err = scene_error(&long);
     assert!(err.contains("is 300 bytes long (at most 256)"), "{err}");
 }
@@ -557,7 +572,9 @@ fn the_actuator_cannot_be_placed_outside_its_drive_bound() {
         position: [x, y, 0.03],
         orientation: [0.0, 0.0, 0.0, 1.0],
     };
-    let err = world.apply(place(999.0, 999.0)).expect_err("outside the bound");
+    let err = world
+        .apply(place(999.0, 999.0))
+        .expect_err("outside the bound");
     assert!(err.to_string().contains("outside its drive bound"), "{err}");
     world.apply(place(1.0, -1.0)).expect("within the bound");
     world.apply(mv(0.5, 0.0)).expect("a Move");

@@ -28,8 +28,8 @@ use learner::{Action, Frame, Model, ModelStats, ObjectState, Poses, Target, Targ
 use serde::{Deserialize, Serialize};
 
 use learner::registry::ModelKind;
-use pushlearn::wire::{pb, MAX_POSITION};
 use pushlearn::wire::pb::learner::{self as lp, reply::Answer, request::Call};
+use pushlearn::wire::{pb, MAX_POSITION};
 use session::Session;
 pub use session::Source;
 
