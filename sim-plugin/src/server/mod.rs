@@ -108,7 +108,7 @@ impl Timing {
 
 pub use crate::lockstep::Latency;
 pub use convert::shapes;
-pub use embedded::EmbeddedWorld;
+pub use embedded::{hold_for_fork, EmbeddedWorld, ForkHold};
 
 /// Everything the daemon needs to start.
 #[derive(Debug, Clone)]
