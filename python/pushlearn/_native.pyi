@@ -52,6 +52,8 @@ BLUE_ID: int
 """The blue block's id (15, ``blockA``)."""
 RED_ID: int
 """The red block's id (27, ``blockB``)."""
+MAX_POSITION: float
+"""The farthest any body is from the origin on an axis, in metres (1000)."""
 
 def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
     """The yaw of the quaternion ``(x, y, z, w)`` as the learners read it (Rust

@@ -183,6 +183,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ACTUATOR_NAME", pushlearn_core::ACTUATOR_NAME)?;
     m.add("BLUE_ID", pushlearn_core::BLUE_ID)?;
     m.add("RED_ID", pushlearn_core::RED_ID)?;
+    m.add("MAX_POSITION", pushlearn_core::MAX_POSITION)?;
     // Where the extension was built: the Gymnasium environments look for the
     // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
     // and `PATH`, so that `pip install .` after `cargo build --release` needs
