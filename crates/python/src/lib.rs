@@ -170,6 +170,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
     m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;
     m.add_function(wrap_pyfunction!(bench::without_timing, m)?)?;
+    m.add_class::<bench::Report>()?;
+    m.add_class::<bench::Table>()?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distances, m)?)?;
