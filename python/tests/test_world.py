@@ -383,11 +383,11 @@ def test_a_scene_that_is_not_a_regular_file_is_refused_without_reading_it(
     os.mkfifo(fifo)
     snippet = (
         "from pushlearn import World\n"
-        "for path in [{fifo!r}, '/dev/zero']:\n"
+        f"for path in [{str(fifo)!r}, '/dev/zero']:\n"
         "    try:\n"
         "        World(path)\n"
         "    except ValueError as err:\n"
         "        print('refused:', err)\n"
-    ).format(fifo=str(fifo))
+    )
     done = run_python(snippet)
     assert done.stdout.count("not a regular file") == 2, done.stdout + done.stderr
