@@ -81,6 +81,10 @@ struct Shared {
     info: Info,
     /// Where learner calls are made: the calling thread's loop in [`run`].
     caller: Mutex<mpsc::Sender<ToCaller>>,
+    /// Set when the caller has gone (interrupted): from then on the
+    /// driver's thread touches no Python object, not even to make a call's
+    /// arguments (the interpreter may be exiting).
+    stopped: Arc<AtomicBool>,
     /// The first exception a learner call raised: re-raised as the cause of
     /// the experiment's error, with its traceback.
     raised: Mutex<Option<PyErr>>,
@@ -143,6 +147,7 @@ impl PyLearner {
         task: &str,
         publish_rate_hz: u32,
         caller: mpsc::Sender<ToCaller>,
+        stopped: Arc<AtomicBool>,
     ) -> PyResult<Self> {
         let (name, version, inverse, ignores_actuator_yaw): (String, String, bool, bool) = direct
             .call_method1(py, "start", (task, publish_rate_hz))?
@@ -161,6 +166,7 @@ impl PyLearner {
                 ignores_actuator_yaw,
             },
             caller: Mutex::new(caller),
+            stopped,
             raised: Mutex::new(None),
         })))
     }
@@ -215,9 +221,12 @@ impl PyLearner {
             return None;
         }
         let outcome = (|| {
+            let stopped = || PyRuntimeError::new_err("the run was stopped");
+            if self.shared.stopped.load(Ordering::SeqCst) {
+                return Err(stopped());
+            }
             let args = Python::attach(args)?;
             let (answer, answered) = mpsc::channel();
-            let stopped = || PyRuntimeError::new_err("the run was stopped");
             self.shared
                 .caller
                 .lock()
@@ -542,6 +551,8 @@ fn run(
         )));
     }
     let (to_caller, from_driver) = mpsc::channel::<ToCaller>();
+    // Once set, the driver's thread calls no Python: the caller has gone.
+    let stopped = Arc::new(AtomicBool::new(false));
     // Behind a lock only so that the wait can release the GIL.
     let from_driver = Mutex::new(from_driver);
     let direct = if spec.model() != Some(&LearnerChoice::InProcess) {
@@ -553,6 +564,7 @@ fn run(
             task,
             rate_hz,
             to_caller.clone(),
+            Arc::clone(&stopped),
         )?;
         model.shared.info.name.clone_into(&mut plan.model);
         plan.learner = Some(LearnerRecord {
@@ -561,8 +573,6 @@ fn run(
         });
         Some(model)
     };
-    // Once set, the driver's thread calls no Python: the caller has gone.
-    let stopped = Arc::new(AtomicBool::new(false));
     // The first exception of the progress callback ends the run once the
     // job under way is done.
     let interrupted: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
