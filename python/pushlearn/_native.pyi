@@ -19,7 +19,7 @@ take turns in ODE (one process-wide lock) and stay bit-identical.
 """
 
 from collections.abc import Callable, Sequence
-from typing import Any, TypeAlias
+from typing import Any, TypeAlias, final
 
 import numpy as np
 import numpy.typing as npt
@@ -54,6 +54,8 @@ BLUE_ID: int
 """The blue block's id (15, ``blockA``)."""
 RED_ID: int
 """The red block's id (27, ``blockB``)."""
+MAX_POSITION: float
+"""The farthest any body is from the origin on an axis, in metres (1000)."""
 
 def quaternion_to_yaw(x: float, y: float, z: float, w: float) -> float:
     """The yaw of the quaternion ``(x, y, z, w)`` as the learners read it (Rust
@@ -71,7 +73,48 @@ def check_stats(document: str) -> None:
 
 # What an experiment gives pushlearn.bench: the report document (JSON), the
 # text ``pushlearn experiment`` prints, and each table as (name, title lines, CSV).
-_Outcome: TypeAlias = tuple[str, str, list[tuple[str, list[str], str]]]
+_Cell: TypeAlias = int | float | str | None
+
+@final
+class Table:
+    """One table of a report, as ``pushlearn experiment --csv`` writes it (made
+    by the native run; not constructible)."""
+
+    @property
+    def name(self) -> str:
+        """The table's name (the CSV file's: ``learning-curve``, …)."""
+    @property
+    def title(self) -> str:
+        """The lines printed above it."""
+    @property
+    def columns(self) -> list[str]:
+        """The column names, in order."""
+    @property
+    def rows(self) -> list[dict[str, _Cell]]:
+        """The rows: dicts by column name, numbers as int or float, empty cells
+        ``None`` (``pandas.DataFrame(table.rows)`` takes them); a new list each time."""
+
+@final
+class Report:
+    """What an experiment gave: its report document and its tables, assembled
+    and held by the native run (not constructible)."""
+
+    @property
+    def document(self) -> dict[str, Any]:
+        """The JSON document ``pushlearn experiment --json`` writes, as a dict (a
+        new one each time)."""
+    @property
+    def tables(self) -> list[Table]:
+        """The tables ``pushlearn experiment`` prints, beside the thesis's numbers."""
+    @property
+    def printed(self) -> str:
+        """The text ``pushlearn experiment`` prints: every table, with the thesis's numbers."""
+    def table(self, name: str) -> Table:
+        """The table called ``name``; ``KeyError`` naming the tables there are if none is."""
+    def to_json(self) -> str:
+        """The document as ``pushlearn experiment --json`` writes it."""
+    def text(self) -> str:
+        """What ``pushlearn experiment`` prints for the experiment."""
 
 def run_push_task(
     learner: Any,
@@ -85,9 +128,11 @@ def run_push_task(
     latency_max: int,
     seed: int,
     progress: Callable[[int, int], None] | None,
-) -> _Outcome:
+    timeout: float,
+) -> Report:
     """The push task with a built-in model's name or a ``pushlearn.bench._Direct``
-    (``pushlearn.bench.push_task``); ``progress(done, jobs)`` after each job."""
+    (``pushlearn.bench.push_task``); ``progress(done, jobs)`` after each job; each
+    learner call made on the calling thread, given ``timeout`` seconds."""
 
 def run_move_to_target(
     learner: Any,
@@ -100,7 +145,8 @@ def run_move_to_target(
     latency_max: int,
     seed: int,
     progress: Callable[[int, int], None] | None,
-) -> _Outcome:
+    timeout: float,
+) -> Report:
     """Move to Target, as :func:`run_push_task` (``pushlearn.bench.move_to_target``)."""
 
 def without_timing(document: str) -> str:

@@ -33,17 +33,37 @@ the same order; its report equals the one through ``--learner`` bit for bit
 other in this process: one learner object, one world at a time.
 
 An exception in learner code ends the experiment with a ``RuntimeError``
-naming the job, the exception as its cause (with its traceback).
+naming the job, the exception as its cause (with its traceback);
+``KeyboardInterrupt`` and ``SystemExit`` end it as themselves. Each learner
+call may take ``timeout`` seconds (default 30, as ``pushlearn experiment
+--learner-timeout``): past it the call is interrupted with ``TimeoutError``
+(the cause), where Python can interrupt it, i.e. when ``pushlearn.bench`` is
+called from the main thread (it sets ``SIGALRM`` for the run and restores the
+previous handler after); elsewhere a call that returns late fails the run.
+Learner code runs on the calling thread and Ctrl-C stops the run at once.
+
+**What in-process trusts.** The learner shares the interpreter. The driver
+scores it in Rust and builds the :class:`Report` there, after the run, from
+data learner code never holds, so replacing anything in this module changes
+nothing; but a learner that rewrites the interpreter itself (builtins, the
+report's class) is beyond any in-process harness: run a learner you do not
+trust through ``pushlearn experiment --learner``, where a process boundary
+holds. One learner object serves every fold, as one process does over the
+protocol: ``new_fold`` is its promise to forget, which the report cannot
+check (``pushlearn learner-check`` runs a fold twice and warns of a learner
+that remembers; ``docs/learner-protocol.md`` §5).
 """
 
 from __future__ import annotations
 
-import csv
-import io
+import contextlib
 import json
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
-from typing import Any, Self, TypeAlias
+import math
+import signal
+import threading
+from collections.abc import Callable, Iterator, Sequence
+from types import FrameType
+from typing import TYPE_CHECKING, Any, Self, TypeAlias
 
 from .learner import (
     Body,
@@ -74,54 +94,16 @@ __all__ = [
 LearnerLike: TypeAlias = Learner | LearnerFactory | str
 """A learner object, something that makes one, or a built-in model's name."""
 
-Cell: TypeAlias = int | float | str | None
-"""A table cell: a number, a text, or ``None`` where the table has none."""
+if TYPE_CHECKING:
+    from ._native import Report, Table
+else:
+    try:
+        from ._native import Report, Table
+    except ImportError:  # the SDK works without the extension; the bench does not
+        Report = Table = None
 
-
-@dataclass(frozen=True)
-class Table:
-    """One table of a report, as ``pushlearn experiment --csv`` writes it.
-
-    ``rows`` are dicts by column name, numbers as floats, empty cells
-    ``None``: ``pandas.DataFrame(table.rows)`` takes them as they are.
-    """
-
-    name: str
-    """The table's name (the CSV file's: ``learning-curve``, …)."""
-    title: str
-    """The lines printed above it."""
-    columns: list[str]
-    """The column names, in order."""
-    rows: list[dict[str, Cell]]
-    """The rows."""
-
-
-@dataclass(frozen=True)
-class Report:
-    """What an experiment gave: its report document and its tables."""
-
-    document: dict[str, Any]
-    """The JSON document ``pushlearn experiment --json`` writes, as a dict."""
-    tables: list[Table]
-    """The tables ``pushlearn experiment`` prints, beside the thesis's numbers."""
-    printed: str
-    """The text ``pushlearn experiment`` prints: every table, with the thesis's numbers."""
-
-    def table(self, name: str) -> Table:
-        """The table called ``name``; ``KeyError`` naming the tables there are if none is."""
-        for table in self.tables:
-            if table.name == name:
-                return table
-        names = ", ".join(t.name for t in self.tables)
-        raise KeyError(f"the report has no table {name!r} (it has: {names})")
-
-    def to_json(self) -> str:
-        """The document as ``pushlearn experiment --json`` writes it."""
-        return json.dumps(self.document, indent=2) + "\n"
-
-    def text(self) -> str:
-        """What ``pushlearn experiment`` prints for the experiment."""
-        return self.printed
+DEFAULT_TIMEOUT = 30.0
+"""Seconds a learner call may take: ``pushlearn experiment --learner-timeout``'s default."""
 
 
 def push_task(
@@ -136,6 +118,7 @@ def push_task(
     latency_max: int = 2,
     seed: int = 1,
     progress: bool | Callable[[int, int], None] = True,
+    timeout: float = DEFAULT_TIMEOUT,
 ) -> Report:
     """Push Task Simulation: train on N pushes, then predict 150 messages of each test push.
 
@@ -147,14 +130,17 @@ def push_task(
     the world's timing ``mode`` (``lockstep-jitter`` with ``latency_max``
     steps, or ``lockstep``) and the ``seed`` of every random choice.
     ``progress``: a bar on stderr (``True``), none (``False``), or a
-    function called with ``(jobs done, jobs)``.
+    function called with ``(jobs done, jobs)``. ``timeout``: seconds each
+    learner call may take.
 
     Raises ``ValueError`` naming a bad argument, ``RuntimeError`` when a job
     fails (a learner's exception is its cause).
     """
     native, learner_arg = _prepare(learner)
-    with _Progress(progress, "push task") as bar:
-        outcome = native.run_push_task(
+    # The report comes from the native run as it is: no function of this
+    # module is looked up after learner code has run.
+    with _Progress(progress, "push task") as bar, _deadlines(learner_arg, timeout):
+        report: Report = native.run_push_task(
             learner_arg,
             variant=variant,
             train_runs=None if train_runs is None else [int(n) for n in train_runs],
@@ -165,8 +151,9 @@ def push_task(
             latency_max=int(latency_max),
             seed=int(seed),
             progress=bar.callback,
+            timeout=float(timeout),
         )
-    return _report(outcome)
+    return report
 
 
 def move_to_target(
@@ -180,6 +167,7 @@ def move_to_target(
     latency_max: int = 2,
     seed: int = 1,
     progress: bool | Callable[[int, int], None] = True,
+    timeout: float = DEFAULT_TIMEOUT,
 ) -> Report:
     """Move to Target: train on 8 fixed pushes, then push the blue block to each target pose.
 
@@ -192,8 +180,8 @@ def move_to_target(
     ``Capability.INVERSE`` and implement ``act``.
     """
     native, learner_arg = _prepare(learner)
-    with _Progress(progress, "move to target") as bar:
-        outcome = native.run_move_to_target(
+    with _Progress(progress, "move to target") as bar, _deadlines(learner_arg, timeout):
+        report: Report = native.run_move_to_target(
             learner_arg,
             targets=None
             if targets is None
@@ -205,8 +193,9 @@ def move_to_target(
             latency_max=int(latency_max),
             seed=int(seed),
             progress=bar.callback,
+            timeout=float(timeout),
         )
-    return _report(outcome)
+    return report
 
 
 def without_timing(document: dict[str, Any]) -> dict[str, Any]:
@@ -233,31 +222,34 @@ def _prepare(learner: LearnerLike) -> tuple[Any, Any]:
     return module, _Direct(learner)
 
 
-def _cell(text: str) -> Cell:
-    if text == "":
-        return None
-    for number in (int, float):
-        try:
-            return number(text)
-        except ValueError:
-            pass
-    return text
-
-
-def _report(outcome: tuple[str, str, list[tuple[str, list[str], str]]]) -> Report:
-    document_json, printed, tables = outcome
-    parsed = []
-    for name, title, text in tables:
-        reader = csv.reader(io.StringIO(text))
-        columns = next(reader, [])
-        rows = [
-            {column: _cell(value) for column, value in zip(columns, row, strict=True)}
-            for row in reader
-        ]
-        parsed.append(
-            Table(name=name, title="\n".join(title), columns=columns, rows=rows)
+@contextlib.contextmanager
+def _deadlines(learner: Any, timeout: float) -> Iterator[None]:
+    """Lets ``learner`` (a :class:`_Direct`) interrupt a call that overruns
+    ``timeout`` with ``TimeoutError``: a ``SIGALRM`` handler for the run, set
+    on the main thread only (Python runs signal handlers nowhere else)."""
+    if not (
+        isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0
+    ):
+        raise ValueError(
+            f"timeout must be a positive number of seconds, not {timeout!r}"
         )
-    return Report(document=json.loads(document_json), tables=parsed, printed=printed)
+    if not isinstance(learner, _Direct) or (
+        threading.current_thread() is not threading.main_thread()
+    ):
+        yield
+        return
+
+    def overrun(signum: int, frame: FrameType | None) -> None:
+        raise TimeoutError(f"no answer within {timeout:g} s")
+
+    previous = signal.signal(signal.SIGALRM, overrun)
+    learner.alarm = True
+    try:
+        yield
+    finally:
+        learner.alarm = False
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 class _Progress:
@@ -300,6 +292,20 @@ class _Direct:
     def __init__(self, source: Learner | LearnerFactory) -> None:
         self._source = source
         self._learner: Learner | None = None
+        self.alarm = False
+        """Whether :func:`_deadlines` set ``SIGALRM`` for the run."""
+
+    def call(self, method: str, args: tuple[Any, ...], timeout: float) -> Any:
+        """One call of the native driver's, given ``timeout`` seconds where a
+        ``SIGALRM`` can interrupt it."""
+        function = getattr(self, method)
+        if not self.alarm:
+            return function(*args)
+        signal.setitimer(signal.ITIMER_REAL, timeout)
+        try:
+            return function(*args)
+        finally:
+            signal.setitimer(signal.ITIMER_REAL, 0)
 
     @property
     def learner(self) -> Learner:

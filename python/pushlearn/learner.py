@@ -123,6 +123,9 @@ BLUE_ID = 15
 """The blue block's id (``blockA``)."""
 RED_ID = 27
 """The red block's id (``blockB``, two-block scene only)."""
+MAX_POSITION = 1000.0
+"""No body of a world is farther than this from the origin on any axis, in
+metres: the world refuses a pose beyond it, and so do targets and predictions."""
 
 PROTOCOL_VERSION = 1
 """The learner protocol version this SDK speaks (``learner.ProtocolVersion``)."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -11,7 +12,7 @@ from typing import Any, ClassVar
 
 import pytest
 from conftest import LIMIT, TESTS_DIR, python_env, run_python
-from pushlearn import Capability, Learner, Prediction, StateLike
+from pushlearn import Capability, Learner, Prediction, StateLike, Target
 from pushlearn.bench import Report, move_to_target, push_task, without_timing
 
 pytest.importorskip("pushlearn._native")
@@ -182,3 +183,132 @@ def test_the_readmes_bench_example_runs_as_written(tmp_path: Path) -> None:
     done = run_python(bench[0], cwd=tmp_path, timeout=4 * LIMIT)
     assert done.returncode == 0, done.stderr
     assert "learner 'still' 1" in done.stdout, done.stdout
+
+
+class Cheater(Learner):
+    """Never moves, and from its new_fold replaces everything the Python side of
+    ``pushlearn.bench`` could build a report with (issue 49, item 6: replacing
+    ``pushlearn.bench._report`` made the table say "reached 1 of 1")."""
+
+    name = "cheater"
+    capabilities: ClassVar[frozenset[Capability]] = frozenset(
+        {Capability.FORWARD, Capability.INVERSE}
+    )
+    patch: ClassVar[pytest.MonkeyPatch]
+
+    def new_fold(self, seed: int) -> None:
+        from pushlearn import bench
+
+        forged = {"reached": 1, "runs": 1}
+
+        class Forged:
+            document = forged
+            printed = "reached 1 of 1"
+
+            def text(self) -> str:
+                return self.printed
+
+        for name in ["_report", "Report", "Table", "_Progress", "push_task"]:
+            self.patch.setattr(bench, name, lambda *a, **k: Forged(), raising=False)
+        self.patch.setattr(json, "loads", lambda *a, **k: forged)
+
+    def predict(self, state: StateLike, action: tuple[float, float]) -> Prediction:
+        return Prediction(state.poses())
+
+    def set_target(self, target: Target | None) -> None:
+        pass
+
+    def act(self) -> tuple[tuple[float, float], bool]:
+        return (0.0, 0.0), True
+
+
+def test_a_learner_cannot_rewrite_its_report(monkeypatch: pytest.MonkeyPatch) -> None:
+    Cheater.patch = monkeypatch
+    report = move_to_target(
+        Cheater,
+        targets=[(0.6, 0.7, 0.75)],
+        repetitions=1,
+        max_steps=30,
+        mode="lockstep",
+        progress=False,
+    )
+    assert isinstance(report, Report), type(report)
+    summary = report.document["targets"][0]["summary"]
+    assert (summary["reached"], summary["runs"]) == (0, 1), summary
+    assert "reached 1 of 1" not in report.text()
+    assert "     1     1  no  " in report.text()
+    monkeypatch.undo()
+    assert json.loads(report.to_json())["targets"][0]["summary"]["reached"] == 0
+
+
+SLEEPER = """
+import sys, time
+from pushlearn import Learner, Prediction
+from pushlearn.bench import push_task
+
+class Sleeper(Learner):
+    name = "sleeper"
+    def new_fold(self, seed):
+        pass
+    def predict(self, state, action):
+        print("predicting", file=sys.stderr, flush=True)
+        time.sleep(3600)
+        return Prediction(state.poses())
+
+try:
+    push_task(Sleeper, train_runs=[1], folds=1, progress=False, {timeout})
+except BaseException as err:
+    print("ended:", type(err).__name__, "cause:", type(err.__cause__).__name__, err)
+"""
+
+
+def test_a_learner_call_past_its_timeout_ends_the_run_with_timeouterror_as_cause() -> (
+    None
+):
+    """Issue 49, item 5: a learner sleeping in predict ran for ever (the command
+    line has --learner-timeout; pushlearn.bench had nothing)."""
+    done = run_python(SLEEPER.replace("{timeout}", "timeout=0.5"))
+    assert "ended: RuntimeError cause: TimeoutError" in done.stdout, (
+        done.stdout + done.stderr
+    )
+    assert "no answer within 0.5 s" in done.stdout, done.stdout
+
+
+def test_ctrl_c_stops_a_run_inside_learner_code_as_keyboardinterrupt() -> None:
+    """Issue 49, item 5: learner code ran on a worker thread, so SIGINT at 3 s
+    surfaced at 21.9 s, and as a RuntimeError. Now learner code runs on the
+    calling thread: SIGINT interrupts it and comes back as itself."""
+    process = subprocess.Popen(
+        [sys.executable, "-c", SLEEPER.replace("{timeout}", "timeout=3600")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=python_env(),
+    )
+    assert process.stderr is not None
+    try:
+        while "predicting" not in process.stderr.readline():
+            pass
+        process.send_signal(signal.SIGINT)
+        out, _ = process.communicate(timeout=LIMIT)
+    finally:
+        process.kill()
+    assert out.startswith("ended: KeyboardInterrupt"), out
+
+
+class Quitting(Exploding):
+    name = "quitting"
+    error: ClassVar[type[BaseException]] = KeyboardInterrupt
+
+    def predict(self, state: StateLike, action: tuple[float, float]) -> Prediction:
+        raise self.error("the learner asked to stop")
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, SystemExit])
+def test_keyboardinterrupt_and_systemexit_from_learner_code_keep_their_type(
+    error: type[BaseException],
+) -> None:
+    """Issue 49, item 5: they came back as RuntimeError."""
+    Quitting.error = error
+    with pytest.raises(error, match="asked to stop"):
+        push_task(Quitting, train_runs=[1], folds=1, progress=False)

@@ -563,3 +563,31 @@ def test_a_world_that_does_not_start_is_reported_with_its_message(
 ) -> None:
     with pytest.raises(RuntimeError, match="no_such_scene"):
         LocalWorld(scene="no_such_scene", sim_bin=sim_bin)
+
+
+def test_bad_reset_options_and_regions_are_refused_not_looped_on(
+    make: Callable[..., Any],
+) -> None:
+    """Issue 49, item 8: an unsatisfiable region looped forever in ``reset``;
+    an actuator placed at (999, 999) was accepted and never moved again; a
+    target of (1e300, 1e300) was accepted."""
+    env = make(targets="region", region=TargetRegion(x=(0.0, 0.1), y=(0.2, 0.3)))
+    with pytest.raises(ValueError, match="has no room for a target"):
+        env.reset(seed=0)
+    env = make()
+    with pytest.raises(ValueError, match="outside its drive bound"):
+        env.reset(seed=0, options={"actuator": (999.0, 999.0)})
+    with pytest.raises(ValueError, match="must lie in the world"):
+        env.reset(seed=0, options={"target": (1e300, 1e300, 0.0)})
+    # The environment is still usable after each refusal.
+    observation, _ = env.reset(seed=0, options={"actuator": (0.24, 0.5)})
+    assert observation["observation"][:2].tolist() == pytest.approx([0.24, 0.5])
+    bad_regions: list[dict[str, Any]] = [
+        {"x": (0.5, 0.1)},
+        {"y": (math.nan, 1.0)},
+        {"x": (-1e300, 0.0)},
+        {"min_travel": -1.0},
+    ]
+    for bad in bad_regions:
+        with pytest.raises(ValueError, match="TargetRegion"):
+            TargetRegion(**bad)

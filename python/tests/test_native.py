@@ -777,6 +777,7 @@ def test_the_sdks_vocabulary_is_the_extensions() -> None:
         _native.ACTUATOR_NAME,
     )
     assert (learner.BLUE_ID, learner.RED_ID) == (_native.BLUE_ID, _native.RED_ID)
+    assert learner.MAX_POSITION == _native.MAX_POSITION
     for name in [
         "actuator",
         "blockA",

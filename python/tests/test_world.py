@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import math
+import os
 import threading
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from conftest import Daemon
+from conftest import LIMIT, Daemon, run_python
 from pushlearn import SimClient, State, World
 from pushlearn._native import Worlds, step_messages
 from pushlearn._pb import pushlearn_pb2
@@ -273,3 +275,119 @@ def test_bad_worlds_and_commands_out_of_turn_are_refused() -> None:
         worlds.move_and_advance(np.array([[0.0, 0.0], [math.nan, 0.0]]))
     with pytest.raises(ValueError, match="stepped must have 2"):
         worlds.move_and_advance(np.zeros((2, 2)), stepped=[True])
+
+
+def test_worlds_move_and_advance_steps_no_world_when_one_would_refuse() -> None:
+    """Issue 49, item 7: with the second world paused, the first stepped and then
+    the call raised, though everything is meant to be checked before any world
+    steps. A world listed twice is refused (one step locks every world)."""
+    first, second = World(), World()
+    first.advance()
+    second.advance()
+    before = first.counters()
+    second.pause()
+    worlds = Worlds([first, second])
+    with pytest.raises(ValueError, match="world 1: advance: the world is paused"):
+        worlds.move_and_advance(np.array([[0.1, 0.0], [0.1, 0.0]]))
+    assert first.counters() == before, "the first world did not step"
+    never = World()
+    with pytest.raises(ValueError, match="world 1: no state yet"):
+        Worlds([first, never]).move_and_advance(
+            np.array([[0.1, 0.0], [0.0, 0.0]]), stepped=[True, False]
+        )
+    assert first.counters() == before
+    second.unpause()
+    assert worlds.move_and_advance(np.zeros((2, 2))).shape == (2, 2, 13)
+    assert first.counters()[0] == before[0] + 10
+    with pytest.raises(ValueError, match="the same World"):
+        Worlds([first, first])
+
+
+def test_a_flood_of_moves_without_an_advance_is_refused_busy() -> None:
+    """Issue 49, item 1, in-process: with latency emulation every Move waits for
+    the next Advance, and a million of them took 45 → 202 MB. The daemon's bound
+    on waiting commands now holds in the embedded world too."""
+    world = World(latency_max=2)
+    accepted = 0
+    with pytest.raises(ValueError, match="^busy: 65536 accepted commands"):
+        for _ in range(70_000):
+            world.move(0.1, 0.0)
+            accepted += 1
+    assert accepted == 65_536
+    world.advance()
+    world.move(0.1, 0.0)
+
+
+FORKS = """
+import os, sys, threading, time
+from pushlearn import World
+
+stepping = World()
+running = True
+
+def step() -> None:
+    while running:
+        stepping.move_and_advance(0.1, 0.0)
+
+threading.Thread(target=step, daemon=True).start()
+time.sleep(0.2)
+children = []
+for _ in range(20):
+    pid = os.fork()
+    if pid == 0:
+        code = 2
+        try:
+            World().advance()
+            try:
+                stepping.advance()
+                code = 0
+            except RuntimeError as err:
+                code = 0 if "when the process forked" in str(err) else 3
+        finally:
+            os._exit(code)
+    children.append(pid)
+deadline = time.monotonic() + 60
+hung = failed = 0
+for pid in children:
+    while True:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            failed += os.waitstatus_to_exitcode(status) != 0
+            break
+        if time.monotonic() > deadline:
+            os.kill(pid, 9)
+            os.waitpid(pid, 0)
+            hung += 1
+            break
+        time.sleep(0.01)
+running = False
+print(f"hung {hung} failed {failed}")
+"""
+
+
+def test_a_fork_while_another_thread_steps_a_world_leaves_a_working_child() -> None:
+    """Issue 49, item 4: 16 of 20 children forked while another thread stepped
+    a world hung (a lock held at the fork). The extension now holds the worlds'
+    locks across every fork (os.register_at_fork): a child can make and step
+    new worlds, and the parent's world either works or says it was in use."""
+    done = run_python(FORKS, timeout=3 * LIMIT)
+    assert "hung 0 failed 0" in done.stdout, done.stdout + done.stderr
+
+
+def test_a_scene_that_is_not_a_regular_file_is_refused_without_reading_it(
+    tmp_path: Path,
+) -> None:
+    """Issue 49, item 12: World(scene) read a FIFO for ever holding the GIL, and
+    /dev/zero until memory ran out."""
+    fifo = tmp_path / "scene.fifo"
+    os.mkfifo(fifo)
+    snippet = (
+        "from pushlearn import World\n"
+        f"for path in [{str(fifo)!r}, '/dev/zero']:\n"
+        "    try:\n"
+        "        World(path)\n"
+        "    except ValueError as err:\n"
+        "        print('refused:', err)\n"
+    )
+    done = run_python(snippet)
+    assert done.stdout.count("not a regular file") == 2, done.stdout + done.stderr

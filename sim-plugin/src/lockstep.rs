@@ -224,6 +224,15 @@ impl Stepper {
         self.world.is_paused()
     }
 
+    /// Accepted commands the latency emulation holds for the next Advance:
+    /// they count against the daemon's bound on waiting commands until they
+    /// are applied, not merely until they left the channel.
+    pub fn pending(&self) -> usize {
+        self.delays
+            .as_ref()
+            .map_or(0, |delays| delays.pending.len())
+    }
+
     #[cfg(feature = "testing")]
     pub fn world_mut(&mut self) -> &mut World {
         &mut self.world
@@ -259,6 +268,8 @@ impl Stepper {
         advance: u64,
         events: &mut impl FnMut(Event),
     ) -> Result<(), StepError> {
+        // Replaced, not emptied: after a flood the drained vector's
+        // capacity would stay allocated for the world's life.
         let pending = self
             .delays
             .as_mut()

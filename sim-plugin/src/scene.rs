@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pushlearn::wire::{BodyName, GHOST_MARKER};
+use pushlearn::wire::{BodyName, GHOST_MARKER, MAX_NAME_BYTES};
 use pushlearn_core::body::{
     ACTUATOR_ID, ACTUATOR_NAME, BLUE_ID, BLUE_NAME, CYLINDER_ID, CYLINDER_NAME, GROUND_NAME,
     RED_ID, RED_NAME,
@@ -44,6 +44,16 @@ const MAX_STIFFNESS: f64 = 1e20;
 /// The default scene of every command.
 pub const DEFAULT_SCENE: &str = "one_block";
 
+/// The largest scene file read, in bytes. The built-in scenes are under
+/// 4 KiB; reading stops here, so `/dev/zero` or a huge file cannot fill
+/// memory.
+pub const MAX_SCENE_FILE_BYTES: u64 = 1 << 20;
+
+/// The most bodies a scene may have. The thesis's worlds have two or three;
+/// collision work grows with the square of the count (1600 boxes took 2.9 s
+/// a message), and a world that slow serves no one.
+pub const MAX_BODIES: usize = 64;
+
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("unknown built-in scene `{0}` (built-ins: one_block, two_blocks, objects)")]
@@ -53,6 +63,8 @@ pub enum SceneError {
         path: PathBuf,
         source: std::io::Error,
     },
+    #[error("cannot read scene file {}: {problem}", path.display())]
+    NotAFile { path: PathBuf, problem: String },
     #[error("invalid scene TOML: {0}")]
     Parse(#[from] toml::de::Error),
     #[error("invalid scene: `{field}` {problem}")]
@@ -270,6 +282,48 @@ impl StartPose {
     }
 }
 
+/// The text of the scene file at `path`: a regular file (a FIFO or a
+/// device would block or never end) of at most [`MAX_SCENE_FILE_BYTES`].
+fn read_scene_file(path: &Path) -> Result<String, SceneError> {
+    use std::io::Read;
+    let io = |source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let refuse = |problem: String| SceneError::NotAFile {
+        path: path.to_owned(),
+        problem,
+    };
+    // Checked before opening: opening a FIFO waits for a writer.
+    let kind = std::fs::metadata(path).map_err(io)?.file_type();
+    if !kind.is_file() {
+        use std::os::unix::fs::FileTypeExt;
+        let what = if kind.is_dir() {
+            "a directory"
+        } else if kind.is_fifo() {
+            "a FIFO"
+        } else if kind.is_char_device() || kind.is_block_device() {
+            "a device"
+        } else if kind.is_socket() {
+            "a socket"
+        } else {
+            "something else"
+        };
+        return Err(refuse(format!("it is {what}, not a regular file")));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENE_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    if bytes.len() as u64 > MAX_SCENE_FILE_BYTES {
+        return Err(refuse(format!(
+            "larger than {MAX_SCENE_FILE_BYTES} bytes, the most a scene file may have"
+        )));
+    }
+    String::from_utf8(bytes).map_err(|_| refuse("not UTF-8 text".to_owned()))
+}
+
 impl Scene {
     /// The names of the embedded scenes.
     pub fn builtin_names() -> impl Iterator<Item = &'static str> {
@@ -294,11 +348,7 @@ impl Scene {
         if !path.exists() && !name_or_path.contains(['/', '.']) {
             return Err(SceneError::UnknownBuiltin(name_or_path.to_owned()));
         }
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Scene::from_toml_str(&text)
+        Scene::from_toml_str(&read_scene_file(path)?)
     }
 
     /// Parses and validates a scene.
@@ -346,6 +396,15 @@ impl Scene {
 
     /// Checks everything a world needs beyond the file's syntax.
     pub fn validate(&self) -> Result<(), SceneError> {
+        if self.bodies.len() > MAX_BODIES {
+            return Err(invalid(
+                "body",
+                format!(
+                    "has {} entries; a scene has at most {MAX_BODIES} bodies",
+                    self.bodies.len()
+                ),
+            ));
+        }
         if self.name.trim().is_empty() {
             return Err(invalid("name", "must not be empty"));
         }
@@ -399,6 +458,12 @@ impl Scene {
 
     fn validate_body(&self, i: usize, b: &BodySpec) -> Result<(), SceneError> {
         let field = |f: &str| format!("body[{i}].{f}");
+        if b.name.len() > MAX_NAME_BYTES {
+            return Err(invalid(
+                field("name"),
+                format!("is {} bytes long (at most {MAX_NAME_BYTES})", b.name.len()),
+            ));
+        }
         if b.name.is_empty() || b.name == GROUND_NAME || BodyName::parse(&b.name).ghost().is_some()
         {
             return Err(invalid(

@@ -68,6 +68,16 @@ pub enum CommandError {
         value: f64,
         limit: f64,
     },
+    #[error(
+        "the actuator at ({:.3}, {:.3}, {:.3}) would be outside its drive bound ({bound_radius} m \
+         around ({:.3}, {:.3}, {:.3})), where it can never move again",
+        position[0], position[1], position[2], centre[0], centre[1], centre[2]
+    )]
+    OutsideDriveBound {
+        position: [f64; 3],
+        centre: [f64; 3],
+        bound_radius: f64,
+    },
     #[error("unknown body `{0}`")]
     UnknownBody(String),
     #[error("orientation of `{0}` is a quaternion of zero length")]
@@ -88,10 +98,13 @@ pub enum WorldError {
 
 #[derive(Debug, thiserror::Error)]
 pub enum StepError {
-    #[error(
-        "physics blew up at step {step}: `{body}` reached a non-finite state; the world was reset"
-    )]
-    Diverged { step: u64, body: String },
+    #[error("physics blew up at step {step}: `{body}` reached {what}; the world was reset")]
+    Diverged {
+        step: u64,
+        body: String,
+        /// `a non-finite state`, or a position beyond the world's bounds.
+        what: &'static str,
+    },
     #[error("physics engine: {0}")]
     Ode(#[from] OdeError),
 }
@@ -511,18 +524,31 @@ impl World {
                 body.poison_for_test();
             }
         }
-        if let Some(bad) = self.bodies.iter().find(|b| {
-            self.ode.body(b.handle).map_or(true, |body| {
-                !(body.position().iter())
-                    .chain(&body.orientation())
-                    .chain(&body.linear_velocity())
-                    .chain(&body.angular_velocity())
-                    .all(|v| v.is_finite())
-            })
-        }) {
+        // A body beyond the bounds a SetPose may reach (bodies placed
+        // overlapping are shot apart, and reached 1130 m) is as lost as a
+        // non-finite one: the world resets rather than publish it.
+        let lost = self.bodies.iter().find_map(|b| {
+            let Ok(body) = self.ode.body(b.handle) else {
+                return Some((b, "a non-finite state"));
+            };
+            let finite = (body.position().iter())
+                .chain(&body.orientation())
+                .chain(&body.linear_velocity())
+                .chain(&body.angular_velocity())
+                .all(|v| v.is_finite());
+            if !finite {
+                Some((b, "a non-finite state"))
+            } else if body.position().iter().any(|v| v.abs() > MAX_POSITION) {
+                Some((b, "a position beyond ±1000 m"))
+            } else {
+                None
+            }
+        });
+        if let Some((bad, what)) = lost {
             let err = StepError::Diverged {
                 step: self.step_count,
                 body: bad.name.clone(),
+                what,
             };
             tracing::error!("{err}");
             self.reset()?;
@@ -588,6 +614,10 @@ impl World {
     }
 }
 
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|k| (a[k] - b[k]).powi(2)).sum::<f64>().sqrt()
+}
+
 /// The checks of [`World::apply`] that need only the scene, not the world's
 /// state (everything but the ghost limit): a daemon runs them when a command
 /// arrives, long before the physics thread applies it.
@@ -620,6 +650,18 @@ pub fn check_command(scene: &Scene, cmd: &Command) -> Result<(), CommandError> {
             };
             if scene.body_index(body).is_none() {
                 return Err(CommandError::UnknownBody(body.clone()));
+            }
+            // The drive stops an actuator whose next position leaves its
+            // bound, so one placed outside it would never move again.
+            let drive = &scene.drive;
+            if matches!(name, BodyName::Body(n) if n == ACTUATOR)
+                && distance(*position, drive.bound_centre) > drive.bound_radius
+            {
+                return Err(CommandError::OutsideDriveBound {
+                    position: *position,
+                    centre: drive.bound_centre,
+                    bound_radius: drive.bound_radius,
+                });
             }
             Ok(())
         }
@@ -659,7 +701,7 @@ mod tests {
         world.provoke_blow_up("blockA").unwrap();
         let err = world.step().unwrap_err();
         assert!(
-            matches!(&err, StepError::Diverged { step: 26, body } if body == "blockA"),
+            matches!(&err, StepError::Diverged { step: 26, body, .. } if body == "blockA"),
             "{err}"
         );
         // Reset: back at the start, every value finite, stepping on.

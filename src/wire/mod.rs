@@ -39,4 +39,4 @@ pub use validate::{validate, InvalidCommand};
 
 // The limits are the vocabulary's: the world and the learner daemon refuse
 // beyond the same numbers.
-pub use pushlearn_core::{MAX_ACTION_SPEED, MAX_POSITION};
+pub use pushlearn_core::{quoted, MAX_ACTION_SPEED, MAX_NAME_BYTES, MAX_POSITION};

@@ -9,6 +9,7 @@
 //! refusal reads the same.
 
 use super::pb::{self, actuator_command::Command, client_message::Payload, sim_control::Action};
+use pushlearn_core::{quoted, MAX_NAME_BYTES};
 
 /// Why a command is refused. The `Display` text is what the `Error` message
 /// carries; it always names the command and, where there is one, the field.
@@ -52,8 +53,16 @@ pub enum InvalidCommand {
         /// Position of the entry in `models`.
         index: usize,
     },
+    /// A `set_pose` entry whose name is longer than [`MAX_NAME_BYTES`].
+    #[error("set_pose: entry {index} has a name of {bytes} bytes (at most {MAX_NAME_BYTES})")]
+    LongBodyName {
+        /// Position of the entry in `models`.
+        index: usize,
+        /// The name's length.
+        bytes: usize,
+    },
     /// A `set_pose` entry lacking `pose`, `pose.position` or `pose.orientation`.
-    #[error("set_pose: body '{body}' has no {field}")]
+    #[error("set_pose: body {} has no {field}", quoted(body))]
     MissingPoseField {
         /// The body's name.
         body: String,
@@ -61,7 +70,7 @@ pub enum InvalidCommand {
         field: &'static str,
     },
     /// An orientation that cannot be normalised to a unit quaternion.
-    #[error("set_pose: body '{body}' orientation {problem}")]
+    #[error("set_pose: body {} orientation {problem}", quoted(body))]
     DegenerateQuaternion {
         /// The body's name.
         body: String,
@@ -70,7 +79,7 @@ pub enum InvalidCommand {
     },
     /// World-dependent: `set_pose` names a body the scene does not have
     /// (`*Shadow` names are not unknown: the world keeps them as ghosts).
-    #[error("set_pose: unknown body '{name}' (this world has: {})", known.join(", "))]
+    #[error("set_pose: unknown body {} (this world has: {})", quoted(name), known.join(", "))]
     UnknownBody {
         /// The name as sent.
         name: String,
@@ -80,7 +89,7 @@ pub enum InvalidCommand {
     /// World-dependent: a ghost (`<body>Shadow…`) of a body the scene does
     /// not have. Refused rather than published, since a ghost is drawn and
     /// identified as its body (with that body's id).
-    #[error("set_pose: ghost '{name}' is of body '{body}', which this world lacks (this world has: {})", known.join(", "))]
+    #[error("set_pose: ghost {} is of body {}, which this world lacks (this world has: {})", quoted(name), quoted(body), known.join(", "))]
     GhostOfUnknownBody {
         /// The ghost's name as sent.
         name: String,
@@ -168,6 +177,12 @@ fn validate_model(index: usize, model: &pb::ModelState) -> Result<(), InvalidCom
     if body.is_empty() {
         return Err(InvalidCommand::EmptyBodyName { index });
     }
+    if body.len() > MAX_NAME_BYTES {
+        return Err(InvalidCommand::LongBodyName {
+            index,
+            bytes: body.len(),
+        });
+    }
     let missing = |field| InvalidCommand::MissingPoseField {
         body: body.clone(),
         field,
@@ -178,7 +193,7 @@ fn validate_model(index: usize, model: &pb::ModelState) -> Result<(), InvalidCom
         .orientation
         .as_ref()
         .ok_or_else(|| missing("orientation"))?;
-    let at = |field: &str| format!("set_pose: body '{body}' {field}");
+    let at = |field: &str| format!("set_pose: body {} {field}", quoted(body));
 
     check_vector(Some(position), || at("position"))?;
     let pb::Quaternion { x, y, z, w } = *orientation;
@@ -522,5 +537,30 @@ mod tests {
             let expected = format!("set_pose: body 'blockA' position.{} is ", ["x", "y", "z"][index]);
             prop_assert!(text.starts_with(&expected), "{}", text);
         }
+    }
+
+    /// Issue 49, item 10: a body name with a newline wrote a forged log
+    /// line (the refusal is logged), and a 100 KB name was echoed whole.
+    #[test]
+    fn body_names_are_capped_and_shown_escaped() {
+        let long = set_pose_with(|m| m.name = "x".repeat(100_000));
+        assert_eq!(
+            refusal(&long),
+            "set_pose: entry 0 has a name of 100000 bytes (at most 256)"
+        );
+        let forged = set_pose_with(|m| {
+            m.name = "blockA\nINFO forged".into();
+            if let Some(p) = m.pose.as_mut().and_then(|p| p.position.as_mut()) {
+                p.x = f64::NAN;
+            }
+        });
+        let text = refusal(&forged);
+        assert!(!text.contains('\n'), "{text}");
+        assert!(text.contains("'blockA\\nINFO forged'"), "{text}");
+        let unknown = InvalidCommand::UnknownBody {
+            name: "a\rb".into(),
+            known: vec!["actuator".into()],
+        };
+        assert!(!unknown.to_string().contains('\r'), "{unknown}");
     }
 }

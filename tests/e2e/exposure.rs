@@ -310,6 +310,159 @@ fn the_learner_daemon_closes_a_connection_announcing_a_frame_above_16_mib() {
     ));
 }
 
+/// Sends `requests` and reads the replies until the daemon closes (it
+/// answers a broken rule with an Error and closes): the last one.
+fn reply_to(addr: SocketAddr, requests: &[Request]) -> Reply {
+    let mut stream = connect(addr);
+    for request in requests {
+        stream
+            .write_all(&encode_frame(request).expect("encodes"))
+            .expect("request");
+    }
+    let bytes = read_to_close(&mut stream);
+    let (mut replies, error) = decode_stream::<Reply>(&bytes);
+    assert!(error.is_none(), "{error:?}");
+    replies.pop().expect("at least one reply")
+}
+
+fn error_text(reply: Reply) -> String {
+    match reply.answer {
+        Some(Answer::Error(error)) => error.message,
+        other => panic!("expected an Error, got {other:?}"),
+    }
+}
+
+fn request(seq: u64, call: Call) -> Request {
+    Request {
+        seq,
+        call: Some(call),
+    }
+}
+
+fn start(protocol_version: i32, task: &str, publish_rate_hz: u32) -> Call {
+    Call::Start(Start {
+        protocol_version,
+        task: task.into(),
+        publish_rate_hz,
+    })
+}
+
+/// Issue 49, item 11: a first request that is not a Start was closed without
+/// the promised Error; Start with protocol version 99, a publish rate of 0, 7
+/// or 2^32 - 1, or a 1000-character task was answered with Hello; a
+/// decreasing seq and a SetTarget without x were accepted.
+#[test]
+fn the_learner_daemon_answers_every_broken_start_rule_with_an_error() {
+    use pushlearn::wire::pb::learner::{Bye, SetTarget};
+    let (_daemon, addr) = learner_daemon(&["--listen", "0"]);
+    let first = error_text(reply_to(addr, &[request(1, Call::Bye(Bye {}))]));
+    assert!(
+        first.contains("the first request must be a start"),
+        "{first}"
+    );
+    let cases: [(Call, &str); 6] = [
+        (start(99, "push-task", 100), "protocol version 99"),
+        (start(1, "push-task", 0), "publish rate 0 Hz"),
+        (start(1, "push-task", 7), "publish rate 7 Hz"),
+        (
+            start(1, "push-task", u32::MAX),
+            "publish rate 4294967295 Hz",
+        ),
+        (start(1, &"x".repeat(1000), 100), "unknown task"),
+        (start(1, "push-tusk", 100), "unknown task 'push-tusk'"),
+    ];
+    for (call, expected) in cases {
+        let text = error_text(reply_to(addr, &[request(1, call)]));
+        assert!(text.contains(expected), "{text}");
+        assert!(text.len() < 300, "the task is not echoed whole: {text}");
+    }
+    let good = || request(1, start(1, "push-task", 100));
+    let target = |x: Option<f64>| {
+        Call::SetTarget(SetTarget {
+            clear: false,
+            id: 15,
+            x,
+            y: Some(0.5),
+            theta: Some(0.0),
+        })
+    };
+    let text = error_text(reply_to(addr, &[good(), request(2, target(None))]));
+    assert!(text.contains("a target without x"), "{text}");
+    let text = error_text(reply_to(addr, &[good(), request(2, target(Some(1e300)))]));
+    assert!(
+        text.contains("not a finite pose within any world"),
+        "{text}"
+    );
+    let text = error_text(reply_to(
+        addr,
+        &[
+            good(),
+            request(3, target(Some(0.5))),
+            request(2, target(Some(0.5))),
+        ],
+    ));
+    assert!(text.contains("seq 2 after seq 3"), "{text}");
+}
+
+/// The daemon's threads, from /proc.
+fn threads(pid: u32) -> usize {
+    std::fs::read_dir(format!("/proc/{pid}/task"))
+        .expect("the daemon's /proc")
+        .count()
+}
+
+/// Issue 49, items 2 and 3: 64 silent connections locked every other
+/// driver out of `serve-learner` (no idle timeout), and every connection
+/// beyond the cap got an OS thread of its own (800 connections: 801
+/// threads). Now a silent connection is closed after --idle-timeout, and
+/// the refused ones cost no thread.
+#[test]
+fn silent_drivers_are_closed_after_the_idle_timeout_and_refusals_cost_no_thread() {
+    let (daemon, addr) = learner_daemon(&[
+        "--listen",
+        "0",
+        "--max-connections",
+        "2",
+        "--idle-timeout",
+        "1",
+    ]);
+    let base = threads(daemon.pid());
+    let mut silent: Vec<TcpStream> = (0..2).map(|_| connect(addr)).collect();
+    // Beyond the cap, silent too: each waits for its Start in a task.
+    let refused: Vec<TcpStream> = (0..100).map(|_| connect(addr)).collect();
+    std::thread::sleep(Duration::from_millis(300));
+    let during = threads(daemon.pid());
+    assert!(
+        during <= base + 2 + 2,
+        "{during} threads with 2 served and 100 refused connections (from {base})"
+    );
+    drop(refused);
+    // The silent ones are closed once idle (bounded wait: CHILD_LIMIT)…
+    for stream in &mut silent {
+        assert!(read_to_close(stream).is_empty());
+    }
+    // …and a driver is served again.
+    let mut driver = connect(addr);
+    assert!(matches!(
+        say_start(&mut driver).answer,
+        Some(Answer::Hello(_))
+    ));
+    // A driver trickling a frame a byte at a time is idle too: the limit is
+    // on whole requests.
+    let mut trickle = connect(addr);
+    let frame = start_frame();
+    let mut closed = false;
+    // 100 ms a byte: a whole request would take 2.2 s, over the 1 s limit.
+    for byte in &frame[..frame.len() - 1] {
+        if trickle.write_all(&[*byte]).is_err() {
+            closed = true;
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert!(closed || read_to_close(&mut trickle).is_empty());
+}
+
 // ----------------------------------------- the world daemon and its replay
 
 /// The world's answer to a browser's request: an Error about the frame's

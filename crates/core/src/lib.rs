@@ -25,7 +25,7 @@ pub use body::{
     BLUE_NAME, CYLINDER_ID, CYLINDER_NAME, GHOST_MARKER, GROUND_NAME, RED_ID, RED_NAME,
     TARGET_GHOST_SUFFIX,
 };
-pub use limits::{MAX_ACTION_SPEED, MAX_POSITION};
+pub use limits::{quoted, MAX_ACTION_SPEED, MAX_NAME_BYTES, MAX_POSITION};
 pub use motion::{Action, ObjectState};
 pub use named::Named;
 pub use observation::{BodyShape, Footprint, Frame, Observation};

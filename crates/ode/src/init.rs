@@ -77,6 +77,13 @@ pub(crate) fn global_lock() -> MutexGuard<'static, ()> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
+/// Holds the process-wide lock until dropped, for a fork: a thread inside
+/// ODE when the process forks would leave the lock held in the child for
+/// ever (the child has no such thread), and every world there would wait.
+pub fn hold_for_fork() -> MutexGuard<'static, ()> {
+    global_lock()
+}
+
 /// Seeds ODE's process-wide random generator (`dRandSetSeed`).
 ///
 /// A [`World`](crate::World) swaps in its own generator state around every

@@ -37,6 +37,6 @@ pub use body::{Body, BodyBuilder, BodyMut};
 pub use contact::{ContactMode, ContactPair, ContactPoint, GeomInfo, Surface, SurfaceParams};
 pub use error::OdeError;
 pub use geom::{GeomBuilder, Shape};
-pub use init::rand_set_seed;
+pub use init::{hold_for_fork, rand_set_seed};
 pub use params::{AutoDisable, StepParams};
 pub use world::{SpaceKind, StepReport, World};

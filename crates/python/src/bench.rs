@@ -10,9 +10,24 @@
 //! (`pushlearn.learner`'s own), in the order the driver makes its calls. So
 //! its reports equal those of the same learner served to `pushlearn
 //! experiment --learner`, bit for bit (`python/tests/test_bench.py`).
+//!
+//! The driver runs on a thread of its own; every learner call is made on
+//! the thread that called `pushlearn.bench` (the main thread, normally),
+//! which waits for the calls and polls for signals in between. So Ctrl-C
+//! reaches learner code at once, a learner call can be given a deadline
+//! (SIGALRM, set by `pushlearn.bench`), and the run stops within moments
+//! when interrupted.
+//!
+//! The report is assembled here and handed to Python as a [`Report`] whose
+//! data only Rust holds: learner code, which shares the interpreter, has no
+//! reference to it and runs before it exists (`docs/learner-protocol.md` §1,
+//! "In-process").
 
 use std::cell::{Cell, RefCell};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::time::{Duration, Instant};
 
 use drive::experiment::move_to_target::sampled_targets;
 use drive::experiment::push_task::protocol::Variant;
@@ -25,7 +40,7 @@ use drive::oracle::OracleLatency;
 use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::results::LearnerRecord;
 use drive::scene::{Object, Transfer};
-use lab::spec::{Document, Spec};
+use lab::spec::{Document, Spec, SpecError};
 use learner::features::{parse_frame, ActuatorYaw, ParseError};
 use learner::registry::{ModelKind, ModelOptions};
 use learner::{
@@ -34,8 +49,9 @@ use learner::{
 use prost::Message;
 use pushlearn::wire::pb::learner as lp;
 use pushlearn_core::Named;
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyError, PyRuntimeError, PyTimeoutError, PyValueError};
 use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
 use serde::{Deserialize, Serialize};
 
 /// What the learner's start said about it (as a Hello would).
@@ -46,12 +62,32 @@ struct Info {
     ignores_actuator_yaw: bool,
 }
 
+/// A learner call the driver's thread asks the calling thread to make:
+/// `_Direct.call(method, args, timeout)`.
+struct CallRequest {
+    method: &'static str,
+    args: Py<PyTuple>,
+    answer: mpsc::Sender<PyResult<Py<PyAny>>>,
+}
+
+/// What the driver's thread sends the thread that called `pushlearn.bench`.
+enum ToCaller {
+    Call(CallRequest),
+    Done(Box<Result<Document, SpecError>>),
+}
+
 /// What every fold's handle on the one learner object shares.
 #[derive(Debug)]
 struct Shared {
     /// The `_Direct` adapter around the user's learner.
     direct: Py<PyAny>,
     info: Info,
+    /// Where learner calls are made: the calling thread's loop in [`run`].
+    caller: Mutex<mpsc::Sender<ToCaller>>,
+    /// Set when the caller has gone (interrupted): from then on the
+    /// driver's thread touches no Python object, not even to make a call's
+    /// arguments (the interpreter may be exiting).
+    stopped: Arc<AtomicBool>,
     /// The first exception a learner call raised: re-raised as the cause of
     /// the experiment's error, with its traceback.
     raised: Mutex<Option<PyErr>>,
@@ -113,6 +149,8 @@ impl PyLearner {
         direct: Py<PyAny>,
         task: &str,
         publish_rate_hz: u32,
+        caller: mpsc::Sender<ToCaller>,
+        stopped: Arc<AtomicBool>,
     ) -> PyResult<Self> {
         let (name, version, inverse, ignores_actuator_yaw): (String, String, bool, bool) = direct
             .call_method1(py, "start", (task, publish_rate_hz))?
@@ -130,6 +168,8 @@ impl PyLearner {
                 version,
                 ignores_actuator_yaw,
             },
+            caller: Mutex::new(caller),
+            stopped,
             raised: Mutex::new(None),
         })))
     }
@@ -169,7 +209,7 @@ impl PyLearner {
     /// once failed, or when the call raised (then recorded as the failure).
     fn call<T>(
         &self,
-        method: &str,
+        method: &'static str,
         args: impl FnOnce(Python<'_>) -> PyResult<Py<pyo3::types::PyTuple>>,
         read: impl FnOnce(Python<'_>, Bound<'_, PyAny>) -> PyResult<T>,
     ) -> Option<T> {
@@ -183,15 +223,26 @@ impl PyLearner {
             );
             return None;
         }
-        let outcome = Python::attach(|py| {
-            let args = args(py)?;
-            let answer = self
-                .shared
-                .direct
-                .bind(py)
-                .call_method1(method, args.bind(py))?;
-            read(py, answer)
-        });
+        let outcome = (|| {
+            let stopped = || PyRuntimeError::new_err("the run was stopped");
+            if self.shared.stopped.load(Ordering::SeqCst) {
+                return Err(stopped());
+            }
+            let args = Python::attach(args)?;
+            let (answer, answered) = mpsc::channel();
+            self.shared
+                .caller
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .send(ToCaller::Call(CallRequest {
+                    method,
+                    args,
+                    answer,
+                }))
+                .map_err(|_| stopped())?;
+            let answer = answered.recv().map_err(|_| stopped())??;
+            Python::attach(|py| read(py, answer.into_bound(py)))
+        })();
         match outcome {
             Ok(value) => Some(value),
             Err(err) => {
@@ -488,15 +539,15 @@ fn builtin(name: &str) -> PyResult<LearnerChoice> {
         })
 }
 
-/// What an experiment gives Python: the report document (JSON), the text
-/// `pushlearn experiment` prints, and each printed table as `(name, title
-/// lines, CSV)`.
-type Outcome = (String, String, Vec<(String, Vec<String>, String)>);
+/// How often the calling thread looks for signals (Ctrl-C) while the
+/// driver steps worlds: a run stops within this of the signal.
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
 /// Runs `spec` with `learner`: the `pushlearn.bench._Direct` of a learner
 /// object when the spec's choice is [`LearnerChoice::InProcess`] (see
 /// [`learner_choice`]), else the spec's built-in; `progress(done, jobs)`
-/// is called after each job.
+/// is called after each job; each learner call may take `timeout`.
+#[allow(clippy::too_many_arguments)] // the run's parts, each once
 fn run(
     py: Python<'_>,
     spec: Spec,
@@ -505,13 +556,31 @@ fn run(
     task: &str,
     rate_hz: u32,
     progress: Option<Py<PyAny>>,
-) -> PyResult<Outcome> {
+    timeout: f64,
+) -> PyResult<Report> {
     spec.validate()
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    if !(timeout.is_finite() && timeout > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "timeout must be a positive number of seconds, not {timeout}"
+        )));
+    }
+    let (to_caller, from_driver) = mpsc::channel::<ToCaller>();
+    // Once set, the driver's thread calls no Python: the caller has gone.
+    let stopped = Arc::new(AtomicBool::new(false));
+    // Behind a lock only so that the wait can release the GIL.
+    let from_driver = Mutex::new(from_driver);
     let direct = if spec.model() != Some(&LearnerChoice::InProcess) {
         None
     } else {
-        let model = PyLearner::start(py, learner.clone().unbind(), task, rate_hz)?;
+        let model = PyLearner::start(
+            py,
+            learner.clone().unbind(),
+            task,
+            rate_hz,
+            to_caller.clone(),
+            Arc::clone(&stopped),
+        )?;
         model.shared.info.name.clone_into(&mut plan.model);
         plan.learner = Some(LearnerRecord {
             version: model.shared.info.version.clone(),
@@ -519,73 +588,351 @@ fn run(
         });
         Some(model)
     };
-    // The first exception of the progress callback (Ctrl-C, say) ends the
-    // run once the job under way is done.
-    let interrupted: Mutex<Option<PyErr>> = Mutex::new(None);
+    // The first exception of the progress callback ends the run once the
+    // job under way is done.
+    let interrupted: Arc<Mutex<Option<PyErr>>> = Arc::new(Mutex::new(None));
     let jobs = spec.jobs();
-    let report = |done: usize| {
-        let Some(callback) = &progress else { return };
-        Python::attach(|py| {
-            if let Err(err) = callback.call1(py, (done, jobs)) {
-                interrupted
-                    .lock()
-                    .unwrap_or_else(PoisonError::into_inner)
-                    .get_or_insert(err);
+    let report = {
+        let (stopped, interrupted) = (Arc::clone(&stopped), Arc::clone(&interrupted));
+        move |done: usize| {
+            let Some(callback) = &progress else { return };
+            if stopped.load(Ordering::SeqCst) {
+                return;
             }
-        });
+            Python::attach(|py| {
+                if let Err(err) = callback.call1(py, (done, jobs)) {
+                    interrupted
+                        .lock()
+                        .unwrap_or_else(PoisonError::into_inner)
+                        .get_or_insert(err);
+                }
+            });
+        }
     };
-    let raised = direct.as_ref().map(|d| Arc::clone(&d.shared));
-    let outcome = py.detach(|| match direct {
-        Some(model) => spec.run_with(&plan, model, report),
-        None => spec.run(&plan, report),
-    });
+    let shared = direct.as_ref().map(|d| Arc::clone(&d.shared));
+    let driver = std::thread::Builder::new()
+        .name("pushlearn-bench".into())
+        .spawn(move || {
+            let outcome = match direct {
+                Some(model) => spec.run_with(&plan, model, report),
+                None => spec.run(&plan, report),
+            };
+            // The caller may have gone (interrupted): nobody to tell.
+            let _ = to_caller.send(ToCaller::Done(Box::new(outcome)));
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("cannot start the run: {e}")))?;
+    let outcome = loop {
+        let next = py.detach(|| {
+            from_driver
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .recv_timeout(SIGNAL_POLL)
+        });
+        match next {
+            Ok(ToCaller::Call(call)) => {
+                let Some(shared) = &shared else { continue };
+                let answer = learner_call(py, &shared.direct, &call, timeout);
+                if let Err(err) = &answer {
+                    if !err.is_instance_of::<PyException>(py) {
+                        // KeyboardInterrupt, SystemExit: the run ends now,
+                        // with the exception itself; the driver's thread
+                        // finds the channel closed and winds down.
+                        stopped.store(true, Ordering::SeqCst);
+                        return Err(err.clone_ref(py));
+                    }
+                }
+                // The driver waits for the answer unless it failed.
+                let _ = call.answer.send(answer);
+            }
+            Ok(ToCaller::Done(outcome)) => break *outcome,
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(err) = py.check_signals() {
+                    stopped.store(true, Ordering::SeqCst);
+                    return Err(err);
+                }
+            }
+            Err(RecvTimeoutError::Disconnected) => {
+                break Err(SpecError::Invalid(
+                    "the run's thread ended without a result".into(),
+                ))
+            }
+        }
+    };
+    // It has sent its result: what is left of it ends at once.
+    let _ = py.detach(|| driver.join());
     if let Some(err) = interrupted
-        .into_inner()
+        .lock()
         .unwrap_or_else(PoisonError::into_inner)
+        .take()
     {
         return Err(err);
     }
     let document = match outcome {
         Ok(document) => document,
         Err(err) => {
-            let error = PyRuntimeError::new_err(err.to_string());
-            let cause = raised.and_then(|shared| {
+            let cause = shared.and_then(|shared| {
                 shared
                     .raised
                     .lock()
                     .unwrap_or_else(PoisonError::into_inner)
                     .take()
             });
+            if let Some(cause) = &cause {
+                if !cause.is_instance_of::<PyException>(py) {
+                    return Err(cause.clone_ref(py));
+                }
+            }
+            let error = PyRuntimeError::new_err(err.to_string());
             error.set_cause(py, cause);
             return Err(error);
         }
     };
-    outcome_of(&document)
+    Report::of(&document)
 }
 
-fn outcome_of(document: &Document) -> PyResult<Outcome> {
-    let json = document
-        .to_json()
-        .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))?;
-    let printout = document
-        .printout()
-        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    let mut text = Vec::new();
-    printout
-        .write_text(&mut text)
-        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    let tables = printout
-        .tables
-        .iter()
-        .map(|t| (t.name.clone(), t.title.clone(), t.csv()))
-        .collect();
-    Ok((json, String::from_utf8_lossy(&text).into_owned(), tables))
+/// Makes one learner call on this thread: `_Direct.call(method, args,
+/// timeout)`, which sets the deadline where it can (SIGALRM, main thread
+/// only). A call that returned but took longer fails all the same.
+fn learner_call(
+    py: Python<'_>,
+    direct: &Py<PyAny>,
+    call: &CallRequest,
+    timeout: f64,
+) -> PyResult<Py<PyAny>> {
+    let started = Instant::now();
+    let answer = direct
+        .bind(py)
+        .call_method1("call", (call.method, call.args.bind(py), timeout))?;
+    if started.elapsed().as_secs_f64() > timeout {
+        return Err(PyTimeoutError::new_err(format!(
+            "no answer within {timeout} s (it returned after {:.1} s)",
+            started.elapsed().as_secs_f64()
+        )));
+    }
+    Ok(answer.unbind())
+}
+
+/// A cell of a report's table: a number, a text, or none.
+#[derive(Clone, Debug)]
+enum Entry {
+    Int(i64),
+    Float(f64),
+    Text(String),
+    Empty,
+}
+
+impl Entry {
+    /// A CSV field read as `pushlearn experiment --csv`'s reader would:
+    /// empty, an integer, a float, or text.
+    fn of(field: &str) -> Entry {
+        if field.is_empty() {
+            Entry::Empty
+        } else if let Ok(i) = field.parse::<i64>() {
+            Entry::Int(i)
+        } else if let Ok(f) = field.parse::<f64>() {
+            Entry::Float(f)
+        } else {
+            Entry::Text(field.to_owned())
+        }
+    }
+
+    fn to_python<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(match self {
+            Entry::Int(i) => i.into_pyobject(py)?.into_any(),
+            Entry::Float(f) => f.into_pyobject(py)?.into_any(),
+            Entry::Text(t) => t.into_pyobject(py)?.into_any(),
+            Entry::Empty => py.None().into_bound(py),
+        })
+    }
+}
+
+/// A JSON value as the Python objects `json.loads` gives, made here: learner
+/// code may have replaced `json.loads` by the time a report is read.
+fn json_to_python<'py>(py: Python<'py>, value: &serde_json::Value) -> PyResult<Bound<'py, PyAny>> {
+    use serde_json::Value;
+    Ok(match value {
+        Value::Null => py.None().into_bound(py),
+        Value::Bool(b) => pyo3::types::PyBool::new(py, *b).to_owned().into_any(),
+        Value::Number(n) => match (n.as_i64(), n.as_u64()) {
+            (Some(i), _) => i.into_pyobject(py)?.into_any(),
+            (None, Some(u)) => u.into_pyobject(py)?.into_any(),
+            (None, None) => n.as_f64().unwrap_or(f64::NAN).into_pyobject(py)?.into_any(),
+        },
+        Value::String(s) => s.into_pyobject(py)?.into_any(),
+        Value::Array(items) => {
+            let list = PyList::empty(py);
+            for item in items {
+                list.append(json_to_python(py, item)?)?;
+            }
+            list.into_any()
+        }
+        Value::Object(map) => {
+            let dict = PyDict::new(py);
+            for (key, item) in map {
+                dict.set_item(key, json_to_python(py, item)?)?;
+            }
+            dict.into_any()
+        }
+    })
+}
+
+/// One table of a report, as `pushlearn experiment --csv` writes it; see
+/// `pushlearn.bench.Table`.
+#[pyclass(frozen, module = "pushlearn._native", name = "Table")]
+pub struct Table {
+    name: String,
+    title: String,
+    columns: Vec<String>,
+    rows: Vec<Vec<Entry>>,
+}
+
+#[pymethods]
+impl Table {
+    /// The table's name (the CSV file's: `learning-curve`, …).
+    #[getter]
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The lines printed above it.
+    #[getter]
+    fn title(&self) -> &str {
+        &self.title
+    }
+
+    /// The column names, in order.
+    #[getter]
+    fn columns(&self) -> Vec<String> {
+        self.columns.clone()
+    }
+
+    /// The rows: dicts by column name, numbers as int or float, empty cells
+    /// `None` (`pandas.DataFrame(table.rows)` takes them as they are); a new
+    /// list every time.
+    #[getter]
+    fn rows<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let rows = PyList::empty(py);
+        for row in &self.rows {
+            let dict = PyDict::new(py);
+            for (column, entry) in self.columns.iter().zip(row) {
+                dict.set_item(column, entry.to_python(py)?)?;
+            }
+            rows.append(dict)?;
+        }
+        Ok(rows)
+    }
+
+    fn __repr__(&self) -> String {
+        format!("Table({:?}, {} rows)", self.name, self.rows.len())
+    }
+}
+
+/// What an experiment gave: its report document and its tables; see
+/// `pushlearn.bench.Report`. Built here from the driver's results after the
+/// run, and kept here: Python gets copies.
+#[pyclass(frozen, module = "pushlearn._native", name = "Report")]
+pub struct Report {
+    json: String,
+    printed: String,
+    tables: Vec<Py<Table>>,
+}
+
+impl Report {
+    fn of(document: &Document) -> PyResult<Report> {
+        let json = document
+            .to_json()
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))?;
+        let printout = document
+            .printout()
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let mut text = Vec::new();
+        printout
+            .write_text(&mut text)
+            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+        let tables = Python::attach(|py| {
+            printout
+                .tables
+                .iter()
+                .map(|t| {
+                    let (columns, rows) = t.csv_fields();
+                    Py::new(
+                        py,
+                        Table {
+                            name: t.name.clone(),
+                            title: t.title.join("\n"),
+                            columns,
+                            rows: rows
+                                .iter()
+                                .map(|row| row.iter().map(|f| Entry::of(f)).collect())
+                                .collect(),
+                        },
+                    )
+                })
+                .collect::<PyResult<Vec<_>>>()
+        })?;
+        Ok(Report {
+            json,
+            printed: String::from_utf8_lossy(&text).into_owned(),
+            tables,
+        })
+    }
+}
+
+#[pymethods]
+impl Report {
+    /// The JSON document `pushlearn experiment --json` writes, as a dict (a
+    /// new one every time).
+    #[getter]
+    fn document<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let value: serde_json::Value = serde_json::from_str(&self.json)
+            .map_err(|e| PyRuntimeError::new_err(format!("the report's document: {e}")))?;
+        json_to_python(py, &value)
+    }
+
+    /// The tables `pushlearn experiment` prints, beside the thesis's numbers.
+    #[getter]
+    fn tables(&self, py: Python<'_>) -> Vec<Py<Table>> {
+        self.tables.iter().map(|t| t.clone_ref(py)).collect()
+    }
+
+    /// The text `pushlearn experiment` prints: every table, with the thesis's numbers.
+    #[getter]
+    fn printed(&self) -> &str {
+        &self.printed
+    }
+
+    /// The table called `name`; `KeyError` naming the tables there are if none is.
+    fn table(&self, py: Python<'_>, name: &str) -> PyResult<Py<Table>> {
+        if let Some(table) = self.tables.iter().find(|t| t.get().name == name) {
+            return Ok(table.clone_ref(py));
+        }
+        let names: Vec<&str> = self.tables.iter().map(|t| t.get().name.as_str()).collect();
+        Err(PyKeyError::new_err(format!(
+            "the report has no table '{name}' (it has: {})",
+            names.join(", ")
+        )))
+    }
+
+    /// The document as `pushlearn experiment --json` writes it.
+    fn to_json(&self) -> &str {
+        &self.json
+    }
+
+    /// What `pushlearn experiment` prints for the experiment.
+    fn text(&self) -> &str {
+        &self.printed
+    }
+
+    fn __repr__(&self) -> String {
+        let names: Vec<&str> = self.tables.iter().map(|t| t.get().name.as_str()).collect();
+        format!("Report(tables: {})", names.join(", "))
+    }
 }
 
 /// The push task (`pushlearn experiment push-task`); see
 /// `pushlearn.bench.push_task`.
 #[pyfunction]
-#[pyo3(signature = (learner, *, variant, train_runs, folds, train_on, test_on, mode, latency_max, seed, progress))]
+#[pyo3(signature = (learner, *, variant, train_runs, folds, train_on, test_on, mode, latency_max, seed, progress, timeout))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
 pub fn run_push_task(
     py: Python<'_>,
@@ -599,7 +946,8 @@ pub fn run_push_task(
     latency_max: u32,
     seed: u64,
     progress: Option<Py<PyAny>>,
-) -> PyResult<Outcome> {
+    timeout: f64,
+) -> PyResult<Report> {
     let variant = named::<Variant>(variant, "variant")?;
     if variant == Variant::ConstantFeedback {
         return Err(PyValueError::new_err(
@@ -642,13 +990,22 @@ pub fn run_push_task(
         .push_protocol()
         .map_or(drive::scene::RATE_HZ, |p| p.rate_hz);
     let plan = plan(mode, latency_max, seed, spec.scene())?;
-    run(py, spec, learner, plan, "push-task", rate_hz, progress)
+    run(
+        py,
+        spec,
+        learner,
+        plan,
+        "push-task",
+        rate_hz,
+        progress,
+        timeout,
+    )
 }
 
 /// Move to Target (`pushlearn experiment move-to-target`); see
 /// `pushlearn.bench.move_to_target`.
 #[pyfunction]
-#[pyo3(signature = (learner, *, targets, sample_targets, repetitions, max_steps, mode, latency_max, seed, progress))]
+#[pyo3(signature = (learner, *, targets, sample_targets, repetitions, max_steps, mode, latency_max, seed, progress, timeout))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
 pub fn run_move_to_target(
     py: Python<'_>,
@@ -661,7 +1018,8 @@ pub fn run_move_to_target(
     latency_max: u32,
     seed: u64,
     progress: Option<Py<PyAny>>,
-) -> PyResult<Outcome> {
+    timeout: f64,
+) -> PyResult<Report> {
     let targets = match (targets, sample_targets) {
         (Some(_), Some(_)) => {
             return Err(PyValueError::new_err(
@@ -714,6 +1072,7 @@ pub fn run_move_to_target(
         "move-to-target",
         drive::scene::RATE_HZ,
         progress,
+        timeout,
     )
 }
 

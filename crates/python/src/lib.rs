@@ -120,12 +120,43 @@ fn is_skipped(name: &str) -> bool {
     pushlearn_core::is_skipped(name)
 }
 
+thread_local! {
+    /// The worlds' locks, held by the forking thread from just before a
+    /// fork until just after it, in the parent and in the child.
+    static FORK_HOLD: std::cell::RefCell<Option<sim_plugin::server::ForkHold>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// `os.register_at_fork(before=…)`: waits until no world of this process is
+/// being stepped and keeps it so until the fork is done, so that the child
+/// inherits no lock held by a thread it does not have.
+#[pyfunction]
+fn _before_fork() {
+    let hold = sim_plugin::server::hold_for_fork();
+    FORK_HOLD.with(|held| *held.borrow_mut() = Some(hold));
+}
+
+/// `os.register_at_fork(after_in_parent=…, after_in_child=…)`.
+#[pyfunction]
+fn _after_fork() {
+    FORK_HOLD.with(|held| held.borrow_mut().take());
+}
+
 /// The pushlearn models, implemented in Rust: GateModel, InteractionModel,
 /// HybridModel (with their worlds GateWorld, InteractionWorld and
 /// HybridWorld) and Aitm; and World, the world of pushlearn-sim in this
 /// process.
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_before_fork, m)?)?;
+    m.add_function(wrap_pyfunction!(_after_fork, m)?)?;
+    let hooks = pyo3::types::PyDict::new(m.py());
+    hooks.set_item("before", m.getattr("_before_fork")?)?;
+    hooks.set_item("after_in_parent", m.getattr("_after_fork")?)?;
+    hooks.set_item("after_in_child", m.getattr("_after_fork")?)?;
+    m.py()
+        .import("os")?
+        .call_method("register_at_fork", (), Some(&hooks))?;
     m.add_class::<models::PyGateModel>()?;
     m.add_class::<models::PyGateWorld>()?;
     m.add_class::<models::PyInteractionModel>()?;
@@ -139,6 +170,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
     m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;
     m.add_function(wrap_pyfunction!(bench::without_timing, m)?)?;
+    m.add_class::<bench::Report>()?;
+    m.add_class::<bench::Table>()?;
     m.add_function(wrap_pyfunction!(check_stats, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distance, m)?)?;
     m.add_function(wrap_pyfunction!(goal_distances, m)?)?;
@@ -152,6 +185,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ACTUATOR_NAME", pushlearn_core::ACTUATOR_NAME)?;
     m.add("BLUE_ID", pushlearn_core::BLUE_ID)?;
     m.add("RED_ID", pushlearn_core::RED_ID)?;
+    m.add("MAX_POSITION", pushlearn_core::MAX_POSITION)?;
     // Where the extension was built: the Gymnasium environments look for the
     // checkout's own `target/release/pushlearn-sim` after `PUSHLEARN_SIM_BIN`
     // and `PATH`, so that `pip install .` after `cargo build --release` needs

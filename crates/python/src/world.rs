@@ -19,7 +19,8 @@
 //! own random generator state), so worlds stepped from several Python threads
 //! take turns and each stays bit-identical to a world stepped alone.
 
-use std::sync::{Mutex, MutexGuard, PoisonError};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
 use std::time::Instant;
 
 use numpy::{
@@ -118,6 +119,16 @@ enum Failure {
     Physics(String),
 }
 
+impl Failure {
+    /// The failure as world `i` of a `Worlds` had it.
+    fn in_world(self, i: usize) -> Failure {
+        match self {
+            Failure::Refused(text) => Failure::Refused(format!("world {i}: {text}")),
+            Failure::Physics(text) => Failure::Physics(format!("world {i}: {text}")),
+        }
+    }
+}
+
 impl From<Failure> for PyErr {
     fn from(failure: Failure) -> PyErr {
         match failure {
@@ -180,6 +191,17 @@ impl Session {
         self.send(Payload::advance())?;
         Ok(())
     }
+
+    /// Whether [`Session::move_and_advance`] would be accepted: the Move and
+    /// the Advance as the world would check them now (a Move changes
+    /// nothing the Advance's check reads).
+    fn check_move_and_advance(&self, vx: f64, vy: f64) -> Result<(), Failure> {
+        for (offset, payload) in [(1, Payload::move_(vx, vy)), (2, Payload::advance())] {
+            let message = pb::ClientMessage::new(self.seq + offset, payload);
+            self.world.check(&message).map_err(Failure::Refused)?;
+        }
+        Ok(())
+    }
 }
 
 /// The lock-step world of `pushlearn-sim serve --mode lockstep` in this
@@ -187,6 +209,9 @@ impl Session {
 #[pyclass(name = "World", module = "pushlearn._native", frozen)]
 pub struct PyWorld {
     session: Mutex<Session>,
+    /// The process that last used the world: after a fork, the child's
+    /// first use finds out whether the lock was held at the fork.
+    pid: AtomicU32,
     scene: String,
     names: Vec<String>,
     latency_max: Option<u32>,
@@ -194,15 +219,36 @@ pub struct PyWorld {
 }
 
 impl PyWorld {
-    fn lock(&self) -> MutexGuard<'_, Session> {
+    fn lock(&self) -> Result<MutexGuard<'_, Session>, Failure> {
         // A panic while stepping leaves a world whose next command is
         // checked like any other; nothing half-written to guard.
-        self.session.lock().unwrap_or_else(PoisonError::into_inner)
+        let pid = std::process::id();
+        if self.pid.load(Ordering::Acquire) == pid {
+            return Ok(self.session.lock().unwrap_or_else(PoisonError::into_inner));
+        }
+        // The first use in a forked child: a lock another thread of the
+        // parent held at the fork stays held for ever, since that thread
+        // does not exist here. Say so instead of waiting.
+        match self.session.try_lock() {
+            Ok(session) => {
+                self.pid.store(pid, Ordering::Release);
+                Ok(session)
+            }
+            Err(TryLockError::Poisoned(poisoned)) => {
+                self.pid.store(pid, Ordering::Release);
+                Ok(poisoned.into_inner())
+            }
+            Err(TryLockError::WouldBlock) => Err(Failure::Physics(
+                "this World was in use by another thread when the process forked, and that \
+                 thread does not exist in the child: make a new World here"
+                    .to_owned(),
+            )),
+        }
     }
 
     /// Sends `payload` with the GIL released (it may step the world).
     fn send(&self, py: Python<'_>, payload: Payload) -> PyResult<u64> {
-        Ok(py.detach(|| self.lock().send(payload))?)
+        Ok(py.detach(|| self.lock()?.send(payload))?)
     }
 
     fn state_array<'py>(
@@ -243,6 +289,7 @@ impl PyWorld {
             .map_err(|e| value_error(format!("scene `{scene}`: {e}")))?;
         let hello = world.hello().encode_to_vec();
         Ok(PyWorld {
+            pid: AtomicU32::new(std::process::id()),
             session: Mutex::new(Session {
                 world,
                 seq: 0,
@@ -346,7 +393,7 @@ impl PyWorld {
     #[pyo3(signature = (*, planar = false))]
     fn advance<'py>(&self, py: Python<'py>, planar: bool) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let values = py.detach(|| {
-            let mut session = self.lock();
+            let mut session = self.lock()?;
             session.send(Payload::advance())?;
             session.rows().map(|rows| view(rows, planar))
         })?;
@@ -363,7 +410,7 @@ impl PyWorld {
         planar: bool,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let values = py.detach(|| {
-            let mut session = self.lock();
+            let mut session = self.lock()?;
             session.move_and_advance(vx, vy)?;
             session.rows().map(|rows| view(rows, planar))
         })?;
@@ -378,14 +425,14 @@ impl PyWorld {
     #[pyo3(signature = (*, planar = false))]
     fn state<'py>(&self, py: Python<'py>, planar: bool) -> PyResult<Bound<'py, PyArray2<f64>>> {
         // Without the GIL: another thread may be stepping this world.
-        let values = py.detach(|| self.lock().rows().map(|rows| view(rows, planar)))?;
+        let values = py.detach(|| self.lock()?.rows().map(|rows| view(rows, planar)))?;
         self.state_array(py, values)
     }
 
     /// The last published state as the daemon sent it: `pushlearn.WorldState`
     /// message bytes (ghosts and counters included).
     fn state_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
-        let bytes = py.detach(|| self.lock().published().map(|p| p.message.encode_to_vec()))?;
+        let bytes = py.detach(|| self.lock()?.published().map(|p| p.message.encode_to_vec()))?;
         Ok(PyBytes::new(py, &bytes))
     }
 
@@ -393,7 +440,7 @@ impl PyWorld {
     /// since the last reset, and the last command in force.
     fn counters(&self, py: Python<'_>) -> PyResult<(u64, u64)> {
         Ok(py.detach(|| {
-            self.lock()
+            self.lock()?
                 .published()
                 .map(|p| (p.message.step, p.message.applied_seq))
         })?)
@@ -424,6 +471,15 @@ impl PyWorlds {
             return Err(value_error("Worlds needs at least one World"));
         };
         let bodies = first.get().names.len();
+        // One lock per world is taken for a whole step of them all: a world
+        // listed twice would wait for itself.
+        for (i, world) in worlds.iter().enumerate() {
+            if let Some(j) = worlds[..i].iter().position(|w| w.is(world)) {
+                return Err(value_error(format!(
+                    "worlds[{j}] and worlds[{i}] are the same World; each may be listed once"
+                )));
+            }
+        }
         if let Some(other) = worlds.iter().find(|w| w.get().names.len() != bodies) {
             return Err(value_error(format!(
                 "every world must have the same bodies: {} has {:?}, {} has {:?}",
@@ -484,9 +540,29 @@ impl PyWorlds {
         let worlds = &self.worlds;
         let columns = if planar { PLANAR_COLUMNS } else { COLUMNS };
         let values = py.detach(|| -> Result<Vec<f64>, Failure> {
+            // Every world locked (in one global order, so that two calls on
+            // overlapping lists cannot deadlock) and checked before any
+            // steps: all or nothing, as the docstring promises.
+            let mut order: Vec<usize> = (0..n).collect();
+            order.sort_by_key(|&i| worlds[i].as_ptr() as usize);
+            let mut locked: Vec<Option<MutexGuard<'_, Session>>> = (0..n).map(|_| None).collect();
+            for i in order {
+                locked[i] = Some(worlds[i].get().lock()?);
+            }
+            let mut sessions: Vec<MutexGuard<'_, Session>> = locked.into_iter().flatten().collect();
+            for (i, (session, (&(vx, vy), &step))) in
+                sessions.iter().zip(moves.iter().zip(&stepped)).enumerate()
+            {
+                let checked = if step {
+                    session.check_move_and_advance(vx, vy)
+                } else {
+                    session.rows().map(|_| ())
+                };
+                checked.map_err(|failure| failure.in_world(i))?;
+            }
             let mut values = Vec::with_capacity(n * bodies * columns);
-            for ((world, &(vx, vy)), &step) in worlds.iter().zip(&moves).zip(&stepped) {
-                let mut session = world.get().lock();
+            for (session, (&(vx, vy), &step)) in sessions.iter_mut().zip(moves.iter().zip(&stepped))
+            {
                 if step {
                     session.move_and_advance(vx, vy)?;
                 }
@@ -525,7 +601,7 @@ pub fn step_messages(
         .collect();
     let world = PyWorld::new(scene, latency_max, Unsigned(0), None)?;
     let seconds = py.detach(|| -> Result<f64, Failure> {
-        let mut session = world.lock();
+        let mut session = world.lock()?;
         if world.latency_max.is_some() {
             session.send(Payload::latency_seed(0))?;
         }

@@ -30,7 +30,7 @@ from gymnasium import spaces
 
 from .. import native
 from .._pb import pushlearn_pb2
-from ..learner import ACTUATOR_NAME, Shape, State
+from ..learner import ACTUATOR_NAME, MAX_POSITION, Shape, State
 from ..local_world import LocalWorld
 from ..sim import SimClient, WorldHello
 from .render import Canvas, Drawn
@@ -83,6 +83,11 @@ class TargetRegion:
     they do not overlap.
     """
 
+    MAX_TRIES = 10_000
+    """Draws :meth:`sample` makes for one target before it gives up: a region
+    that leaves no room (every point too near the start) would otherwise loop
+    forever. The default region needs about 1.1 draws a target."""
+
     def __init__(
         self,
         x: tuple[float, float] = (-0.7, 0.7),
@@ -90,6 +95,22 @@ class TargetRegion:
         min_travel: float = 0.3,
         min_apart: float = 0.5,
     ) -> None:
+        for name, (low, high) in (("x", x), ("y", y)):
+            if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+                raise ValueError(
+                    f"TargetRegion {name} must be finite (low, high) with low <= high, "
+                    f"got {(low, high)}"
+                )
+            if max(abs(low), abs(high)) > MAX_POSITION:
+                raise ValueError(
+                    f"TargetRegion {name} = {(low, high)} reaches beyond the world "
+                    f"(at most {MAX_POSITION} m from the origin)"
+                )
+        for name, value in (("min_travel", min_travel), ("min_apart", min_apart)):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise ValueError(
+                    f"TargetRegion {name} must be a finite distance >= 0, got {value}"
+                )
         self.x = x
         self.y = y
         self.min_travel = min_travel
@@ -101,7 +122,7 @@ class TargetRegion:
         """One target per start, drawn from ``rng`` by rejection (uniform over the allowed set)."""
         targets: list[tuple[float, float, float]] = []
         for sx, sy in starts:
-            while True:
+            for _ in range(self.MAX_TRIES):
                 x = float(rng.uniform(*self.x))
                 y = float(rng.uniform(*self.y))
                 theta = float(rng.uniform(-math.pi, math.pi))
@@ -113,6 +134,12 @@ class TargetRegion:
                     continue
                 targets.append((x, y, theta))
                 break
+            else:
+                raise ValueError(
+                    f"{self!r} has no room for a target of the block starting at "
+                    f"({sx}, {sy}): no point in {self.MAX_TRIES} draws was at least "
+                    f"min_travel from it and min_apart from the other targets"
+                )
         return targets
 
     def __repr__(self) -> str:
@@ -345,6 +372,11 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
             )
         if not np.all(np.isfinite(values)):
             raise ValueError(f"{what} must be finite numbers, got {values.tolist()}")
+        if np.any(np.abs(values) > MAX_POSITION):
+            raise ValueError(
+                f"{what} must lie in the world (x, y at most {MAX_POSITION} m from the "
+                f"origin, θ at most {MAX_POSITION} rad), got {values.tolist()}"
+            )
         return tuple(float(v) for v in values)
 
     def _check_world(self, sim: str, latency_max: int | None) -> None:

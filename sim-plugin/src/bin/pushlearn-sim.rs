@@ -154,6 +154,12 @@ struct ServeArgs {
     /// A client whose queue stays full this long is disconnected.
     #[arg(long, value_name = "SECONDS", default_value = "5", value_parser = parse_seconds)]
     slow_client_timeout: Duration,
+    /// A client over which nothing has passed for this long — no frame from
+    /// it, no frame written to it (a lock-step world nobody advances, a
+    /// paused one, or a client that stopped reading) — is disconnected, so
+    /// that silent connections cannot hold every place.
+    #[arg(long, value_name = "SECONDS", default_value = "60", value_parser = parse_seconds)]
+    idle_timeout: Duration,
     /// Stop, as on SIGTERM, when standard input reaches its end: a program
     /// that starts the world with a pipe as its stdin (the Python package's
     /// Gymnasium environments do) then takes it down with itself, even when
@@ -238,6 +244,7 @@ fn serve_config(args: &ServeArgs) -> anyhow::Result<Config> {
         max_clients: args.max_clients,
         client_queue: args.client_queue,
         slow_client_limit: args.slow_client_timeout,
+        idle_limit: args.idle_timeout,
         ..Config::new(scene)
     })
 }

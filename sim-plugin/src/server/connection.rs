@@ -3,8 +3,9 @@
 
 use std::fmt;
 use std::net::SocketAddr;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use pushlearn::wire::pb;
 use pushlearn::wire::{FrameReader, FrameWriter, ServerConnection, WireError};
@@ -31,6 +32,8 @@ enum Ending {
     Broken(WireError),
     /// Its queue stayed full too long.
     TooSlow,
+    /// Nothing passed either way for the idle limit.
+    Idle(Duration),
     /// The daemon is shutting down.
     Shutdown,
 }
@@ -42,6 +45,7 @@ impl fmt::Display for Ending {
             Ending::BadFrame(err) => write!(f, "bad frame: {err}"),
             Ending::Broken(err) => write!(f, "connection broken: {err}"),
             Ending::TooSlow => f.write_str("too slow: its queue stayed full"),
+            Ending::Idle(limit) => write!(f, "idle: nothing passed either way for {limit:?}"),
             Ending::Shutdown => f.write_str("shutting down"),
         }
     }
@@ -89,12 +93,15 @@ async fn exchange(
     outbox: &Outbox,
     disconnect: &CancellationToken,
 ) -> Ending {
-    let writing = write_queue(writer, outbox);
+    let activity = Activity::new();
+    let writing = write_queue(writer, outbox, &activity);
     tokio::pin!(writing);
-    let reading = read_commands(reader, client, shared, outbox);
+    let reading = read_commands(reader, client, shared, outbox, &activity);
     tokio::pin!(reading);
     let ending = tokio::select! {
         () = disconnect.cancelled() => return cancelled(outbox),
+        // Dropping the reader frees a frame the client began and stalled.
+        () = activity.idle(shared.idle_limit) => return Ending::Idle(shared.idle_limit),
         written = &mut writing => return match written {
             Ok(()) => Ending::ClientClosed,
             Err(err) => Ending::Broken(err),
@@ -112,6 +119,40 @@ async fn exchange(
     ending
 }
 
+/// When a frame last passed over a connection, either way.
+struct Activity {
+    started: Instant,
+    /// Milliseconds after `started`.
+    last: AtomicU64,
+}
+
+impl Activity {
+    fn new() -> Activity {
+        Activity {
+            started: Instant::now(),
+            last: AtomicU64::new(0),
+        }
+    }
+
+    fn touch(&self) {
+        let now = u64::try_from(self.started.elapsed().as_millis()).unwrap_or(u64::MAX);
+        self.last.store(now, Ordering::Relaxed);
+    }
+
+    /// Resolves once nothing has passed for `limit`. A frame counts when it
+    /// is whole: a client trickling one, or stalled inside one, is idle.
+    async fn idle(&self, limit: Duration) {
+        loop {
+            let last = Duration::from_millis(self.last.load(Ordering::Relaxed));
+            let quiet = self.started.elapsed().saturating_sub(last);
+            match limit.checked_sub(quiet) {
+                Some(left) if !left.is_zero() => tokio::time::sleep(left).await,
+                _ => return,
+            }
+        }
+    }
+}
+
 fn cancelled(outbox: &Outbox) -> Ending {
     if outbox.was_too_slow() {
         Ending::TooSlow
@@ -127,10 +168,14 @@ async fn read_commands(
     client: ClientId,
     shared: &Shared,
     outbox: &Outbox,
+    activity: &Activity,
 ) -> Ending {
     loop {
         let message = match reader.read().await {
-            Ok(Some(message)) => message,
+            Ok(Some(message)) => {
+                activity.touch();
+                message
+            }
             Ok(None) => return Ending::ClientClosed,
             Err(err) => {
                 return match err.error_reply() {
@@ -160,9 +205,11 @@ async fn read_commands(
 async fn write_queue(
     mut writer: FrameWriter<pb::ServerMessage, OwnedWriteHalf>,
     outbox: &Outbox,
+    activity: &Activity,
 ) -> Result<(), WireError> {
     while let Some(message) = outbox.next().await {
         writer.write(&message).await?;
+        activity.touch();
     }
     writer.close().await
 }

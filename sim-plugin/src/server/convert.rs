@@ -89,7 +89,12 @@ fn set_pose(model: &pb::ModelState, scene: &Scene) -> Result<Command, Refusal> {
 fn describe(command: &Command) -> String {
     match command {
         Command::Actuator { .. } => "actuator".into(),
-        Command::SetPose { name, .. } => format!("set_pose: body '{name}'"),
+        Command::SetPose { name, .. } => {
+            format!(
+                "set_pose: body {}",
+                pushlearn::wire::quoted(&name.to_string())
+            )
+        }
         Command::SetPublishRate(_) => "publish_rate_hz".into(),
         Command::Pause | Command::Unpause => "pause".into(),
         Command::Reset => "reset".into(),

@@ -10,8 +10,8 @@ use std::collections::VecDeque;
 
 use pushlearn::wire::pb;
 
-use super::gate::{operation, Admission};
-use super::{convert, state_message, Latency, ServerError, Timing};
+use super::gate::{operation, Admission, Refusal};
+use super::{convert, state_message, Latency, ServerError, Timing, MAX_QUEUED_COMMANDS};
 use crate::lockstep::{Accepted, Event, Op, Stepper};
 use crate::scene::Scene;
 use crate::world::{Command, StepError, World};
@@ -25,6 +25,27 @@ const CLIENT: u64 = 1;
 /// spares the workers a lock hand-over at every step while their learners
 /// still run in parallel (`docs/performance.md` §1, "Embedded worlds").
 static INTERVAL: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// What [`hold_for_fork`] holds: no embedded world is in an interval, and
+/// no thread inside ODE, until it is dropped.
+pub struct ForkHold {
+    _ode: std::sync::MutexGuard<'static, ()>,
+    _interval: std::sync::MutexGuard<'static, ()>,
+}
+
+/// Waits until no embedded world steps and holds them all, for a fork: a
+/// lock held by another thread at the fork stays held in the child, which
+/// then waits for ever (16 of 20 children of a process stepping a world on
+/// another thread did). Taken in the stepping order, interval then ODE.
+pub fn hold_for_fork() -> ForkHold {
+    let interval = INTERVAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    ForkHold {
+        _ode: ode::hold_for_fork(),
+        _interval: interval,
+    }
+}
 
 /// A lock-step world served to one in-process client.
 pub struct EmbeddedWorld {
@@ -108,6 +129,10 @@ impl EmbeddedWorld {
                 return Ok(());
             }
         };
+        if !matches!(op, Op::Advance) && self.stepper.pending() >= MAX_QUEUED_COMMANDS {
+            self.outbox.push_back(Refusal::Busy.reply(message.seq));
+            return Ok(());
+        }
         self.admission.note(&op);
         let asked = std::time::Instant::now();
         // A poisoned lock guards nothing but the turn: take it over.
@@ -146,6 +171,22 @@ impl EmbeddedWorld {
                 err.to_string(),
             )),
         })
+    }
+
+    /// Whether [`EmbeddedWorld::send`] would accept `message` now, without
+    /// sending it: `Err` is the refusal's `Error` text. For a caller that
+    /// must check several commands (or worlds) before any takes effect.
+    ///
+    /// # Errors
+    /// The daemon's refusal of `message`.
+    pub fn check(&self, message: &pb::ClientMessage) -> Result<(), String> {
+        let op = operation(message, &self.scene)
+            .and_then(|op| self.admission.check(&op, self.timing).map(|()| op))
+            .map_err(|refusal| refusal.to_string())?;
+        if !matches!(op, Op::Advance) && self.stepper.pending() >= MAX_QUEUED_COMMANDS {
+            return Err(Refusal::Busy.to_string());
+        }
+        Ok(())
     }
 
     /// The wall time this world has spent stepping its physics, and the

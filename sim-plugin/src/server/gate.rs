@@ -152,7 +152,14 @@ impl Gate {
         let op = operation(message, &self.scene)?;
         let mut mirror = self.lock();
         mirror.admission.check(&op, self.timing)?;
-        if self.queued.load(Ordering::Acquire) >= MAX_QUEUED_COMMANDS {
+        // An Advance is what empties the queue, so it still passes a full
+        // one, up to a second bound of its own.
+        let limit = if matches!(op, Op::Advance) {
+            2 * MAX_QUEUED_COMMANDS
+        } else {
+            MAX_QUEUED_COMMANDS
+        };
+        if self.queued.load(Ordering::Acquire) >= limit {
             return Err(Refusal::Busy);
         }
         mirror.admission.note(&op);
@@ -213,7 +220,10 @@ impl Admission {
                         && self.ghosts.len() + new_ghosts.len() > MAX_GHOSTS
                     {
                         return Err(Refusal::World {
-                            command: format!("set_pose: body '{ghost}'"),
+                            command: format!(
+                                "set_pose: body {}",
+                                pushlearn::wire::quoted(&ghost.to_string())
+                            ),
                             error: CommandError::TooManyGhosts,
                         });
                     }

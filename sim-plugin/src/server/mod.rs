@@ -64,11 +64,17 @@ pub const DEFAULT_CLIENT_QUEUE: usize = 1024;
 /// disconnected, by default.
 pub const DEFAULT_SLOW_CLIENT_LIMIT: Duration = Duration::from_secs(5);
 
-/// Accepted commands waiting for the physics thread, over all clients. In
-/// realtime mode the physics thread takes every waiting command at each step
-/// boundary and in lock-step mode between intervals, so this is only reached
-/// by a client flooding a lock-step world with latency emulation without
-/// ever advancing it; commands beyond it are refused.
+/// How long nothing may pass over a connection, either way, before the
+/// client is disconnected, by default.
+pub const DEFAULT_IDLE_LIMIT: Duration = Duration::from_secs(60);
+
+/// Accepted commands waiting to be applied, over all clients: on the
+/// channel to the physics thread and held by the latency emulation for the
+/// next Advance. In realtime mode the physics thread applies every waiting
+/// command at each step boundary and in lock-step mode between intervals,
+/// so this is only reached by a client flooding a lock-step world with
+/// latency emulation without ever advancing it; commands beyond it are
+/// refused (`busy:`), in the daemon and in an [`EmbeddedWorld`] alike.
 pub const MAX_QUEUED_COMMANDS: usize = 65_536;
 
 /// How the world paces its steps (`docs/spec/world.md` §8).
@@ -102,7 +108,7 @@ impl Timing {
 
 pub use crate::lockstep::Latency;
 pub use convert::shapes;
-pub use embedded::EmbeddedWorld;
+pub use embedded::{hold_for_fork, EmbeddedWorld, ForkHold};
 
 /// Everything the daemon needs to start.
 #[derive(Debug, Clone)]
@@ -118,6 +124,9 @@ pub struct Config {
     pub client_queue: usize,
     /// A client whose queue stays full this long is disconnected.
     pub slow_client_limit: Duration,
+    /// A client over which nothing passed this long, no frame read from it
+    /// and none written to it, is disconnected.
+    pub idle_limit: Duration,
 }
 
 impl Config {
@@ -132,6 +141,7 @@ impl Config {
             max_clients: DEFAULT_MAX_CLIENTS,
             client_queue: DEFAULT_CLIENT_QUEUE,
             slow_client_limit: DEFAULT_SLOW_CLIENT_LIMIT,
+            idle_limit: DEFAULT_IDLE_LIMIT,
         }
     }
 
@@ -154,6 +164,11 @@ impl Config {
         if self.slow_client_limit.is_zero() {
             return Err(ServerError::Config(
                 "the slow-client limit must be positive".into(),
+            ));
+        }
+        if self.idle_limit.is_zero() {
+            return Err(ServerError::Config(
+                "the idle timeout must be positive".into(),
             ));
         }
         Ok(())
@@ -235,6 +250,7 @@ struct Shared {
     counters: Counters,
     client_queue: usize,
     slow_client_limit: Duration,
+    idle_limit: Duration,
 }
 
 impl Shared {
@@ -317,6 +333,7 @@ impl Server {
             counters: Counters::default(),
             client_queue: config.client_queue,
             slow_client_limit: config.slow_client_limit,
+            idle_limit: config.idle_limit,
         });
         let (ready_tx, ready_rx) = oneshot::channel();
         let physics = physics::spawn(

@@ -232,8 +232,11 @@ impl Physics {
                 }
                 ToPhysics::Stop => return Ok(()),
             };
-            self.shared.gate.taken(1);
+            // A command the latency emulation holds still waits: it leaves
+            // the count when the Advance after it applies it.
+            let held = self.stepper.pending();
             self.stepping(|stepper, mut events| stepper.take(accepted, &mut events))?;
+            self.shared.gate.taken(1 + held - self.stepper.pending());
         }
     }
 

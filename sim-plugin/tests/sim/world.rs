@@ -446,3 +446,139 @@ fn world_can_move_to_a_physics_thread() {
         .expect("physics thread finishes");
     assert_eq!(published, 10);
 }
+
+/// Issue 49, item 12: `World(scene)` read a FIFO forever (waiting for a
+/// writer) and `/dev/zero` until memory ran out. Only regular files of at
+/// most `MAX_SCENE_FILE_BYTES` are read.
+#[test]
+fn only_regular_scene_files_of_bounded_size_are_read() {
+    use sim_plugin::scene::MAX_SCENE_FILE_BYTES;
+    let err = Scene::load("/dev/zero").expect_err("a device");
+    assert!(
+        err.to_string().contains("a device, not a regular file"),
+        "{err}"
+    );
+    let dir = std::env::temp_dir().join(format!("pushlearn-scenes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let fifo = dir.join("scene.fifo");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo runs");
+    assert!(made.success());
+    // Before the fix this open waited for a writer that never comes.
+    let err = Scene::load(fifo.to_str().expect("utf-8")).expect_err("a FIFO");
+    assert!(
+        err.to_string().contains("a FIFO, not a regular file"),
+        "{err}"
+    );
+    let big = dir.join("big.toml");
+    let mut text = ONE_BLOCK.to_owned();
+    while (text.len() as u64) <= MAX_SCENE_FILE_BYTES {
+        text.push_str("# padding padding padding padding padding padding padding\n");
+    }
+    std::fs::write(&big, &text).expect("writable");
+    let err = Scene::load(big.to_str().expect("utf-8")).expect_err("too large");
+    assert!(
+        err.to_string().contains("larger than 1048576 bytes"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 49, item 12: no cap on bodies (1600 boxes took 2.9 s a message),
+/// and item 10's cap on names holds for scene files too.
+#[test]
+fn a_scene_has_at_most_max_bodies_with_names_of_bounded_length() {
+    use sim_plugin::scene::MAX_BODIES;
+    let block = |i: usize| {
+        format!(
+            "\n[[body]]\nname = \"box{i}\"\nid = {}\nshape = {{ type = \"box\", size = [0.1, 0.1, 0.1] }}\n\
+             mass = 1.0\ninertia = [1e-3, 1e-3, 1e-3]\nmu1 = 0.9\nmu2 = 0.9\ngravity = true\n\
+             start = {{ x = {}, y = 5.0, z = 0.05, yaw = 0.0 }}\nkp = 1e12\nkd = 1.0\n",
+            1000 + i,
+            i as f64 * 0.2
+        )
+    };
+    let at_cap: String = ONE_BLOCK.to_owned() + &(0..MAX_BODIES - 2).map(block).collect::<String>();
+    Scene::from_toml_str(&at_cap).expect("MAX_BODIES bodies are fine");
+    let over = at_cap + &block(MAX_BODIES);
+    let err = scene_error(&over);
+    assert!(
+        err.contains("65 entries; a scene has at most 64 bodies"),
+        "{err}"
+    );
+    let long = ONE_BLOCK.replace(
+        "name = \"blockA\"",
+        &format!("name = \"{}\"", "b".repeat(300)),
+    );
+    let err = scene_error(&long);
+    assert!(err.contains("is 300 bytes long (at most 256)"), "{err}");
+}
+
+/// Issue 49, item 12: bodies placed overlapping are shot apart, and reached
+/// 1130 m, past the ±1000 m a SetPose may reach. The world now treats a
+/// body beyond its bounds as a blow-up: it resets and says so, and never
+/// publishes one.
+#[test]
+fn a_body_shot_beyond_the_worlds_bounds_resets_the_world() {
+    use pushlearn::wire::BodyName;
+    use sim_plugin::world::StepError;
+    let mut world = world("two_blocks");
+    // Overlapping in the air at the edge of the world: blockB is shot out.
+    for (name, x) in [("blockA", 999.99), ("blockB", 999.9)] {
+        world
+            .apply(Command::SetPose {
+                name: BodyName::parse(name),
+                position: [x, 0.0, 0.5],
+                orientation: [0.0, 0.0, 0.0, 1.0],
+            })
+            .expect("within the bounds");
+    }
+    let mut reset = None;
+    for _ in 0..2000 {
+        match world.step() {
+            Ok(Some(snapshot)) => {
+                for body in &snapshot.bodies {
+                    assert!(
+                        body.position.iter().all(|v| v.abs() <= 1000.0),
+                        "published {} at {:?}",
+                        body.name,
+                        body.position
+                    );
+                }
+            }
+            Ok(None) => {}
+            Err(err @ StepError::Diverged { .. }) => {
+                reset = Some(err.to_string());
+                break;
+            }
+            Err(err) => panic!("{err}"),
+        }
+    }
+    let reset = reset.expect("a body left the world");
+    assert!(reset.contains("a position beyond ±1000 m"), "{reset}");
+    assert_eq!(world.step_count(), 0, "the world was reset");
+}
+
+/// Issue 49, item 8: an actuator placed at (999, 999) was accepted and could
+/// never move again (the drive stops a Move that leaves its bound).
+#[test]
+fn the_actuator_cannot_be_placed_outside_its_drive_bound() {
+    use pushlearn::wire::BodyName;
+    let mut world = world("one_block");
+    let place = |x: f64, y: f64| Command::SetPose {
+        name: BodyName::parse("actuator"),
+        position: [x, y, 0.03],
+        orientation: [0.0, 0.0, 0.0, 1.0],
+    };
+    let err = world
+        .apply(place(999.0, 999.0))
+        .expect_err("outside the bound");
+    assert!(err.to_string().contains("outside its drive bound"), "{err}");
+    world.apply(place(1.0, -1.0)).expect("within the bound");
+    world.apply(mv(0.5, 0.0)).expect("a Move");
+    let states = step_n(&mut world, 20);
+    let x = states.last().expect("published").bodies[0].position[0];
+    assert!(x > 1.005, "the actuator moves: x = {x}");
+}

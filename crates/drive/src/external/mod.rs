@@ -29,8 +29,8 @@ use pushlearn_core::Named;
 use serde::{Deserialize, Serialize};
 
 use learner::registry::ModelKind;
-use pushlearn::wire::pb;
 use pushlearn::wire::pb::learner::{self as lp, reply::Answer, request::Call};
+use pushlearn::wire::{pb, MAX_POSITION};
 use session::Session;
 pub use session::Source;
 
@@ -500,6 +500,14 @@ pub fn predicted_poses(
                 "predicted a non-finite pose for body {id}: ({x}, {y}, {theta})"
             ));
         }
+        // Finite but absurd (1.7e308) is refused too: its error squared is
+        // infinite, and the report printed `inf ± NaN` and wrote nulls.
+        if [x, y, theta].iter().any(|v| v.abs() > MAX_POSITION) {
+            return Err(format!(
+                "predicted a pose outside any world for body {id}: ({x}, {y}, {theta}) (at \
+                 most {MAX_POSITION} m from the origin on each axis, and {MAX_POSITION} rad)"
+            ));
+        }
         let state = ObjectState::new(x, y, theta);
         let duplicate = if id == learner::ACTUATOR_ID {
             actuator.replace(state).is_some()
@@ -748,5 +756,30 @@ impl Model for ExternalModel {
                 self.shared.info.name, self.shared.spec.source
             )
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 49, item 9: a prediction of 1.7e308 m was scored, printed as
+    /// `inf ± NaN` and written as nulls into the report.
+    #[test]
+    fn a_prediction_outside_any_world_is_refused_like_a_non_finite_one() {
+        let from = Poses {
+            actuator: ObjectState::new(0.0, 0.0, 0.0),
+            blocks: [(15, ObjectState::new(0.0, 0.25, 0.0))].into(),
+        };
+        let fine = [(8, 0.0, 0.01, 0.0), (15, 0.0, 0.25, 0.1)];
+        assert!(predicted_poses(fine, &from).is_ok());
+        for absurd in [1.7e308, -1001.0] {
+            let err = predicted_poses([(8, 0.0, 0.0, 0.0), (15, absurd, 0.25, 0.0)], &from)
+                .expect_err("refused");
+            assert!(err.contains("outside any world for body 15"), "{err}");
+        }
+        let err = predicted_poses([(8, 0.0, 0.0, 0.0), (15, 0.0, 0.25, 1e300)], &from)
+            .expect_err("refused");
+        assert!(err.contains("outside any world"), "{err}");
     }
 }

@@ -10,6 +10,7 @@
 //! the identity of what it parsed (`docs/spec/gate-model.md` §4.1).
 
 use std::io::{Read, Write};
+use std::time::{Duration, Instant};
 
 use bytes::BytesMut;
 use learner::features::ActuatorYaw;
@@ -22,7 +23,8 @@ use pushlearn::wire::pb::learner::{
     self as lp, reply::Answer, request::Call, state_ref::State, Reply, Request,
 };
 use pushlearn::wire::{
-    encode_frame, FrameDecoder, Shapes, WireError, MAX_ACTION_SPEED, MAX_POSITION,
+    encode_frame, quoted, FrameDecoder, Shapes, WireError, MAX_ACTION_SPEED, MAX_NAME_BYTES,
+    MAX_POSITION,
 };
 
 use learner::registry::{ModelKind, ModelOptions, WithModel};
@@ -30,12 +32,62 @@ use learner::registry::{ModelKind, ModelOptions, WithModel};
 /// Why serving ended early.
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
-    #[error("reading requests: {0}")]
+    // The causes are sources, not part of the text: a log line or error
+    // report that prints the chain showed each of them twice.
+    #[error("reading requests")]
     Read(#[from] WireError),
-    #[error("writing replies: {0}")]
-    Write(std::io::Error),
+    #[error("writing replies")]
+    Write(#[source] std::io::Error),
     #[error("message {seq}: {why}")]
     Request { seq: u64, why: String },
+    #[error("the driver closed the connection before its start")]
+    NoStart,
+    #[error("no request for {0:?}: closing an idle connection")]
+    Idle(Duration),
+}
+
+/// The tasks a Start may name (`docs/learner-protocol.md` §5).
+pub const TASKS: [&str; 3] = ["push-task", "constant-feedback", "move-to-target"];
+
+/// The Start rules of `docs/learner-protocol.md` §5 that a learner daemon
+/// enforces: protocol version 1, a task it knows, and a publish rate a
+/// world can have (a divisor of 1000 Hz).
+///
+/// # Errors
+/// The rule broken, worded for the driver.
+pub fn check_start(start: &lp::Start) -> Result<(), String> {
+    let version = lp::ProtocolVersion::ProtocolVersion as i32;
+    if start.protocol_version != version {
+        return Err(format!(
+            "protocol version {} is not spoken here (this learner speaks version {version})",
+            start.protocol_version
+        ));
+    }
+    if !TASKS.contains(&start.task.as_str()) {
+        let shown: String = start
+            .task
+            .chars()
+            .take(40)
+            .flat_map(char::escape_debug)
+            .collect();
+        let cut = if start.task.chars().count() > 40 {
+            "…"
+        } else {
+            ""
+        };
+        return Err(format!(
+            "unknown task '{shown}{cut}' (expected one of {})",
+            TASKS.join(", ")
+        ));
+    }
+    let hz = start.publish_rate_hz;
+    if hz == 0 || 1000 % hz != 0 {
+        return Err(format!(
+            "publish rate {hz} Hz: a world publishes at a divisor of 1000 Hz (100 or 10 in the \
+             experiments)"
+        ));
+    }
+    Ok(())
 }
 
 /// What a served model says in its hello (its actuator-yaw rule it says
@@ -60,13 +112,19 @@ struct Served<M: Model> {
 /// predict NaN.
 fn within_the_world(state: &lp::State) -> Result<(), String> {
     for body in &state.bodies {
+        if body.name.len() > MAX_NAME_BYTES {
+            return Err(format!(
+                "a body name of {} bytes (at most {MAX_NAME_BYTES})",
+                body.name.len()
+            ));
+        }
         let p = body.pose.and_then(|p| p.position).unwrap_or_default();
         for (axis, value) in [("x", p.x), ("y", p.y), ("z", p.z)] {
             if value.abs() > MAX_POSITION {
                 return Err(format!(
-                    "body '{}' position.{axis} = {value} is outside any world (at most \
+                    "body {} position.{axis} = {value} is outside any world (at most \
                      {MAX_POSITION} m from the origin)",
-                    body.name
+                    quoted(&body.name)
                 ));
             }
         }
@@ -79,21 +137,21 @@ fn within_the_world(state: &lp::State) -> Result<(), String> {
 /// position, rather than dropped so that the model falls back on another.
 fn shapes_of(state: &lp::State) -> Result<Shapes, String> {
     for (i, shape) in state.shapes.iter().enumerate() {
+        let name = quoted(&shape.name);
         if shape.body_shape().is_none() {
             return Err(format!(
-                "the shape of body '{}' is not one a world can have (a box, a cylinder or a \
+                "the shape of body {name} is not one a world can have (a box, a cylinder or a \
                  sphere with finite, positive sizes): {:?}",
-                shape.name, shape.geometry
+                shape.geometry
             ));
         }
         if !state.bodies.iter().any(|b| b.name == shape.name) {
             return Err(format!(
-                "a shape for body '{}', which the state does not list",
-                shape.name
+                "a shape for body {name}, which the state does not list"
             ));
         }
         if state.shapes[..i].iter().any(|s| s.name == shape.name) {
-            return Err(format!("two shapes for body '{}'", shape.name));
+            return Err(format!("two shapes for body {name}"));
         }
     }
     Ok(Shapes::from_shapes(&state.shapes))
@@ -195,12 +253,23 @@ impl<M: Model> Served<M> {
                 None
             }
             Call::SetTarget(target) => {
-                let wanted = (!target.clear).then(|| {
-                    Target::new(
-                        target.id,
-                        ObjectState::new(target.x(), target.y(), target.theta()),
-                    )
-                });
+                let wanted = if target.clear {
+                    None
+                } else {
+                    let (Some(x), Some(y), Some(theta)) = (target.x, target.y, target.theta) else {
+                        return Err("a target without x, y or theta (or clear)".into());
+                    };
+                    if [x, y, theta]
+                        .iter()
+                        .any(|v| !v.is_finite() || v.abs() > MAX_POSITION)
+                    {
+                        return Err(format!(
+                            "the target ({x:?}, {y:?}, {theta:?}) is not a finite pose within \
+                             any world (at most {MAX_POSITION} m from the origin)"
+                        ));
+                    }
+                    Some(Target::new(target.id, ObjectState::new(x, y, theta)))
+                };
                 let reply = match self.model.set_target(wanted) {
                     Ok(()) => lp::TargetReply {
                         accepted: true,
@@ -272,6 +341,20 @@ fn fail(output: &mut impl Write, seq: u64, why: String) -> ServeError {
     }
 }
 
+/// The frame of an `Error` reply to message `seq` saying `why`: what a
+/// daemon writes to a driver it turns away.
+///
+/// # Errors
+/// The reply is too large for a frame.
+pub fn error_frame(seq: u64, why: &str) -> Result<bytes::Bytes, WireError> {
+    encode_frame(&Reply {
+        seq,
+        answer: Some(Answer::Error(lp::Error {
+            message: why.to_owned(),
+        })),
+    })
+}
+
 fn send(output: &mut impl Write, seq: u64, answer: Answer) -> Result<(), ServeError> {
     let frame = encode_frame(&Reply {
         seq,
@@ -297,11 +380,18 @@ pub fn stdout_file() -> std::io::Result<std::fs::File> {
     ))
 }
 
+/// Sets how long the next read of a connection may wait (`None`: forever),
+/// as `TcpStream::set_read_timeout` does.
+pub type SetReadTimeout = Box<dyn FnMut(Option<Duration>) -> std::io::Result<()> + Send>;
+
 /// The requests of one driver, read frame by frame.
 pub struct Requests<R> {
     input: R,
     decoder: FrameDecoder<Request>,
     buffer: BytesMut,
+    /// A daemon's idle limit: each request must be complete within this
+    /// long of the previous one, however its bytes trickle in.
+    idle: Option<(Duration, SetReadTimeout)>,
 }
 
 impl<R: Read> Requests<R> {
@@ -310,24 +400,55 @@ impl<R: Read> Requests<R> {
             input,
             decoder: FrameDecoder::new(),
             buffer: BytesMut::with_capacity(4096),
+            idle: None,
         }
+    }
+
+    /// Ends reading with [`ServeError::Idle`] when a request is not complete
+    /// within `limit` of the previous one (or of the start): a silent or
+    /// trickling connection holds a daemon's place, and a stalled frame its
+    /// bytes, no longer than that. `set_timeout` bounds each read.
+    #[must_use]
+    pub fn with_idle_limit(mut self, limit: Duration, set_timeout: SetReadTimeout) -> Self {
+        self.idle = Some((limit, set_timeout));
+        self
     }
 
     /// The next request; `None` when the driver closed its end between
     /// requests.
     ///
     /// # Errors
-    /// The input is not frames of requests, or ends inside one.
+    /// The input is not frames of requests, or ends inside one, or the
+    /// idle limit passed.
     pub fn next_request(&mut self) -> Result<Option<Request>, ServeError> {
         let mut chunk = [0_u8; 4096];
+        let deadline = self.idle.as_ref().map(|(limit, _)| Instant::now() + *limit);
         loop {
             if let Some(request) = self.decoder.decode(&mut self.buffer)? {
                 return Ok(Some(request));
             }
-            let n = self
-                .input
-                .read(&mut chunk)
-                .map_err(|e| ServeError::Read(WireError::Io(e)))?;
+            if let (Some(deadline), Some((limit, set_timeout))) = (deadline, &mut self.idle) {
+                let left = deadline.saturating_duration_since(Instant::now());
+                if left.is_zero() {
+                    return Err(ServeError::Idle(*limit));
+                }
+                set_timeout(Some(left)).map_err(|e| ServeError::Read(WireError::Io(e)))?;
+            }
+            let n = match self.input.read(&mut chunk) {
+                Ok(n) => n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                // A read timeout: the loop finds the deadline passed.
+                Err(e)
+                    if deadline.is_some()
+                        && matches!(
+                            e.kind(),
+                            std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                        ) =>
+                {
+                    continue
+                }
+                Err(e) => return Err(ServeError::Read(WireError::Io(e))),
+            };
             if n == 0 {
                 return if self.buffer.is_empty() {
                     Ok(None)
@@ -357,33 +478,9 @@ impl<R: Read> Requests<R> {
                 seq: other.seq,
                 why: "the first request must be a start".into(),
             }),
-            None => Err(ServeError::Request {
-                seq: 0,
-                why: "the driver closed the connection before its start".into(),
-            }),
+            None => Err(ServeError::NoStart),
         }
     }
-}
-
-/// Turns a driver away: reads its Start and answers it with an Error
-/// saying `why`, so that the driver reports the reason instead of a bare
-/// closed connection (`docs/learner-protocol.md` §4 shows a learner's Error).
-///
-/// # Errors
-/// The transport failed, or the first request was not a Start.
-pub fn refuse(
-    mut requests: Requests<impl Read>,
-    mut output: impl Write,
-    why: &str,
-) -> Result<(), ServeError> {
-    let (seq, _) = requests.start()?;
-    send(
-        &mut output,
-        seq,
-        Answer::Error(lp::Error {
-            message: why.to_owned(),
-        }),
-    )
 }
 
 /// Serves `untrained` (a fresh clone per fold) to one driver whose Start
@@ -424,13 +521,18 @@ pub fn serve<M: Model>(
             ignores_actuator_yaw: served.untrained.actuator_yaw() == ActuatorYaw::ForceZero,
         }),
     )?;
+    let mut last = start_seq;
     while let Some(request) = requests.next_request()? {
         let seq = request.seq;
         let result = match request.call {
+            _ if seq <= last => Err(format!(
+                "seq {seq} after seq {last}: a driver numbers its requests 1, 2, 3, …"
+            )),
             Some(Call::Bye(_)) => return Ok(()),
             Some(call) => served.handle(call),
             None => Err("a request without a call".to_owned()),
         };
+        last = seq;
         match result {
             Ok(Some(answer)) => send(&mut output, seq, answer)?,
             Ok(None) => {}
@@ -454,7 +556,16 @@ pub fn serve_driver(
     mut requests: Requests<impl Read>,
     mut output: impl Write,
 ) -> Result<(), ServeError> {
-    let (seq, start) = requests.start()?;
+    // Every broken Start rule is answered with an Error naming it
+    // (`docs/learner-protocol.md` §8), not just a closed connection.
+    let (seq, start) = match requests.start() {
+        Ok(started) => started,
+        Err(ServeError::Request { seq, why }) => return Err(fail(&mut output, seq, why)),
+        Err(err) => return Err(err),
+    };
+    if let Err(why) = check_start(&start) {
+        return Err(fail(&mut output, seq, why));
+    }
     let job = Driver {
         identity: Identity {
             name: options.report_name(kind),

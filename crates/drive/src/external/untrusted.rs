@@ -224,8 +224,8 @@ mod tests {
             1,
             Call::Start(lp::Start {
                 protocol_version: lp::ProtocolVersion::ProtocolVersion as i32,
+                task: "push-task".into(),
                 publish_rate_hz: 100,
-                ..lp::Start::default()
             }),
         )
     }

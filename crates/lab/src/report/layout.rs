@@ -278,22 +278,30 @@ impl Table {
     #[must_use]
     pub fn csv(&self) -> String {
         let mut text = String::new();
-        let head: Vec<String> = self.columns.iter().flat_map(Column::csv_heads).collect();
-        let mut push = |fields: Vec<String>| {
+        let (head, rows) = self.csv_fields();
+        for fields in std::iter::once(head).chain(rows) {
             let fields: Vec<String> = fields.iter().map(|f| quoted(f)).collect();
             text.push_str(&fields.join(","));
             text.push('\n');
-        };
-        push(head);
-        for row in &self.rows {
-            push(
+        }
+        text
+    }
+
+    /// The CSV's fields unquoted: the header row, then one row per row.
+    #[must_use]
+    pub fn csv_fields(&self) -> (Vec<String>, Vec<Vec<String>>) {
+        let head = self.columns.iter().flat_map(Column::csv_heads).collect();
+        let rows = self
+            .rows
+            .iter()
+            .map(|row| {
                 row.iter()
                     .zip(&self.columns)
                     .flat_map(|(cell, c)| csv_fields(cell, &c.kind))
-                    .collect(),
-            );
-        }
-        text
+                    .collect()
+            })
+            .collect();
+        (head, rows)
     }
 }
 

@@ -188,3 +188,42 @@ async fn lockstep_never_waits_for_a_slow_reader() {
     assert!(stats.states_dropped > 0, "{stats:?}");
     assert_eq!(stats.slow_disconnects, 0, "{stats:?}");
 }
+
+/// Issue 49, item 2: 64 silent connections locked every other client out
+/// of the world for as long as they stayed (tried for 20 s in lock-step).
+/// Now a connection over which nothing passes either way for the idle
+/// timeout is closed, and its place is free again; a client that reads a
+/// stream of states is never idle.
+#[tokio::test]
+async fn silent_connections_are_closed_after_the_idle_timeout_and_free_their_places() {
+    let server = start(Config {
+        max_clients: 2,
+        idle_limit: Duration::from_millis(500),
+        ..lockstep()
+    })
+    .await;
+    let mut silent = [Raw::connect(&server).await, Raw::connect(&server).await];
+    // Half a frame begun and stalled: its bytes are dropped with it.
+    silent[1].send_bytes(&[0, 0xf0, 0, 0, 1, 2, 3]).await;
+    for raw in &mut silent {
+        within("the idle connection to be closed", raw.expect_closed()).await;
+    }
+    let mut client = connect(&server).await;
+    client
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .expect("served once the silent ones were closed");
+
+    let realtime = start(Config {
+        idle_limit: Duration::from_millis(300),
+        ..realtime(FAST)
+    })
+    .await;
+    let mut reader = connect(&realtime).await;
+    let started = std::time::Instant::now();
+    while started.elapsed() < Duration::from_millis(1500) {
+        within("a state", reader.next_state())
+            .await
+            .expect("still connected: states flow to it");
+    }
+}

@@ -375,3 +375,56 @@ async fn the_embedded_world_greets_and_refuses_as_the_daemon_does() {
     };
     assert_eq!(error.message, message);
 }
+
+/// Issue 49, item 1: the bound on waiting commands counted only those still
+/// on the channel, and the physics thread moves each Move into the latency
+/// emulation's pending list at once, so a flood without an Advance never
+/// met it (2 000 000 Moves: 7 → 322 MB, no `busy:`). Now the held Moves
+/// count until an Advance applies them: the flood is refused past the
+/// bound, an Advance still passes and empties it, and Moves are accepted
+/// again.
+#[tokio::test]
+async fn a_flood_of_moves_without_an_advance_is_refused_busy_and_an_advance_drains_it() {
+    use pushlearn::wire::encode_frame;
+    use sim_plugin::server::MAX_QUEUED_COMMANDS;
+
+    let server = start(with_latency(2, 1)).await;
+    let mut raw = Raw::connect(&server).await;
+    let over = 5;
+    let flood = MAX_QUEUED_COMMANDS as u64 + over;
+    let mut batch = Vec::new();
+    for seq in 1..=flood {
+        batch.extend(
+            encode_frame(&pb::ClientMessage::new(seq, Payload::move_(0.1, 0.0))).expect("frame"),
+        );
+        if batch.len() > 1 << 16 {
+            raw.send_bytes(&batch).await;
+            batch.clear();
+        }
+    }
+    raw.send_bytes(&batch).await;
+    for expected in (flood - over + 1)..=flood {
+        let error = raw.next_error().await;
+        assert_eq!(error.kind(), pb::error::Kind::Busy, "{error:?}");
+        assert_eq!(error.seq, expected);
+        assert!(error.message.starts_with("busy:"), "{}", error.message);
+    }
+    raw.send(&pb::ClientMessage::new(flood + 1, Payload::advance()))
+        .await;
+    match raw.next().await {
+        Some(pb::server_message::Payload::WorldState(state)) => {
+            assert_eq!(state.applied_seq, flood + 1);
+        }
+        other => panic!("expected the Advance's state, got {other:?}"),
+    }
+    raw.send(&pb::ClientMessage::new(flood + 2, Payload::move_(0.1, 0.0)))
+        .await;
+    // A barrier: its answer, and no busy before it, shows the Move passed.
+    raw.send(&pb::ClientMessage {
+        seq: flood + 3,
+        payload: None,
+    })
+    .await;
+    let error = raw.next_error().await;
+    assert_eq!(error.seq, flood + 3, "{error:?}");
+}
