@@ -211,6 +211,10 @@ class GateModel:
     def name(self) -> str:
         """The name reports give this model, as ``pushlearn experiment``
         names it: "gate", "gate+" (every change) or "gate+CHANGE+…"."""
+    @property
+    def ignores_actuator_yaw(self) -> bool:
+        """Whether the driver reads the actuator's yaw as 0 for this model
+        (``Hello.ignores_actuator_yaw``)."""
     def parse(self, bodies: Sequence[_Body]) -> GateWorld:
         """Parse one world-state message into a world of this model
         (``Model::parse``).
@@ -330,6 +334,10 @@ class InteractionModel:
     @property
     def name(self) -> str:
         """The name reports give this model: "interaction"."""
+    @property
+    def ignores_actuator_yaw(self) -> bool:
+        """Whether the driver reads the actuator's yaw as 0 for this model
+        (``Hello.ignores_actuator_yaw``)."""
     def parse(self, bodies: Sequence[_Body]) -> InteractionWorld:
         """Parse one world-state message into a world of this model
         (``Model::parse``); ``bodies`` as for GateModel.parse.
@@ -430,6 +438,10 @@ class HybridModel:
     def name(self) -> str:
         """The name reports give this model: "hybrid", or "hybrid-PARTS"
         with fewer parts."""
+    @property
+    def ignores_actuator_yaw(self) -> bool:
+        """Whether the driver reads the actuator's yaw as 0 for this model
+        (``Hello.ignores_actuator_yaw``)."""
     def parse(self, bodies: Sequence[_Body]) -> HybridWorld:
         """Parse one world-state message into a world of this model
         (``Model::parse``); ``bodies`` as for GateModel.parse. A block's

@@ -405,7 +405,8 @@ class State(_PosesView):
         for message in state.shapes:
             shapes.setdefault(message.name, Shape.from_proto(message))
         return cls(
-            Body.from_proto(model, shape=shapes.get(model.name)) for model in state.bodies
+            Body.from_proto(model, shape=shapes.get(model.name))
+            for model in state.bodies
         )
 
     @classmethod

@@ -108,6 +108,12 @@ class NativeLearner(Learner):
         raise NotImplementedError
 
     @property
+    def ignores_actuator_yaw(self) -> bool:  # type: ignore[override]
+        """The native model's rule: the driver reads the actuator's yaw as it
+        would for the built-in model (``Hello.ignores_actuator_yaw``)."""
+        return bool(self.template.ignores_actuator_yaw)
+
+    @property
     def display_name(self) -> str:
         """The name ``pushlearn experiment`` gives the built-in model under these
         options (``"gate"``, ``"gate+"``, ``"gate+unrounded"``, ``"interaction"``)."""
@@ -222,9 +228,6 @@ class GateLearner(NativeLearner):
 
     name: ClassVar[str] = "gate"
     version: ClassVar[str] = _version()
-    ignores_actuator_yaw: ClassVar[bool] = True
-    """The gate model forces the actuator's yaw to 0 when it parses a state, so the
-    driver must read it so too (start-position check, recorded poses)."""
 
     def __init__(
         self,

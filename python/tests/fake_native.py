@@ -58,6 +58,11 @@ class FakeModel:
     def name(self) -> str:
         return self.kind
 
+    @property
+    def ignores_actuator_yaw(self) -> bool:
+        """As the native models say it: the gate model's rule, not the others'."""
+        return self.kind == "gate"
+
     def copy(self) -> FakeModel:
         twin = type(self)(**self.params)
         twin.log = self.log
@@ -70,10 +75,11 @@ class FakeModel:
         self.log.append(("seed", seed))
 
     def parse(
-        self, bodies: list[tuple[str, int, tuple[float, ...], tuple[float, ...]]]
+        self,
+        bodies: list[tuple[str, int, tuple[float, ...], tuple[float, ...], Any]],
     ) -> FakeWorld:
         rows = []
-        for name, id_, position, q in bodies:
+        for name, id_, position, q, _shape in bodies:
             if name == "ground_plane" or "Shadow" in name or "wall" in name:
                 continue
             x, y, z, w = q

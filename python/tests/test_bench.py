@@ -74,14 +74,91 @@ def test_a_python_learner_gives_the_report_it_gives_through_learner_bit_for_bit(
     assert here.document["model"].startswith("gate")
 
 
-@pytest.mark.parametrize("model", ["gate", "hybrid", "floor"])
-def test_a_built_in_models_report_is_the_clis(
-    driver_bin: Path, tmp_path: Path, model: str
+# Every kind of experiment, reduced: (bench function, its arguments, the
+# command line's arguments).
+KINDS: dict[str, tuple[Any, dict[str, Any], list[str]]] = {
+    "push-task": (push_task, {"train_runs": [1], "folds": 1}, ["push-task"]),
+    "two-objects": (
+        push_task,
+        {"variant": "two-objects", "train_runs": [6], "folds": 1},
+        ["push-task", "--variant", "two-objects"],
+    ),
+    "new-objects": (
+        push_task,
+        {
+            "train_on": ["blue", "red"],
+            "test_on": "cylinder",
+            "train_runs": [2],
+            "folds": 1,
+        },
+        ["push-task", "--train-on", "blue,red", "--test-on", "cylinder"],
+    ),
+    "cross-object": (
+        push_task,
+        {"train_on": ["red"], "test_on": "blue", "train_runs": [1], "folds": 1},
+        ["push-task", "--train-on", "red", "--test-on", "blue"],
+    ),
+    "move-to-target": (
+        move_to_target,
+        {"targets": [(0.6, 0.7, 0.75)], "repetitions": 1, "max_steps": 300},
+        ["move-to-target", "--target", "0.6,0.7,0.75", "--repetitions", "1"],
+    ),
+}
+
+
+def _flags(kwargs: dict[str, Any]) -> list[str]:
+    """The command line's spelling of the counts in ``kwargs``."""
+    flags = []
+    if "train_runs" in kwargs:
+        flags += ["--train-runs", ",".join(map(str, kwargs["train_runs"]))]
+    if "folds" in kwargs:
+        flags += ["--folds", str(kwargs["folds"])]
+    if "max_steps" in kwargs:
+        flags += ["--max-steps", str(kwargs["max_steps"])]
+    return flags
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+@pytest.mark.parametrize("model", ["gate", "interaction", "gate+", "hybrid", "still"])
+def test_a_built_in_models_report_is_the_clis_in_every_kind(
+    driver_bin: Path, tmp_path: Path, model: str, kind: str
 ) -> None:
-    here = push_task(model, progress=False, **PUSH)
-    choice = ["--floor"] if model == "floor" else ["--model", model]
-    there = cli_document(driver_bin, tmp_path, "push-task", *PUSH_FLAGS, *choice)
+    run, kwargs, args = KINDS[kind]
+    here = run(model, progress=False, **kwargs)
+    there = cli_document(driver_bin, tmp_path, *args, *_flags(kwargs), "--model", model)
     assert comparable(here.document) == comparable(there)
+
+
+@pytest.mark.parametrize("oracle", ["oracle-known", "oracle-unknown"])
+def test_an_oracles_report_is_the_clis(
+    driver_bin: Path, tmp_path: Path, oracle: str
+) -> None:
+    here = push_task(oracle, progress=False, **PUSH)
+    latency = oracle.removeprefix("oracle-")
+    there = cli_document(
+        driver_bin, tmp_path, "push-task", *PUSH_FLAGS, "--oracle", latency
+    )
+    assert comparable(here.document) == comparable(there)
+
+
+@pytest.mark.parametrize("kind", ["new-objects", "move-to-target"])
+def test_the_sdks_learner_of_a_native_model_is_the_built_in_one(
+    driver_bin: Path, tmp_path: Path, kind: str
+) -> None:
+    """The SDK path in process: the hybrid model (which reads the shapes the
+    protocol's states carry) wrapped as a ``pushlearn.Learner`` gives the
+    built-in model's report."""
+    from pushlearn.models import HybridLearner
+
+    run, kwargs, args = KINDS[kind]
+    here = run(HybridLearner, progress=False, **kwargs)
+    there = cli_document(
+        driver_bin, tmp_path, *args, *_flags(kwargs), "--model", "hybrid"
+    )
+    mine, theirs = comparable(here.document), comparable(there)
+    # The built-in model has no learner record; the learner object one.
+    mine.pop("learner", None)
+    assert mine == theirs
 
 
 def test_the_report_has_the_tables_as_rows_and_the_progress_counts_every_job() -> None:

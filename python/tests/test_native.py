@@ -248,10 +248,14 @@ def test_parse_accepts_any_sequences_of_numbers(model_class: type[Model]) -> Non
     # Wider than the stub's Sequence[float] positions and int ids, on purpose.
     poses = m.parse(bodies).poses()  # type: ignore[arg-type]
     np.testing.assert_array_equal(poses, [[8, 0.0, 0.1, 0.0], [15, 0.0, 0.25, 0.0]])
-    with pytest.raises(TypeError):
+    with pytest.raises((TypeError, ValueError), match="a body is a tuple"):
         m.parse(
-            [["actuator", 8, (0.0, 0.1, 0.03), (0.0, 0.0, 0.0, 1.0)]]  # type: ignore[list-item]
-        )  # a body is a tuple
+            [("actuator", 8, (0.0, 0.1, 0.03))]  # type: ignore[list-item]
+        )  # four or five elements
+    with pytest.raises((TypeError, ValueError), match="not a pushlearn.Shape|no world"):
+        m.parse(
+            [("actuator", 8, (0.0, 0.1, 0.03), (0.0, 0.0, 0.0, 1.0), "sphere")]  # type: ignore[list-item]
+        )
 
 
 def test_parsed_poses_are_rounded_and_the_actuator_comes_first() -> None:

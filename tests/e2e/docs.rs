@@ -221,3 +221,140 @@ fn the_learner_protocol_pages_conversation_is_what_the_driver_sends_and_accepts(
         hex_dump(&requests)
     );
 }
+
+/// One number per fact: how long `pushlearn reproduce` or the ablation
+/// sweep takes depends on the machine and on the day, and lives in one
+/// place, `docs/results/timing.md`, which every run rewrites; every other
+/// page links to it. A sentence of a hand-written page that speaks of the
+/// reproduction or the ablation and names a duration is a copy that will
+/// go stale — unless it states a target (a goal, not a measurement).
+#[test]
+fn only_the_generated_timing_page_names_the_reproductions_durations() {
+    let root = crate::process::repo_root();
+    let mut pages: Vec<std::path::PathBuf> =
+        ["README.md", "python/README.md", "docs/results/template.md"]
+            .iter()
+            .map(|p| root.join(p))
+            .collect();
+    for entry in std::fs::read_dir(root.join("docs")).expect("docs/") {
+        let path = entry.expect("an entry of docs/").path();
+        // The page generated from the template is checked through it.
+        if path.extension().is_some_and(|e| e == "md") && !path.ends_with("results.md") {
+            pages.push(path);
+        }
+    }
+    let mut copies = Vec::new();
+    for page in &pages {
+        let text =
+            std::fs::read_to_string(page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+        for (line, sentence) in sentences(&text) {
+            let lower = sentence.to_lowercase();
+            let about = lower.contains("reproduce") || lower.contains("ablation");
+            // A target is stated as `Target: …` (a goal, not a measurement).
+            if about && !lower.contains("target:") {
+                if let Some(duration) = duration_in(&sentence) {
+                    copies.push(format!(
+                        "{}:{line}: `{duration}`",
+                        page.strip_prefix(&root).unwrap_or(page).display()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(
+        copies.is_empty(),
+        "durations of the reproduction outside docs/results/timing.md (link to it instead):\n{}",
+        copies.join("\n")
+    );
+}
+
+/// The sentences of a page with the line each starts on: split at a full
+/// stop followed by white space, and at blank lines and table rows.
+fn sentences(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let mut current = String::new();
+    let mut start = 1;
+    for (i, line) in text.lines().enumerate() {
+        if line.trim().is_empty() || line.trim_start().starts_with('|') {
+            if !current.trim().is_empty() {
+                out.push((start, std::mem::take(&mut current)));
+            }
+            current.clear();
+            if line.trim_start().starts_with('|') {
+                out.push((i + 1, line.to_owned()));
+            }
+            start = i + 2;
+            continue;
+        }
+        if current.is_empty() {
+            start = i + 1;
+        }
+        for word in line.split_whitespace() {
+            current.push_str(word);
+            current.push(' ');
+            let ends = word.trim_end_matches([')', '*']).ends_with('.');
+            if ends && !word.ends_with("..") && word.len() > 2 {
+                out.push((start, std::mem::take(&mut current)));
+                start = i + 1;
+            }
+        }
+    }
+    if !current.trim().is_empty() {
+        out.push((start, current));
+    }
+    out
+}
+
+/// The first duration written in `text` (`884 s`, `1 348.8 s`, `15
+/// minutes`, `about an hour`, `ten minutes`), if any.
+fn duration_in(text: &str) -> Option<String> {
+    let words: Vec<&str> = text
+        .split(|c: char| c.is_whitespace() || matches!(c, '(' | ')' | ',' | ';' | ':' | '*' | '`'))
+        .filter(|w| !w.is_empty())
+        .collect();
+    let unit = |w: &str| {
+        let w = w.trim_end_matches(['.', ')']);
+        matches!(
+            w,
+            "s" | "sec"
+                | "seconds"
+                | "second"
+                | "min"
+                | "mins"
+                | "minute"
+                | "minutes"
+                | "h"
+                | "hour"
+                | "hours"
+        )
+    };
+    let number = |w: &str| {
+        (w.chars().any(|c| c.is_ascii_digit())
+            && w.chars()
+                .all(|c| c.is_ascii_digit() || matches!(c, '.' | '\u{a0}' | '≈' | '~')))
+            || matches!(
+                w.to_lowercase().as_str(),
+                "an" | "half"
+                    | "one"
+                    | "two"
+                    | "three"
+                    | "five"
+                    | "ten"
+                    | "fifteen"
+                    | "twenty"
+                    | "thirty"
+                    | "forty"
+                    | "fifty"
+                    | "sixty"
+                    | "few"
+                    | "several"
+            )
+    };
+    for (i, pair) in words.windows(2).enumerate() {
+        if number(pair[0]) && unit(pair[1]) {
+            let start = i.saturating_sub(1);
+            return Some(words[start..i + 2].join(" "));
+        }
+    }
+    None
+}

@@ -8,96 +8,10 @@ use std::time::{Duration, Instant};
 use pushlearn::wire::encode_frame;
 use pushlearn::wire::pb::learner::{self as lp, reply::Answer, Reply};
 
-use crate::experiment::{experiment, read_json, succeeded, without_run_time, TempDir};
-use crate::process::{text, Background};
+use crate::experiment::{experiment, TempDir};
+use crate::process::text;
 
 const PUSHLEARN: &str = env!("CARGO_BIN_EXE_pushlearn");
-
-/// A report as JSON text without its run time and its learner's identity.
-fn comparable(path: &str) -> String {
-    let mut report = read_json(path);
-    let setup = report.as_object_mut().expect("a report object");
-    setup.remove("model");
-    setup.remove("learner");
-    without_run_time(report)
-}
-
-/// Equal texts, else the first difference in context.
-fn assert_same(inside: &str, outside: &str) {
-    let at = inside
-        .bytes()
-        .zip(outside.bytes())
-        .position(|(a, b)| a != b)
-        .unwrap_or(inside.len().min(outside.len()));
-    let context = |t: &str| {
-        t.get(at.saturating_sub(120)..(at + 80).min(t.len()))
-            .unwrap_or("")
-            .to_owned()
-    };
-    assert!(
-        inside == outside,
-        "reports differ at byte {at}:\nin-process: …{}…\nprotocol:   …{}…",
-        context(inside),
-        context(outside)
-    );
-}
-
-/// The cross-check of the whole path: a built-in model served over the
-/// protocol (in a child on stdin/stdout, or as a daemon) gives the report
-/// of the same model run in-process, bit for bit.
-#[test]
-fn a_built_in_model_over_the_protocol_gives_the_in_process_report() {
-    let dir = TempDir::new("learner-same");
-    let served = format!("{PUSHLEARN} serve-learner --model gate");
-    let push = ["push-task", "--train-runs", "1,3", "--folds", "2"];
-    let inside = dir.file("inside.json");
-    let outside = dir.file("outside.json");
-    succeeded(&experiment(
-        &[&push[..], &["--model", "gate", "--json", &inside]].concat(),
-    ));
-    let table = succeeded(&experiment(
-        &[&push[..], &["--learner", &served, "--json", &outside]].concat(),
-    ));
-    assert_same(&comparable(&inside), &comparable(&outside));
-    assert!(table.contains("learner 'gate'"), "{table}");
-    let report = read_json(&outside);
-    assert_eq!(report["model"], "gate");
-    assert_eq!(report["learner"]["source"], format!("`{served}`"));
-
-    // Move to Target through a learner daemon: the inverse model's actions
-    // and its exploration (seeded by NewFold) are the in-process ones.
-    let mut command = Command::new(PUSHLEARN);
-    command.args([
-        "serve-learner",
-        "--model",
-        "gate",
-        "--listen",
-        "127.0.0.1:0",
-    ]);
-    let (mut daemon, line) = Background::start(command, "serve-learner");
-    let addr = line
-        .trim()
-        .strip_prefix("listening on ")
-        .unwrap_or_else(|| panic!("no address from serve-learner: {line:?}"))
-        .to_owned();
-    let mtt = [
-        "move-to-target",
-        "--target",
-        "0.6,0.7,0.75",
-        "--repetitions",
-        "2",
-        "--max-steps",
-        "400",
-    ];
-    succeeded(&experiment(
-        &[&mtt[..], &["--model", "gate", "--json", &inside]].concat(),
-    ));
-    succeeded(&experiment(
-        &[&mtt[..], &["--learner-connect", &addr, "--json", &outside]].concat(),
-    ));
-    daemon.stop();
-    assert_same(&comparable(&inside), &comparable(&outside));
-}
 
 /// A learner that says hello and then does what `after` says; `$DIR` is
 /// where its canned frames are. It waits for the driver's first requests

@@ -14,6 +14,7 @@ mod docs;
 mod experiment;
 mod exposure;
 mod first_hour;
+mod identity;
 mod learner;
 mod python;
 mod record;

@@ -143,7 +143,7 @@ const CRATES: &[(&str, Table)] = &[
             ("oracle", &["scene"]),
             // The learner protocol's client and server, and which learner
             // an experiment runs.
-            ("external", &["frame", "process"]),
+            ("external", &["frame", "oracle", "process"]),
             // What the experiments measured, as plain data.
             ("results", &["latency", "oracle", "scene"]),
             // The driver, the tasks, the links and workers, and whole
@@ -166,7 +166,7 @@ const CRATES: &[(&str, Table)] = &[
             ("experiments", &["report"]),
             ("spec", &["experiments", "report"]),
             ("sweep", &["report"]),
-            ("reproduce", &["report", "spec", "sweep"]),
+            ("reproduce", &["experiments", "report", "spec", "sweep"]),
         ],
     ),
     // The application, on the engine and the experiments (whose modules it

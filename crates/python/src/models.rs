@@ -201,6 +201,14 @@ macro_rules! model_class {
                 self.options.model.report_name($kind)
             }
 
+            /// Whether the driver reads the actuator's yaw as 0 for this
+            /// model (`Model::actuator_yaw`; the learner protocol's
+            /// `Hello.ignores_actuator_yaw`).
+            #[getter]
+            fn ignores_actuator_yaw(&self) -> bool {
+                self.model.actuator_yaw() == learner::features::ActuatorYaw::ForceZero
+            }
+
             /// Parse one world-state message into a world of this model
             /// (`Model::parse`).
             ///

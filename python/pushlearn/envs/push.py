@@ -418,7 +418,8 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         if self._state is None:
             # In-process: built when asked for, not at every step.
             self._state = State.from_world_state(
-                pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes())
+                pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes()),
+                self._shapes,
             )
         return self._state
 

@@ -15,7 +15,9 @@
 
 use learner::eval::RunStepper;
 use learner::features::ACTUATOR_SHAPE;
-use learner::{Action, Frame, Model, ObjectState, Observation, Target, BLUE_ID, BLUE_NAME};
+use learner::{
+    Action, BodyShape, Frame, Model, ObjectState, Observation, Target, BLUE_ID, BLUE_NAME,
+};
 use learner::{ACTUATOR_ID, ACTUATOR_NAME};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -79,17 +81,34 @@ impl Findings {
 /// `block` (yaw 0, the heights the world publishes).
 #[must_use]
 pub fn scripted_state(actuator: (f64, f64), block: (f64, f64)) -> Frame {
-    let body = |name: &str, id, (x, y): (f64, f64), z| Observation {
+    let body = |name: &str, id, (x, y): (f64, f64), z, shape| Observation {
         name: name.to_owned(),
         id,
         position: [x, y, z],
         orientation: [0.0, 0.0, 0.0, 1.0],
-        shape: None,
+        shape: Some(shape),
     };
+    // The thesis's bodies with the shapes an experiment's states carry.
     Frame {
         objects: vec![
-            body(ACTUATOR_NAME, ACTUATOR_ID, actuator, 0.03),
-            body(BLUE_NAME, BLUE_ID, block, 0.05),
+            body(
+                ACTUATOR_NAME,
+                ACTUATOR_ID,
+                actuator,
+                0.03,
+                BodyShape::Sphere {
+                    radius: ACTUATOR_SHAPE.radius,
+                },
+            ),
+            body(
+                BLUE_NAME,
+                BLUE_ID,
+                block,
+                0.05,
+                BodyShape::Box {
+                    size: [0.5, 0.1, 0.1],
+                },
+            ),
         ],
     }
 }

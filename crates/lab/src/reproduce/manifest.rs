@@ -784,6 +784,21 @@ pub fn quick() -> Vec<Entry> {
             move_to_target(model, 1),
         ));
     }
+    // The reference rows on the curves' runs: every kind of reference
+    // checked in CI, for a second or two.
+    for (name, learner) in references() {
+        entries.push(Entry::new(
+            reference_entry_name(name, ""),
+            Spec::PushTask {
+                model: learner,
+                options: ModelOptions::default(),
+                variant: Variant::Random,
+                transfer: None,
+                train_runs: vec![1, 3, 10],
+                folds: 2,
+            },
+        ));
+    }
     entries
 }
 

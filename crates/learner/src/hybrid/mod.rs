@@ -2,8 +2,9 @@
 //! online, and a memory for the residual the mechanics miss
 //! (`docs/models.md` "The hybrid model"). Not a model of the thesis.
 //!
-//! * [`mechanics`]: contact geometry and quasi-static pushing on an
-//!   ellipsoidal limit surface, free sliding after contact;
+//! * [`mechanics`]: contact geometry and quasi-static pushing with friction
+//!   at the block's supports (the twist of least dissipation, a linear
+//!   programme), free sliding after contact;
 //! * [`residual`]: the k-nearest-neighbour memory of residuals;
 //! * [`HybridModel`]: the [`Model`](crate::Model) implementation: the
 //!   actuator by least squares on the commanded velocities, every block by

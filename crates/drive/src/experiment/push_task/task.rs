@@ -9,7 +9,7 @@ use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 
 use super::objects::View;
-use super::protocol::PushJob;
+use super::protocol::{PushJob, Variant};
 use crate::experiment::driver::{Core, Task};
 use crate::experiment::ExperimentError;
 use crate::results::push_task::{EndPoses, PushJobResult, SelectionCount};
@@ -41,6 +41,14 @@ pub struct PushTask {
     /// The real state of the previous message of the current test run, for
     /// the selector samples.
     previous_real: Option<Poses>,
+    /// Whether to sample the model's selector on the test runs' real
+    /// transitions: the thesis draft's protocol, whose tables show the
+    /// agreement. It asks the model about real states the test chain never
+    /// shows it, which the learner protocol cannot do without showing a
+    /// learner its test runs; so it is a diagnostic of the draft's tables
+    /// alone, and every other report is the same in process and behind
+    /// the protocol.
+    samples_selector: bool,
     /// Selector samples of the test runs' real transitions.
     pub selection: SelectionCount,
     /// The actual and predicted end configurations of the test runs, for
@@ -68,6 +76,7 @@ impl PushTask {
             keypoints: Vec::new(),
             keypoints_run: KeyPointRun::default(),
             previous_real: None,
+            samples_selector: job.protocol.variant == Variant::Draft,
             selection: SelectionCount::default(),
             end_poses: Vec::new(),
         }
@@ -80,7 +89,11 @@ impl PushTask {
         if let Some(p) = predicted {
             self.keypoints_run.add(&actual, &p);
         }
-        if let Some(old) = &self.previous_real {
+        if let Some(old) = self
+            .previous_real
+            .as_ref()
+            .filter(|_| self.samples_selector)
+        {
             for (truth, chosen) in model.selection(old, &actual, PUSH_ACTION) {
                 self.selection.samples += 1;
                 match truth {

@@ -10,6 +10,7 @@ use super::PlotError;
 use crate::report::plural;
 use drive::results::push_task::CurveEntry;
 use drive::results::PushReport;
+use learner::registry::ModelKind;
 
 /// Draws `dir/{stem}.png` and `.svg`: block position, block orientation and
 /// actuator error over the training runs (all 21 test positions, mean ±
@@ -29,17 +30,25 @@ pub fn learners(
         .max()
         .unwrap_or(1) as f64;
     let folds = curves.iter().map(|(_, r)| r.folds).max().unwrap_or(0);
-    let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd| Panel {
+    // `still`'s actuator never moves: 0.75 m after a run, off the scale of
+    // every learner's actuator; it is in the tables.
+    let still = |report: &PushReport| {
+        ModelKind::of_report_name(&report.setup.model) == Some(ModelKind::Still)
+    };
+    let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd, actuator: bool| Panel {
         title: title.to_owned(),
         x_desc: "training runs (N_train)".to_owned(),
         y_desc: y.to_owned(),
         x_range: 0.0..n_max + 1.0,
         offset: 0.3,
         counts: true,
+        // Left out with no points rather than no series, so that every
+        // learner keeps its colour in every panel.
         series: coloured(curves.iter().map(|(label, report)| {
             let points = report
                 .results
                 .iter()
+                .filter(|_| !(actuator && still(report)))
                 .map(|e| {
                     let m = get(e);
                     (e.train_runs as f64, m.mean, m.std)
@@ -56,11 +65,24 @@ pub fn learners(
         columns: 3,
         panel_size: (420, 340),
         panels: vec![
-            panel("block position", "error [m]", |e| e.blue.block_pos_err),
-            panel("block orientation", "error [rad]", |e| e.blue.block_ori_err),
-            panel("actuator position", "error [m]", |e| {
-                e.blue.actuator_pos_err
-            }),
+            panel(
+                "block position",
+                "error [m]",
+                |e| e.blue.block_pos_err,
+                false,
+            ),
+            panel(
+                "block orientation",
+                "error [rad]",
+                |e| e.blue.block_ori_err,
+                false,
+            ),
+            panel(
+                "actuator position",
+                "error [m]",
+                |e| e.blue.actuator_pos_err,
+                true,
+            ),
         ],
     };
     let mut written = Vec::new();
