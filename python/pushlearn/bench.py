@@ -24,7 +24,9 @@ between the driver and your learner::
 
 ``learner`` is a :class:`~pushlearn.Learner` (an instance, or its class or
 any function that makes one, called once), or the name of a built-in model
-(``"gate"``, ``"hybrid"``, …, or ``"floor"``, the world predicting itself).
+(``"gate"``, ``"hybrid"``, ``"still"``, …, or an oracle, ``"oracle-known"`` or
+``"oracle-unknown"``: a copy of the world predicting itself, docs/models.md
+"Reference rows").
 A learner object is called exactly as :func:`pushlearn.serve` calls it for
 ``pushlearn experiment --learner``: the same :class:`~pushlearn.State` and
 :class:`~pushlearn.Prediction` objects, the same checks of its answers, in

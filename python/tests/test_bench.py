@@ -239,7 +239,8 @@ def test_a_wrong_prediction_is_named() -> None:
             ),
             "finite",
         ),
-        (lambda: move_to_target("floor", progress=False), "floor"),
+        (lambda: move_to_target("oracle-unknown", progress=False), "does not plan"),
+        (lambda: push_task("floor", progress=False), "unknown model 'floor'"),
         (lambda: push_task(42, progress=False), "expected a pushlearn.Learner"),  # type: ignore[arg-type]
     ],
 )
