@@ -13,6 +13,8 @@ import subprocess
 import sys
 import time
 
+from wire import varint
+
 sim = sys.argv[1]
 moves = int(sys.argv[2]) if len(sys.argv) > 2 else 2_000_000
 daemon = subprocess.Popen(
@@ -33,15 +35,6 @@ def rss_mb() -> int:
     with open(f"/proc/{daemon.pid}/status") as status:
         kb = next(int(line.split()[1]) for line in status if line.startswith("VmRSS"))
     return kb // 1024
-
-
-def varint(value: int) -> bytes:
-    out = b""
-    while True:
-        low, value = value & 0x7F, value >> 7
-        if not value:
-            return out + bytes([low])
-        out += bytes([low | 0x80])
 
 
 def frame(seq: int, payload: bytes) -> bytes:

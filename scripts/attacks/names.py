@@ -10,6 +10,8 @@ import subprocess
 import sys
 import time
 
+from wire import length_delimited, varint
+
 sim = sys.argv[1]
 log = open("/tmp/pushlearn-attack-names.log", "w")
 p = subprocess.Popen(
@@ -21,28 +23,15 @@ p = subprocess.Popen(
 port = next(int(l.rsplit(":", 1)[1].split()[0]) for l in p.stdout if "127.0.0.1:" in l)
 
 
-def varint(v):
-    out = b""
-    while True:
-        b = v & 0x7F
-        v >>= 7
-        if v:
-            out += bytes([b | 0x80])
-        else:
-            return out + bytes([b])
-
-
-def ld(field, payload):
-    return bytes([field << 3 | 2]) + varint(len(payload)) + payload
-
-
 def set_pose(seq, name):
-    pos = ld(
+    pos = length_delimited(
         1, b"\x09" + struct.pack("<d", 0.0) + b"\x11" + struct.pack("<d", 5000.0)
     )  # y beyond the world
-    pose = ld(4, pos + ld(2, b"\x21" + struct.pack("<d", 1.0)))
-    model = ld(1, name.encode()) + pose
-    msg = b"\x08" + varint(seq) + ld(4, ld(2, model))
+    pose = length_delimited(
+        4, pos + length_delimited(2, b"\x21" + struct.pack("<d", 1.0))
+    )
+    model = length_delimited(1, name.encode()) + pose
+    msg = b"\x08" + varint(seq) + length_delimited(4, length_delimited(2, model))
     return struct.pack(">I", len(msg)) + msg
 
 

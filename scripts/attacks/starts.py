@@ -10,6 +10,8 @@ import struct
 import subprocess
 import sys
 
+from wire import length_delimited, varint
+
 bin_ = sys.argv[1]
 p = subprocess.Popen(
     [bin_, "serve-learner", "--listen", "0"],
@@ -20,29 +22,20 @@ p = subprocess.Popen(
 port = int(p.stdout.readline().rsplit(":", 1)[1])
 
 
-def varint(v):
-    out = b""
-    while True:
-        b = v & 0x7F
-        v >>= 7
-        if v:
-            out += bytes([b | 0x80])
-        else:
-            return out + bytes([b])
-
-
-def ld(f, b):
-    return bytes([f << 3 | 2]) + varint(len(b)) + b
-
-
 def req(seq, field, body):
-    m = b"\x08" + varint(seq) + ld(field, body)
+    m = b"\x08" + varint(seq) + length_delimited(field, body)
     return struct.pack(">I", len(m)) + m
 
 
 def start(version, task, rate):
     return req(
-        1, 2, b"\x08" + varint(version) + ld(2, task.encode()) + b"\x18" + varint(rate)
+        1,
+        2,
+        b"\x08"
+        + varint(version)
+        + length_delimited(2, task.encode())
+        + b"\x18"
+        + varint(rate),
     )
 
 

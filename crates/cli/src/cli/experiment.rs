@@ -30,11 +30,12 @@ use super::parse::parse_pose;
 /// Run one of the thesis's experiments and print its table beside the
 /// thesis's numbers.
 ///
-/// Each worker starts its own world (`pushlearn-sim serve` on a free port,
-/// found next to this executable, on PATH, or at --sim-bin) and runs
-/// independent jobs; results are gathered in job order, so they do not
-/// depend on --workers. In the lock-step modes the same --seed gives the same
-/// results.
+/// Each worker has its own world (in the lock-step modes a world inside
+/// the worker, by default; with --world spawn or --mode realtime a
+/// `pushlearn-sim serve` child on a free port, found next to this
+/// executable, on PATH, or at --sim-bin) and runs independent jobs; results
+/// are gathered in job order, so they do not depend on --workers. In the
+/// lock-step modes the same --seed gives the same results.
 #[derive(Debug, Args)]
 pub struct ExperimentArgs {
     #[command(subcommand)]
