@@ -21,6 +21,10 @@ pub const KNOWN_IDS: [(&str, u32); 4] = [
     (CYLINDER_NAME, CYLINDER_ID),
 ];
 
+/// The id no body may have: protobuf's default, what a `ModelState` without
+/// an id carries, so a learner could not tell such a body from a missing id.
+pub const UNSET_ID: u32 = 0;
+
 /// Name of the body the actuator commands drive.
 pub const ACTUATOR: &str = ACTUATOR_NAME;
 
@@ -94,6 +98,34 @@ pub struct Scene {
     /// Dynamic bodies, in the order they are published.
     #[serde(rename = "body")]
     pub bodies: Vec<BodySpec>,
+    /// Friction of chosen pairs of bodies (`[[friction]]`), overriding the
+    /// minimum rule for them: a block's friction with the ground and with
+    /// the pusher set independently.
+    #[serde(rename = "friction", default, skip_serializing_if = "Vec::is_empty")]
+    pub frictions: Vec<PairFriction>,
+}
+
+/// The friction coefficients of the contacts between two bodies,
+/// replacing `min(μ_a, μ_b)` for that pair (softness still comes from the
+/// two bodies' `kp` and `kd`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PairFriction {
+    /// The two bodies by name, in either order; `ground_plane` is the
+    /// ground.
+    pub between: [String; 2],
+    /// Coulomb friction along ODE's first friction direction.
+    pub mu1: f64,
+    /// Along the second direction; `mu1` when absent (isotropic).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mu2: Option<f64>,
+}
+
+impl PairFriction {
+    /// `(mu1, mu2)`, with `mu2` defaulting to `mu1`.
+    pub fn coefficients(&self) -> (f64, f64) {
+        (self.mu1, self.mu2.unwrap_or(self.mu1))
+    }
 }
 
 fn default_publish_rate() -> u32 {
@@ -217,8 +249,15 @@ pub struct BodySpec {
     pub shape: ShapeSpec,
     /// kg.
     pub mass: f64,
-    /// Diagonal of the body-frame inertia tensor about the centre, kg·m².
-    pub inertia: [f64; 3],
+    /// Diagonal of the body-frame inertia tensor about the shape's centre,
+    /// kg·m²; absent, that of a solid of uniform density
+    /// ([`BodySpec::inertia_about_centre`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<[f64; 3]>,
+    /// The centre of mass in the body frame, from the shape's centre, m;
+    /// absent, the shape's centre. The published pose stays the shape's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub centre_of_mass: Option<[f64; 3]>,
     pub mu1: f64,
     pub mu2: f64,
     #[serde(default = "yes")]
@@ -242,6 +281,45 @@ fn default_kd() -> f64 {
     1.0
 }
 
+impl BodySpec {
+    /// The diagonal of the inertia tensor about the shape's centre: the
+    /// file's `inertia`, or else a solid of uniform density of this mass.
+    pub fn inertia_about_centre(&self) -> [f64; 3] {
+        self.inertia
+            .unwrap_or_else(|| self.shape.solid_inertia(self.mass))
+    }
+
+    /// The centre of mass from the shape's centre, body frame (zero when the
+    /// file gives none).
+    pub fn centre_of_mass(&self) -> [f64; 3] {
+        self.centre_of_mass.unwrap_or([0.0; 3])
+    }
+
+    /// The inertia tensor about the centre of mass, body frame, as its
+    /// diagonal and its off-diagonal entries `[xy, xz, yz]` (tensor entries,
+    /// `I_xy = −∫ x y dm`). By the parallel-axis theorem the tensor about the
+    /// shape's centre is this one plus `m (|c|² E − c cᵀ)`, c the centre of
+    /// mass from the centre, so this one is that tensor minus it. Without an
+    /// offset it is the file's diagonal untouched.
+    pub fn inertia_about_centre_of_mass(&self) -> ([f64; 3], [f64; 3]) {
+        let centre = self.inertia_about_centre();
+        let c = self.centre_of_mass();
+        if c == [0.0; 3] {
+            return (centre, [0.0; 3]);
+        }
+        let m = self.mass;
+        let [x, y, z] = c;
+        (
+            [
+                centre[0] - m * (y * y + z * z),
+                centre[1] - m * (x * x + z * z),
+                centre[2] - m * (x * x + y * y),
+            ],
+            [m * x * y, m * x * z, m * y * z],
+        )
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum ShapeSpec {
@@ -257,6 +335,38 @@ pub enum ShapeSpec {
         radius: f64,
         length: f64,
     },
+}
+
+impl ShapeSpec {
+    /// The diagonal of the inertia tensor of a solid of uniform density
+    /// and mass `mass` about its centre, body frame.
+    pub fn solid_inertia(&self, mass: f64) -> [f64; 3] {
+        match *self {
+            ShapeSpec::Sphere { radius } => [0.4 * mass * radius * radius; 3],
+            ShapeSpec::Box { size: [a, b, c] } => [
+                mass * (b * b + c * c) / 12.0,
+                mass * (a * a + c * c) / 12.0,
+                mass * (a * a + b * b) / 12.0,
+            ],
+            ShapeSpec::Cylinder { radius, length } => {
+                let across = mass * (3.0 * radius * radius + length * length) / 12.0;
+                [across, across, mass * radius * radius / 2.0]
+            }
+        }
+    }
+
+    /// Whether the body-frame point `p` (from the centre) lies strictly
+    /// inside the shape.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        let [x, y, z] = p;
+        match *self {
+            ShapeSpec::Sphere { radius } => x * x + y * y + z * z < radius * radius,
+            ShapeSpec::Box { size } => (0..3).all(|k| p[k].abs() < size[k] / 2.0),
+            ShapeSpec::Cylinder { radius, length } => {
+                x * x + y * y < radius * radius && z.abs() < length / 2.0
+            }
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -453,6 +563,45 @@ impl Scene {
         for (i, b) in self.bodies.iter().enumerate() {
             self.validate_body(i, b)?;
         }
+        for (i, f) in self.frictions.iter().enumerate() {
+            self.validate_friction(i, f)?;
+        }
+        Ok(())
+    }
+
+    fn validate_friction(&self, i: usize, f: &PairFriction) -> Result<(), SceneError> {
+        let field = |f: &str| format!("friction[{i}].{f}");
+        for name in &f.between {
+            if name != GROUND_NAME && self.body_index(name).is_none() {
+                return Err(invalid(
+                    field("between"),
+                    format!(
+                        "names `{name}`, which is neither a body of the scene nor `{GROUND_NAME}`"
+                    ),
+                ));
+            }
+        }
+        let [a, b] = &f.between;
+        if a == b {
+            return Err(invalid(
+                field("between"),
+                format!("names `{a}` twice; a pair is two different bodies"),
+            ));
+        }
+        let same = |o: &PairFriction| {
+            let [c, d] = &o.between;
+            (a == c && b == d) || (a == d && b == c)
+        };
+        if let Some(j) = self.frictions[..i].iter().position(same) {
+            return Err(invalid(
+                field("between"),
+                format!("`{a}` and `{b}` already have their friction in friction[{j}]"),
+            ));
+        }
+        non_negative(&field("mu1"), f.mu1)?;
+        if let Some(mu2) = f.mu2 {
+            non_negative(&field("mu2"), mu2)?;
+        }
         Ok(())
     }
 
@@ -480,8 +629,22 @@ impl Scene {
                 format!("`{}` is used twice", b.name),
             ));
         }
-        if self.bodies[..i].iter().any(|o| o.id == b.id) {
-            return Err(invalid(field("id"), format!("{} is used twice", b.id)));
+        if let Some(j) = self.bodies[..i].iter().position(|o| o.id == b.id) {
+            return Err(invalid(
+                field("id"),
+                format!(
+                    "{} is already the id of body[{j}] (`{}`)",
+                    b.id, self.bodies[j].name
+                ),
+            ));
+        }
+        if b.id == UNSET_ID {
+            return Err(invalid(
+                field("id"),
+                format!(
+                    "{UNSET_ID} is reserved: it is what a state without an id carries; any other free id will do"
+                ),
+            ));
         }
         for (name, id) in KNOWN_IDS {
             if (b.name == name) != (b.id == id) {
@@ -509,8 +672,28 @@ impl Scene {
             }
         }
         within(&field("mass"), b.mass, MIN_MASS, MAX_MASS)?;
-        for v in b.inertia {
-            within(&field("inertia"), v, MIN_INERTIA, MAX_INERTIA)?;
+        match b.inertia {
+            Some(inertia) => {
+                for v in inertia {
+                    within(&field("inertia"), v, MIN_INERTIA, MAX_INERTIA)?;
+                }
+            }
+            None => {
+                for v in b.shape.solid_inertia(b.mass) {
+                    if !(MIN_INERTIA..=MAX_INERTIA).contains(&v) {
+                        return Err(invalid(
+                            field("inertia"),
+                            format!(
+                                "is absent, and a solid of this shape and mass has a moment of {v} \
+                                 kg·m², outside [{MIN_INERTIA:e}, {MAX_INERTIA:e}]; give it"
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(c) = b.centre_of_mass {
+            self.validate_centre_of_mass(&field("centre_of_mass"), b, c)?;
         }
         non_negative(&field("mu1"), b.mu1)?;
         non_negative(&field("mu2"), b.mu2)?;
@@ -529,6 +712,57 @@ impl Scene {
             )?;
         }
         finite(&field("start.yaw"), b.start.yaw)?;
+        Ok(())
+    }
+}
+
+impl Scene {
+    /// `c` is `b`'s centre of mass (from the shape's centre).
+    fn validate_centre_of_mass(
+        &self,
+        field: &str,
+        b: &BodySpec,
+        c: [f64; 3],
+    ) -> Result<(), SceneError> {
+        for v in c {
+            finite(field, v)?;
+        }
+        if b.name == ACTUATOR && c != [0.0; 3] {
+            return Err(invalid(
+                field,
+                "must be the centre for the actuator: the drive moves and clamps its centre",
+            ));
+        }
+        // Strictly inside the shape: a box or an upright cylinder with its
+        // centre of mass beyond its base could not rest on it, and a centre
+        // of mass outside a convex solid needs mass outside it.
+        if !b.shape.contains(c) {
+            return Err(invalid(
+                field,
+                format!(
+                    "{c:?} lies outside the body's {}: its centre of mass must be inside it",
+                    match b.shape {
+                        ShapeSpec::Sphere { .. } => "sphere",
+                        ShapeSpec::Box { .. } => "box",
+                        ShapeSpec::Cylinder { .. } => "cylinder",
+                    }
+                ),
+            ));
+        }
+        let (diagonal, products) = b.inertia_about_centre_of_mass();
+        if !ode::positive_definite(diagonal, products) || diagonal.iter().any(|&v| v < MIN_INERTIA)
+        {
+            return Err(invalid(
+                field,
+                format!(
+                    "{c:?} is too far from the centre for the inertia {:?} about it: the inertia \
+                     about the centre of mass (parallel-axis theorem) would have diagonal \
+                     {diagonal:?} and products {products:?}, not a positive-definite tensor; \
+                     give a larger `inertia` or a smaller offset",
+                    b.inertia_about_centre()
+                ),
+            ));
+        }
         Ok(())
     }
 }
@@ -574,5 +808,152 @@ fn non_negative(field: &str, v: f64) -> Result<(), SceneError> {
         Ok(())
     } else {
         Err(invalid(field, format!("must not be negative, got {v}")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const ONE_BLOCK: &str = include_str!("../scenes/one_block.toml");
+    const BLOCK_INERTIA: &str = "inertia = [1.66667e-3, 0.0216667, 0.0216667]";
+
+    fn error(text: &str) -> String {
+        match Scene::from_toml_str(text) {
+            Ok(_) => panic!("accepted:\n{text}"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn solid_inertia_of_each_shape() {
+        let close = |a: [f64; 3], b: [f64; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-15);
+        let block = ShapeSpec::Box {
+            size: [0.5, 0.1, 0.1],
+        };
+        assert!(close(
+            block.solid_inertia(1.0),
+            [0.02 / 12.0, 0.26 / 12.0, 0.26 / 12.0]
+        ));
+        let cylinder = ShapeSpec::Cylinder {
+            radius: 0.1,
+            length: 0.1,
+        };
+        assert!(close(
+            cylinder.solid_inertia(1.0),
+            [0.04 / 12.0, 0.04 / 12.0, 0.005]
+        ));
+        let sphere = ShapeSpec::Sphere { radius: 0.025 };
+        assert!(close(sphere.solid_inertia(10.0), [2.5e-3; 3]));
+    }
+
+    #[test]
+    fn the_inertia_about_the_centre_of_mass_follows_the_parallel_axis_theorem() {
+        let mut scene = Scene::from_toml_str(ONE_BLOCK).unwrap();
+        let block = &mut scene.bodies[1];
+        // Without an offset the file's numbers go to ODE untouched.
+        assert_eq!(
+            block.inertia_about_centre_of_mass(),
+            ([1.66667e-3, 0.0216667, 0.0216667], [0.0; 3])
+        );
+        // About the centre diag(1e-3, 0.041, 0.041); with c = (0.05, 0.02, 0)
+        // and m = 1 the theorem takes m(c_y² + c_z²), m(c_x² + c_z²) and
+        // m(c_x² + c_y²) off the diagonal and gives the entry m c_x c_y.
+        block.inertia = Some([1e-3, 0.04 + 1e-3, 0.04 + 1e-3]);
+        block.centre_of_mass = Some([0.05, 0.02, 0.0]);
+        let (d, p) = block.inertia_about_centre_of_mass();
+        let want_d = [
+            1e-3 - 0.02f64.powi(2),
+            0.041 - 0.05f64.powi(2),
+            0.041 - 0.0029,
+        ];
+        for k in 0..3 {
+            assert!((d[k] - want_d[k]).abs() < 1e-15, "{d:?}");
+        }
+        assert!((p[0] - 0.05 * 0.02).abs() < 1e-15 && p[1] == 0.0 && p[2] == 0.0);
+        assert!(scene.validate().is_ok());
+    }
+
+    #[test]
+    fn a_centre_of_mass_lies_inside_the_shape() {
+        let b = ShapeSpec::Box {
+            size: [0.5, 0.1, 0.1],
+        };
+        assert!(b.contains([0.249, 0.049, -0.049]));
+        assert!(!b.contains([0.25, 0.0, 0.0]));
+        let c = ShapeSpec::Cylinder {
+            radius: 0.1,
+            length: 0.1,
+        };
+        assert!(c.contains([0.07, 0.07, 0.0]));
+        assert!(!c.contains([0.08, 0.08, 0.0]));
+        assert!(!ShapeSpec::Sphere { radius: 0.1 }.contains([0.0, 0.0, 0.1]));
+    }
+
+    #[test]
+    fn bad_new_fields_are_named() {
+        let body = |line: &str| ONE_BLOCK.replacen(BLOCK_INERTIA, line, 1);
+        let pair = |text: &str| format!("{ONE_BLOCK}\n[[friction]]\n{text}\n");
+        let cases = [
+            (
+                body(&format!("{BLOCK_INERTIA}\ncentre_of_mass = [0.3, 0.0, 0.0]")),
+                "`body[1].centre_of_mass` [0.3, 0.0, 0.0] lies outside the body's box",
+            ),
+            (
+                body(&format!("{BLOCK_INERTIA}\ncentre_of_mass = [0.0, 0.0, nan]")),
+                "`body[1].centre_of_mass` must be a finite number",
+            ),
+            (
+                body(&format!("{BLOCK_INERTIA}\ncentre_of_mass = [0.2, 0.0, 0.0]")),
+                "`body[1].centre_of_mass` [0.2, 0.0, 0.0] is too far from the centre",
+            ),
+            (
+                ONE_BLOCK.replacen(
+                    "inertia = [2.5e-4, 2.5e-4, 2.5e-4]",
+                    "inertia = [2.5e-4, 2.5e-4, 2.5e-4]\ncentre_of_mass = [0.01, 0.0, 0.0]",
+                    1,
+                ),
+                "`body[0].centre_of_mass` must be the centre for the actuator",
+            ),
+            (
+                body("").replacen("mass = 1.0", "mass = 1e6", 1).replacen(
+                    "size = [0.5, 0.1, 0.1]",
+                    "size = [50.0, 0.1, 0.1]",
+                    1,
+                ),
+                "`body[1].inertia` is absent, and a solid",
+            ),
+            (
+                pair("between = [\"blockA\", \"ground_plane\"]\nmu1 = -0.3"),
+                "`friction[0].mu1` must not be negative",
+            ),
+            (
+                pair("between = [\"blockA\", \"ground_plane\"]\nmu1 = 0.3\nmu2 = inf"),
+                "`friction[0].mu2` must be a finite number",
+            ),
+            (
+                pair("between = [\"blockA\", \"table\"]\nmu1 = 0.3"),
+                "`friction[0].between` names `table`",
+            ),
+            (
+                pair("between = [\"blockA\", \"blockA\"]\nmu1 = 0.3"),
+                "`friction[0].between` names `blockA` twice",
+            ),
+            (
+                pair(
+                    "between = [\"blockA\", \"actuator\"]\nmu1 = 0.3\n\n[[friction]]\n\
+                     between = [\"actuator\", \"blockA\"]\nmu1 = 0.4",
+                ),
+                "`friction[1].between` `actuator` and `blockA` already have their friction in friction[0]",
+            ),
+            (
+                pair("between = [\"blockA\"]\nmu1 = 0.3"),
+                "invalid scene TOML",
+            ),
+        ];
+        for (text, says) in cases {
+            let err = error(&text);
+            assert!(err.contains(says), "`{err}` does not say `{says}`");
+        }
     }
 }

@@ -171,8 +171,54 @@ struct SimBody {
     handle: BodyHandle,
     name: String,
     id: u32,
+    /// The shape's centre (the published frame) at the start.
     start_position: [f64; 3],
     start_orientation: [f64; 4],
+    /// The centre of mass from the shape's centre, body frame; `None` when
+    /// they coincide, so that such a body is read and written exactly as
+    /// before centres of mass could move.
+    centre_of_mass: Option<[f64; 3]>,
+}
+
+impl SimBody {
+    /// Puts the shape's centre at `position` with `orientation`. The ODE
+    /// body sits at the centre of mass, `R c` further on, computed by ODE's
+    /// own body transform (the one it places the offset geom with).
+    fn place(
+        &self,
+        body: &mut ode::BodyMut<'_>,
+        position: [f64; 3],
+        orientation: [f64; 4],
+    ) -> Result<(), OdeError> {
+        // In this order for bodies without an offset, as before offsets.
+        body.set_position(position)?;
+        body.set_orientation(orientation)?;
+        if let Some(c) = self.centre_of_mass {
+            let centre_of_mass = body.point_position(c);
+            body.set_position(centre_of_mass)?;
+        }
+        Ok(())
+    }
+
+    /// The published state: the pose and velocity of the shape's centre.
+    fn state(&self, body: &ode::Body<'_>) -> BodyState {
+        let (position, lin_vel) = match self.centre_of_mass {
+            None => (body.position(), body.linear_velocity()),
+            Some([x, y, z]) => (
+                body.point_position([-x, -y, -z]),
+                body.point_velocity([-x, -y, -z]),
+            ),
+        };
+        BodyState {
+            name: self.name.clone(),
+            id: self.id,
+            is_static: false,
+            position,
+            orientation: body.orientation(),
+            lin_vel,
+            ang_vel: body.angular_velocity(),
+        }
+    }
 }
 
 /// Contact surfaces for every pair of materials, indexed by geom tag
@@ -193,14 +239,33 @@ impl SurfaceTable {
         )];
         mats.extend(scene.bodies.iter().map(|b| (b.mu1, b.mu2, b.kp, b.kd)));
         let h = scene.physics.step_size;
-        let mut surfaces = Vec::with_capacity(mats.len() * mats.len());
+        let n = mats.len();
+        let mut surfaces = Vec::with_capacity(n * n);
         for a in &mats {
             for b in &mats {
-                surfaces.push(combine(*a, *b, h)?);
+                surfaces.push(combine(*a, *b, h, None)?);
             }
         }
+        // `[[friction]]` pairs replace the minimum rule for themselves only.
+        let tag = |name: &str| {
+            if name == GROUND_NAME {
+                Some(0)
+            } else {
+                scene.body_index(name).map(|i| i + 1)
+            }
+        };
+        for pair in &scene.frictions {
+            let [a, b] = &pair.between;
+            // Validated: both name the ground or a body.
+            let (Some(a), Some(b)) = (tag(a), tag(b)) else {
+                continue;
+            };
+            let mu = pair.coefficients();
+            surfaces[a * n + b] = combine(mats[a], mats[b], h, Some(mu))?;
+            surfaces[b * n + a] = combine(mats[b], mats[a], h, Some(mu))?;
+        }
         Ok(SurfaceTable {
-            materials: mats.len(),
+            materials: n,
             surfaces,
         })
     }
@@ -212,11 +277,17 @@ impl SurfaceTable {
 }
 
 /// Gazebo 2.x's contact surface for two materials (`docs/spec/world.md` §4): friction
-/// by the minimum rule, softness from springs in series and dampers in
-/// parallel.
-fn combine(a: (f64, f64, f64, f64), b: (f64, f64, f64, f64), h: f64) -> Result<Surface, OdeError> {
+/// by the minimum rule unless the scene gives the pair's own `(mu1, mu2)`,
+/// softness from springs in series and dampers in parallel.
+fn combine(
+    a: (f64, f64, f64, f64),
+    b: (f64, f64, f64, f64),
+    h: f64,
+    pair_friction: Option<(f64, f64)>,
+) -> Result<Surface, OdeError> {
     let kp = 1.0 / (1.0 / a.2 + 1.0 / b.2);
     let kd = a.3 + b.3;
+    let (mu, mu2) = pair_friction.unwrap_or((a.0.min(b.0), a.1.min(b.1)));
     SurfaceParams {
         mode: ContactMode::APPROX1
             | ContactMode::MU2
@@ -225,8 +296,8 @@ fn combine(a: (f64, f64, f64, f64), b: (f64, f64, f64, f64), h: f64) -> Result<S
             | ContactMode::BOUNCE
             | ContactMode::SLIP1
             | ContactMode::SLIP2,
-        mu: a.0.min(b.0),
-        mu2: a.1.min(b.1),
+        mu,
+        mu2,
         bounce: 0.0,
         bounce_vel: 0.0,
         soft_erp: h * kp / (h * kp + kd),
@@ -277,8 +348,18 @@ impl World {
         ode.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0).tag(0))?;
         let mut bodies = Vec::with_capacity(scene.bodies.len());
         for (i, spec) in scene.bodies.iter().enumerate() {
+            // ODE wants the body at its centre of mass (`dBodySetMass`
+            // refuses a mass centred elsewhere), so a centre of mass away
+            // from the shape's centre puts the geom at −c from the body.
+            // The published pose is converted back to the shape's centre
+            // (`SimBody::state`) rather than read from the geom, because
+            // the same body transform also gives that point's velocity,
+            // and SetPose and Reset write through its inverse.
+            let centre_of_mass = Some(spec.centre_of_mass()).filter(|c| *c != [0.0; 3]);
+            let (inertia, products) = spec.inertia_about_centre_of_mass();
             let handle = ode.insert_body(
-                BodyBuilder::new(spec.mass, spec.inertia)
+                BodyBuilder::new(spec.mass, inertia)
+                    .products_of_inertia(products)
                     .position(spec.start.position())
                     .orientation(spec.start.orientation())
                     .gravity(spec.gravity),
@@ -288,6 +369,10 @@ impl World {
                 ShapeSpec::Box { size } => GeomBuilder::cuboid(size),
                 ShapeSpec::Cylinder { radius, length } => GeomBuilder::cylinder(radius, length),
             };
+            let geom = match centre_of_mass {
+                Some([x, y, z]) => geom.offset([-x, -y, -z]),
+                None => geom,
+            };
             ode.insert_geom(geom.attached_to(handle).tag(i as u32 + 1))?;
             bodies.push(SimBody {
                 handle,
@@ -295,6 +380,7 @@ impl World {
                 id: spec.id,
                 start_position: spec.start.position(),
                 start_orientation: spec.start.orientation(),
+                centre_of_mass,
             });
         }
         let actuator =
@@ -422,10 +508,9 @@ impl World {
         let Some(i) = self.scene.body_index(&name) else {
             return Err(CommandError::UnknownBody(name));
         };
-        let handle = self.bodies[i].handle;
-        let set = self.ode.body_mut(handle).and_then(|mut b| {
-            b.set_position(position)?;
-            b.set_orientation(unit)?;
+        let sim = &self.bodies[i];
+        let set = self.ode.body_mut(sim.handle).and_then(|mut b| {
+            sim.place(&mut b, position, unit)?;
             // A sleeping body moved into the air would otherwise hang there.
             b.enable();
             Ok(())
@@ -485,8 +570,7 @@ impl World {
     fn reset(&mut self) -> Result<(), OdeError> {
         for b in &self.bodies {
             let mut body = self.ode.body_mut(b.handle)?;
-            body.set_position(b.start_position)?;
-            body.set_orientation(b.start_orientation)?;
+            b.place(&mut body, b.start_position, b.start_orientation)?;
             body.reset_dynamics();
         }
         // QuickStep's row shuffling draws from this stream: seeding it at
@@ -592,18 +676,7 @@ impl World {
         let bodies = self
             .bodies
             .iter()
-            .filter_map(|b| {
-                let body = self.ode.body(b.handle).ok()?;
-                Some(BodyState {
-                    name: b.name.clone(),
-                    id: b.id,
-                    is_static: false,
-                    position: body.position(),
-                    orientation: body.orientation(),
-                    lin_vel: body.linear_velocity(),
-                    ang_vel: body.angular_velocity(),
-                })
-            })
+            .filter_map(|b| Some(b.state(&self.ode.body(b.handle).ok()?)))
             .collect();
         Snapshot {
             step: self.step_count,
@@ -718,7 +791,7 @@ mod tests {
 
     #[test]
     fn gazebo_softness_for_two_default_surfaces() {
-        let s = combine((0.9, 0.9, 1e12, 1.0), (0.01, 0.02, 1e12, 1.0), 0.001).unwrap();
+        let s = combine((0.9, 0.9, 1e12, 1.0), (0.01, 0.02, 1e12, 1.0), 0.001, None).unwrap();
         let p = s.params();
         assert_eq!((p.mu, p.mu2), (0.01, 0.02));
         let (kp, kd) = (5e11, 2.0);

@@ -15,13 +15,16 @@ pub(crate) struct BodyEntry {
 
 /// Describes a body to create with [`World::insert_body`](crate::World::insert_body).
 ///
-/// The centre of mass is the body origin and the inertia tensor is diagonal
-/// in the body frame, which covers boxes and spheres.
+/// The centre of mass is the body origin (ODE requires it: `dBodySetMass`
+/// refuses a mass whose centre is elsewhere; offset the geoms instead, with
+/// [`GeomBuilder::offset`](crate::GeomBuilder::offset)). The inertia tensor is
+/// diagonal in the body frame unless products of inertia are given.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[must_use = "a builder does nothing until passed to World::insert_body"]
 pub struct BodyBuilder {
     pub(crate) mass: f64,
     pub(crate) inertia: [f64; 3],
+    pub(crate) products: [f64; 3],
     pub(crate) position: [f64; 3],
     pub(crate) orientation: [f64; 4],
     pub(crate) linear_velocity: [f64; 3],
@@ -36,12 +39,23 @@ impl BodyBuilder {
         BodyBuilder {
             mass,
             inertia,
+            products: [0.0; 3],
             position: [0.0; 3],
             orientation: [0.0, 0.0, 0.0, 1.0],
             linear_velocity: [0.0; 3],
             angular_velocity: [0.0; 3],
             gravity: true,
         }
+    }
+
+    /// The off-diagonal entries `[Ixy, Ixz, Iyz]` of the body-frame inertia
+    /// tensor about the centre of mass, kg·m² (zero by default): tensor
+    /// entries, `Ixy = −∫ x y dm`, as ODE's `dMassSetParameters` takes them.
+    /// A centre of mass away from a shape's centre gives them (parallel-axis
+    /// theorem).
+    pub fn products_of_inertia(mut self, products: [f64; 3]) -> Self {
+        self.products = products;
+        self
     }
 
     pub fn position(mut self, position: [f64; 3]) -> Self {
@@ -72,19 +86,49 @@ impl BodyBuilder {
     }
 
     /// Everything ODE's `dMassCheck` and setters would abort on. Positive
-    /// diagonal moments make the tensor positive definite, which is all ODE
-    /// requires; the triangle inequality is deliberately not enforced (the
+    /// diagonal moments make a diagonal tensor positive definite, which is
+    /// all ODE requires; with products of inertia the whole tensor is
+    /// checked. The triangle inequality is deliberately not enforced (the
     /// thesis's red block violates it and must be reproducible).
     pub(crate) fn validate(&self) -> Result<[f64; 4], OdeError> {
         check_positive("mass", self.mass)?;
         self.inertia
             .iter()
             .try_for_each(|&i| check_positive("inertia", i))?;
+        check_finite3("products of inertia", self.products)?;
+        if self.products != [0.0; 3] && !positive_definite(self.inertia, self.products) {
+            return Err(OdeError::NotPositiveDefinite);
+        }
         check_finite3("position", self.position)?;
         check_finite3("linear velocity", self.linear_velocity)?;
         check_finite3("angular velocity", self.angular_velocity)?;
         quat_to_ode(self.orientation)
     }
+}
+
+/// Whether the symmetric tensor with diagonal `d` and products
+/// `[xy, xz, yz]` is positive definite, by a Cholesky factorisation as
+/// ODE's `dMassCheck` does. Pivots must clear a small margin relative to the
+/// largest moment, so that rounding inside ODE cannot tip a borderline
+/// tensor (ODE aborts on one that fails).
+pub fn positive_definite(d: [f64; 3], p: [f64; 3]) -> bool {
+    let [xx, yy, zz] = d;
+    let [xy, xz, yz] = p;
+    let margin = 1e-12 * xx.abs().max(yy.abs()).max(zz.abs());
+    // False for NaN too.
+    let clears = |pivot: f64| pivot > margin;
+    let p1 = xx;
+    if !clears(p1) {
+        return false;
+    }
+    let l21 = xy / p1.sqrt();
+    let l31 = xz / p1.sqrt();
+    let p2 = yy - l21 * l21;
+    if !clears(p2) {
+        return false;
+    }
+    let l32 = (yz - l31 * l21) / p2.sqrt();
+    clears(zz - l31 * l31 - l32 * l32)
 }
 
 /// Read-only view of a body, borrowed from its world.
@@ -136,6 +180,29 @@ macro_rules! body_getters {
         pub fn angular_velocity(&self) -> [f64; 3] {
             // SAFETY: `raw` is a live body.
             read3(unsafe { ode_sys::dBodyGetAngularVel(self.raw) })
+        }
+
+        /// World-frame position of the point at `rel` in the body frame
+        /// (relative to the centre of mass), m.
+        pub fn point_position(&self, rel: [f64; 3]) -> [f64; 3] {
+            let mut out = [0.0; 4];
+            // SAFETY: `raw` is a live body; `out` is a dVector3 (4 doubles)
+            // that ODE writes the result into. Non-finite input gives a
+            // non-finite result, nothing worse.
+            unsafe {
+                ode_sys::dBodyGetRelPointPos(self.raw, rel[0], rel[1], rel[2], out.as_mut_ptr())
+            };
+            [out[0], out[1], out[2]]
+        }
+
+        /// World-frame velocity of the point at `rel` in the body frame, m/s.
+        pub fn point_velocity(&self, rel: [f64; 3]) -> [f64; 3] {
+            let mut out = [0.0; 4];
+            // SAFETY: as for `point_position`.
+            unsafe {
+                ode_sys::dBodyGetRelPointVel(self.raw, rel[0], rel[1], rel[2], out.as_mut_ptr())
+            };
+            [out[0], out[1], out[2]]
         }
 
         /// False while ODE's auto-disable has put the body to sleep.

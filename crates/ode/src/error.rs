@@ -20,6 +20,10 @@ pub enum OdeError {
     StaleBody(BodyHandle),
     #[error("geom handle {0:?} is stale or belongs to another world")]
     StaleGeom(GeomHandle),
+    #[error("the inertia tensor must be positive definite")]
+    NotPositiveDefinite,
+    #[error("a geom offset needs a body to be offset from")]
+    OffsetWithoutBody,
     #[error("a plane is not placeable and cannot be attached to a body")]
     PlaneOnBody,
     #[error("ODE could not {0}")]

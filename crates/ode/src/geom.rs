@@ -68,6 +68,7 @@ impl Shape {
 pub struct GeomBuilder {
     pub(crate) shape: Shape,
     pub(crate) body: Option<BodyHandle>,
+    pub(crate) offset: [f64; 3],
     pub(crate) tag: u32,
 }
 
@@ -76,6 +77,7 @@ impl GeomBuilder {
         GeomBuilder {
             shape,
             body: None,
+            offset: [0.0; 3],
             tag: 0,
         }
     }
@@ -100,6 +102,16 @@ impl GeomBuilder {
     /// is static.
     pub fn attached_to(mut self, body: BodyHandle) -> Self {
         self.body = Some(body);
+        self
+    }
+
+    /// Places the geom's centre at `offset` in its body's frame (from the
+    /// body's origin, its centre of mass) instead of on it: how a body's
+    /// centre of mass comes to lie away from its shape's centre. Needs
+    /// [`GeomBuilder::attached_to`]. A zero offset leaves the geom exactly as
+    /// without this call (ODE is never told of it).
+    pub fn offset(mut self, offset: [f64; 3]) -> Self {
+        self.offset = offset;
         self
     }
 

@@ -33,7 +33,7 @@ mod params;
 mod world;
 
 pub use arena::{BodyHandle, GeomHandle};
-pub use body::{Body, BodyBuilder, BodyMut};
+pub use body::{positive_definite, Body, BodyBuilder, BodyMut};
 pub use contact::{ContactMode, ContactPair, ContactPoint, GeomInfo, Surface, SurfaceParams};
 pub use error::OdeError;
 pub use geom::{GeomBuilder, Shape};

@@ -11,6 +11,7 @@ use ode_sys::{dContact, dContactGeom, dGeomID, dJointGroupID, dWorldID};
 
 use crate::arena::{next_arena_id, Arena};
 use crate::body::{Body, BodyEntry, BodyMut};
+use crate::check::check_finite3;
 use crate::contact::{ContactPair, GeomInfo, Surface};
 use crate::geom::GeomEntry;
 use crate::init::{ensure_thread, global_lock, rand_get_seed_locked, rand_set_seed_locked};
@@ -162,8 +163,9 @@ impl World {
             let mut mass = ode_sys::dMass::default();
             ode_sys::dMassSetZero(&mut mass);
             let [ixx, iyy, izz] = b.inertia;
+            let [ixy, ixz, iyz] = b.products;
             ode_sys::dMassSetParameters(
-                &mut mass, b.mass, 0.0, 0.0, 0.0, ixx, iyy, izz, 0.0, 0.0, 0.0,
+                &mut mass, b.mass, 0.0, 0.0, 0.0, ixx, iyy, izz, ixy, ixz, iyz,
             );
             ode_sys::dBodySetMass(raw, &mass);
             ode_sys::dBodySetGravityMode(raw, c_int::from(b.gravity));
@@ -193,12 +195,20 @@ impl World {
             }
             None => None,
         };
+        check_finite3("geom offset", g.offset)?;
+        // ODE asserts (aborts) when a geom without a body is given an offset.
+        let offset = (g.offset != [0.0; 3]).then_some(g.offset);
+        if offset.is_some() && body_raw.is_none() {
+            return Err(OdeError::OffsetWithoutBody);
+        }
         ensure_thread()?;
         let _guard = global_lock();
         let index = self.geoms.next_index();
         let space = self.space.as_ptr();
         // SAFETY: the space is live; shapes were validated (positive finite
-        // sizes, unit plane normal); `body_raw` is a live body of this world.
+        // sizes, unit plane normal); `body_raw` is a live body of this world,
+        // set before the (finite) offset, which ODE only accepts on a geom
+        // with a body.
         // The geom's data pointer carries its arena index, read back only by
         // the near-callback of this world.
         let raw = unsafe {
@@ -217,6 +227,9 @@ impl World {
             }
             if let Some(b) = body_raw {
                 ode_sys::dGeomSetBody(raw, b);
+                if let Some([x, y, z]) = offset {
+                    ode_sys::dGeomSetOffsetPosition(raw, x, y, z);
+                }
             }
             ode_sys::dGeomSetData(raw, index as usize as *mut c_void);
             raw
@@ -536,6 +549,57 @@ mod tests {
     }
 
     #[test]
+    fn an_offset_geom_rests_with_its_body_beside_it() {
+        let mut w = World::new(StepParams::gazebo(), SpaceKind::Simple).unwrap();
+        w.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0))
+            .unwrap();
+        // A 0.2 m cube whose centre of mass sits 0.05 m to +x of its centre.
+        let b = w
+            .insert_body(
+                BodyBuilder::new(1.0, [6e-3, 6e-3, 6e-3])
+                    .products_of_inertia([0.0, 0.0, 0.0])
+                    .position([0.05, 0.0, 0.1]),
+            )
+            .unwrap();
+        w.insert_geom(
+            GeomBuilder::cuboid([0.2; 3])
+                .attached_to(b)
+                .offset([-0.05, 0.0, 0.0]),
+        )
+        .unwrap();
+        let s = surface();
+        for _ in 0..1000 {
+            w.step(|_| Some(s)).unwrap();
+        }
+        let body = w.body(b).unwrap();
+        // The cube rests on its face: the centre of mass stays 0.05 m to +x
+        // of the shape's centre, which is 0.1 m up.
+        let p = body.position();
+        assert!(
+            (p[0] - 0.05).abs() < 1e-3 && (p[2] - 0.1).abs() < 2e-3,
+            "{p:?}"
+        );
+        let centre = body.point_position([-0.05, 0.0, 0.0]);
+        assert!(
+            centre[0].abs() < 1e-3 && (centre[2] - 0.1).abs() < 2e-3,
+            "{centre:?}"
+        );
+        let v = body.point_velocity([-0.05, 0.0, 0.0]);
+        assert!(v.iter().all(|c| c.abs() < 1e-2), "{v:?}");
+    }
+
+    #[test]
+    fn positive_definite_tensors() {
+        use crate::positive_definite;
+        assert!(positive_definite([1.0, 2.0, 3.0], [0.0; 3]));
+        assert!(positive_definite([1.0, 1.0, 1.0], [0.5, 0.0, 0.0]));
+        assert!(!positive_definite([1.0, 1.0, 1.0], [1.0, 0.0, 0.0]));
+        assert!(!positive_definite([1.0, 1.0, 1.0], [0.9, -0.9, 0.9]));
+        assert!(!positive_definite([1.0, -1.0, 1.0], [0.0; 3]));
+        assert!(!positive_definite([f64::NAN, 1.0, 1.0], [0.0; 3]));
+    }
+
+    #[test]
     fn refusing_the_contact_lets_the_ball_fall_through() {
         let (mut w, b) = ball_world();
         for _ in 0..1000 {
@@ -571,6 +635,25 @@ mod tests {
             w.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0).attached_to(b)),
             Err(OdeError::PlaneOnBody)
         );
+        assert_eq!(
+            w.insert_geom(GeomBuilder::sphere(0.1).offset([0.1, 0.0, 0.0])),
+            Err(OdeError::OffsetWithoutBody)
+        );
+        assert!(w
+            .insert_geom(
+                GeomBuilder::sphere(0.1)
+                    .attached_to(b)
+                    .offset([f64::NAN; 3])
+            )
+            .is_err());
+        // Products of inertia larger than the moments allow.
+        assert_eq!(
+            w.insert_body(BodyBuilder::new(1.0, [1.0; 3]).products_of_inertia([1.0, 0.0, 0.0])),
+            Err(OdeError::NotPositiveDefinite)
+        );
+        assert!(w
+            .insert_body(BodyBuilder::new(1.0, [1.0; 3]).products_of_inertia([0.0, f64::NAN, 0.0]))
+            .is_err());
         let mut body = w.body_mut(b).unwrap();
         assert!(body.set_position([0.0, f64::INFINITY, 0.0]).is_err());
         assert!(body.set_orientation([0.0; 4]).is_err());

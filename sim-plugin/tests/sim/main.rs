@@ -3,6 +3,8 @@
 //!
 //! * [`world`], [`calibration`]: the in-process world and the thesis's
 //!   calibration checks (`docs/spec/world.md` §10);
+//! * [`scene_features`]: what scene files say about objects beyond the
+//!   thesis's (pair friction, centre of mass, computed inertia, free ids);
 //! * [`daemon`]: the `pushlearn-sim` daemon over real localhost sockets;
 //! * [`gate_push_task`], [`interaction_push_task`]: the learners trained and
 //!   tested on pushes of this world, in-process (trace-driven).
@@ -14,4 +16,5 @@ mod calibration;
 mod daemon;
 mod gate_push_task;
 mod interaction_push_task;
+mod scene_features;
 mod world;

@@ -306,7 +306,7 @@ fn builtin_scenes_load_by_name() {
         if let Some(red) = scene.body_index("blockB") {
             assert_eq!(
                 scene.bodies[red].inertia,
-                [1.66667e-3, 1.66667e-3, 0.0216667]
+                Some([1.66667e-3, 1.66667e-3, 0.0216667])
             );
         }
     }
