@@ -1515,7 +1515,12 @@ BASELINES: dict[str, type[BaselineLearner]] = {
     "gp": GpLearner,
     "mlp": MlpLearner,
 }
-"""The baselines by the name ``python -m pushlearn.baselines`` takes."""
+"""The baselines by the name ``python -m pushlearn.baselines`` takes.
+
+The results page runs the same list (``BASELINES`` in
+``crates/lab/src/reproduce/manifest.rs``, a Rust test keeps the two equal):
+a new baseline is a class here and an entry in both.
+"""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1523,9 +1528,8 @@ def main(argv: list[str] | None = None) -> int:
     from .serve import main as serve_main
 
     args = list(sys.argv[1:] if argv is None else argv)
-    usage = (
-        "usage: python -m pushlearn.baselines knn|gp|mlp [--listen HOST:PORT] [OPTIONS]"
-    )
+    names = list(BASELINES)
+    usage = f"usage: python -m pushlearn.baselines {'|'.join(names)} [--listen HOST:PORT] [OPTIONS]"
     if not args or args[0] in ("-h", "--help"):
         print(usage + "\n\n" + (__doc__ or "").split("\n\n", 1)[0])
         return 0 if args else 2
@@ -1539,7 +1543,8 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     if args[0] not in BASELINES:
         print(
-            f"pushlearn.baselines: unknown baseline {args[0]!r} (choose knn, gp or mlp)\n{usage}",
+            f"pushlearn.baselines: unknown baseline {args[0]!r} "
+            f"(choose {', '.join(names[:-1])} or {names[-1]})\n{usage}",
             file=sys.stderr,
         )
         return 2

@@ -8,12 +8,15 @@
         client = world.connect()                   # a SimClient
         ...
 
-The binary is found in this order: the ``sim_bin`` argument, the
-environment variable ``PUSHLEARN_SIM_BIN``, the one the package carries
-(``pushlearn/_bin/``, in an installed wheel: the world built with the
-extension), next to the running Python (a virtual environment's ``bin/``),
-on ``PATH``, and last in ``target/release/`` of the checkout the native
-extension was built from (for an editable install, after ``cargo build
+The binary is found by :func:`find_sim_binary`, in the order every lookup
+of it follows (the command line's too; ``docs/simulator.md``, "Where
+pushlearn-sim is found"): the ``sim_bin`` argument, the environment variable
+``PUSHLEARN_SIM_BIN``, beside the running program (the one the package
+carries, ``pushlearn/_bin/``, in an installed wheel: the world built with
+the extension; then next to the running Python, a virtual environment's
+``bin/``), on ``PATH``, and last the build of the checkout the native
+extension was built from (``$CARGO_TARGET_DIR/release/`` if that is set,
+else its ``target/release/``: for an editable install, after ``cargo build
 --release``).
 
 The world never outlives its owner: :meth:`LocalWorld.close` (idempotent)
@@ -55,13 +58,16 @@ class SimNotFound(FileNotFoundError):
 
 
 def _checkout_binary() -> Path | None:
+    """The binary cargo builds in the checkout the extension was built from."""
     try:
         from . import native
 
         checkout = native().SOURCE_CHECKOUT
     except (ImportError, AttributeError):
         return None
-    return Path(checkout).resolve() / "target" / "release" / SIM_BIN
+    target = os.environ.get("CARGO_TARGET_DIR")
+    target_dir = Path(target) if target else Path(checkout).resolve() / "target"
+    return target_dir / "release" / SIM_BIN
 
 
 def find_sim_binary(explicit: str | os.PathLike[str] | None = None) -> Path:

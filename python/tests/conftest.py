@@ -1,11 +1,12 @@
 """Shared fixtures: the repository's root, the binaries, a running world daemon.
 
-The world daemon is the real ``pushlearn-sim`` binary, found through the
-environment variable ``PUSHLEARN_SIM_BIN``, else in ``$CARGO_TARGET_DIR/release``,
-else in the repository's ``target/release`` (build it with
-``cargo build --release -p sim-plugin --bins``). Tests needing it are skipped
-when it is missing, unless ``PUSHLEARN_REQUIRE_SIM=1`` (set it on CI) turns
-the skip into a failure.
+The world daemon is the real ``pushlearn-sim`` binary, found as the package
+finds it (:func:`pushlearn.local_world.find_sim_binary`: ``PUSHLEARN_SIM_BIN``,
+the package's own, beside the running Python, ``PATH``, then
+``$CARGO_TARGET_DIR/release`` or the checkout's ``target/release``; build it
+with ``cargo build --release -p sim-plugin --bins``). Tests needing it are
+skipped when it is missing, unless ``PUSHLEARN_REQUIRE_SIM=1`` (set it on CI)
+turns the skip into a failure.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import threading
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NoReturn
 
 import pytest
 
@@ -32,20 +34,16 @@ LIMIT = 60.0
 """Seconds after which a child process counts as hung (the test then fails)."""
 
 
-def sim_binary() -> Path | None:
-    """The ``pushlearn-sim`` binary, or ``None`` if it cannot be found."""
-    explicit = os.environ.get("PUSHLEARN_SIM_BIN")
-    if explicit:
-        return Path(explicit)
-    candidates = []
-    target_dir = os.environ.get("CARGO_TARGET_DIR")
-    if target_dir:
-        candidates.append(Path(target_dir) / "release" / "pushlearn-sim")
-    candidates.append(REPO_ROOT / "target" / "release" / "pushlearn-sim")
-    for candidate in candidates:
-        if candidate.is_file():
-            return candidate
-    return None
+def sim_binary() -> Path | str:
+    """The ``pushlearn-sim`` binary, or the message saying where it was looked for."""
+    # Imported here, not at the top: collecting the tests imports no package
+    # module before a test does (some replace ``pushlearn._native`` first).
+    from pushlearn.local_world import SimNotFound, find_sim_binary
+
+    try:
+        return find_sim_binary()
+    except SimNotFound as err:
+        return str(err)
 
 
 def pushlearn_binary() -> Path | None:
@@ -54,12 +52,12 @@ def pushlearn_binary() -> Path | None:
     if explicit:
         return Path(explicit)
     sim = sim_binary()
-    candidates = [sim.parent / "pushlearn"] if sim is not None else []
+    candidates = [sim.parent / "pushlearn"] if isinstance(sim, Path) else []
     candidates.append(REPO_ROOT / "target" / "release" / "pushlearn")
     return next((c for c in candidates if c.is_file()), None)
 
 
-def _missing(message: str) -> None:
+def _missing(message: str) -> NoReturn:
     if os.environ.get("PUSHLEARN_REQUIRE_SIM") == "1":
         pytest.fail(message)
     pytest.skip(message)
@@ -82,13 +80,8 @@ def driver_bin(sim_bin: Path) -> Path:
 def sim_bin() -> Path:
     """The ``pushlearn-sim`` binary (skips, or fails with PUSHLEARN_REQUIRE_SIM=1, if missing)."""
     path = sim_binary()
-    if path is None or not path.is_file():
-        message = (
-            f"pushlearn-sim not found ({path or 'target/release/pushlearn-sim'}): build it with "
-            "`cargo build --release -p sim-plugin --bins` or set PUSHLEARN_SIM_BIN"
-        )
-        _missing(message)
-    assert path is not None
+    if isinstance(path, str):
+        _missing(path)
     return path
 
 

@@ -543,6 +543,7 @@ def test_without_a_binary_on_path_the_checkout_the_package_was_built_from_is_use
 ) -> None:
     native = pytest.importorskip("pushlearn._native")
     monkeypatch.delenv("PUSHLEARN_SIM_BIN", raising=False)
+    monkeypatch.delenv("CARGO_TARGET_DIR", raising=False)
     monkeypatch.setenv("PATH", str(tmp_path))
     # Neither the package's own binary (an installed wheel's) nor the console
     # script beside the venv's Python that runs it.
@@ -556,6 +557,12 @@ def test_without_a_binary_on_path_the_checkout_the_package_was_built_from_is_use
             find_sim_binary()
     else:
         assert find_sim_binary() == expected
+    # Where cargo put the build when CARGO_TARGET_DIR says so.
+    built = tmp_path / "target-dir" / "release" / "pushlearn-sim"
+    built.parent.mkdir(parents=True)
+    built.write_text("")
+    monkeypatch.setenv("CARGO_TARGET_DIR", str(tmp_path / "target-dir"))
+    assert find_sim_binary() == built
 
 
 def test_a_world_that_does_not_start_is_reported_with_its_message(

@@ -11,7 +11,7 @@ use super::driver::{Driver, Task};
 use super::move_to_target::{MttJob, MttTask};
 use super::processes::{Processes, Recipe};
 use super::push_task::protocol::{Protocol, PushJob, Variant};
-use super::push_task::task::PushTask;
+use super::push_task::task::PushJobTask;
 use super::run_cache::{CacheCounts, RunCache};
 use super::workers::{retry_if_the_world_dies, run_jobs, Worker, WorldDeath, WorldSource};
 use super::{ExperimentError, Mode};
@@ -350,7 +350,7 @@ pub(crate) fn push_job<M: Model>(
         drive(
             worker,
             untrained,
-            PushTask::new(job),
+            PushJobTask::new(job),
             rate_hz,
             plan.job_setup(job.latency_seed),
             Fold {

@@ -28,29 +28,61 @@ const START_LIMIT: Duration = Duration::from_secs(30);
 /// What the daemon prints once it accepts connections.
 const LISTENING: &str = "listening on ";
 
-/// Locates `pushlearn-sim`: the override, else next to the running
-/// executable (where cargo puts both binaries), else on `PATH`.
+/// The environment variable that names the world binary when no path is
+/// given on the command line: the same name every lookup of it reads
+/// (Python's `pushlearn.local_world.find_sim_binary`, the Python tests).
+pub const SIM_BIN_ENV: &str = "PUSHLEARN_SIM_BIN";
+
+/// Locates `pushlearn-sim` in the order `docs/simulator.md` ("Where
+/// `pushlearn-sim` is found") gives for every lookup of it: `explicit`
+/// (`--sim-bin`), else the file `PUSHLEARN_SIM_BIN` names, else next to the
+/// running executable (where cargo puts both binaries, and where a wheel
+/// carries them), else on `PATH`. A path given either way must be a file:
+/// a typo is reported, not passed over for another binary.
 ///
 /// # Errors
-/// [`ExperimentError::SimNotFound`] naming what to build.
+/// [`ExperimentError::SimNotFound`] naming where it looked and what to build.
 pub fn find_sim_binary(explicit: Option<&Path>) -> Result<PathBuf, ExperimentError> {
-    if let Some(path) = explicit {
+    let from_env = std::env::var_os(SIM_BIN_ENV)
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from);
+    let beside = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.parent().map(Path::to_owned));
+    locate_sim_binary(
+        explicit,
+        from_env.as_deref(),
+        beside.as_deref(),
+        std::env::var_os("PATH").as_deref(),
+    )
+}
+
+/// [`find_sim_binary`] on its inputs: the explicit path, the environment
+/// variable's value, the running executable's directory and `PATH`.
+fn locate_sim_binary(
+    explicit: Option<&Path>,
+    from_env: Option<&Path>,
+    exe_dir: Option<&Path>,
+    path_var: Option<&std::ffi::OsStr>,
+) -> Result<PathBuf, ExperimentError> {
+    let given = explicit
+        .map(|p| (p, p.display().to_string()))
+        .or_else(|| from_env.map(|p| (p, format!("{SIM_BIN_ENV}={}", p.display()))));
+    if let Some((path, described)) = given {
         return if path.is_file() {
             Ok(path.to_owned())
         } else {
             Err(ExperimentError::SimNotFound {
-                looked: path.display().to_string(),
+                looked: format!("{described}, which is not a file"),
             })
         };
     }
-    let beside = std::env::current_exe()
-        .ok()
-        .and_then(|exe| exe.parent().map(|dir| dir.join(SIM_BIN)));
-    let on_path = std::env::var_os("PATH")
+    let beside = exe_dir.map(|dir| dir.join(SIM_BIN));
+    let on_path: Vec<PathBuf> = path_var
         .map(|paths| {
-            std::env::split_paths(&paths)
+            std::env::split_paths(paths)
                 .map(|dir| dir.join(SIM_BIN))
-                .collect::<Vec<_>>()
+                .collect()
         })
         .unwrap_or_default();
     if let Some(found) = beside.iter().chain(&on_path).find(|p| p.is_file()) {
@@ -548,6 +580,42 @@ mod tests {
             "{err}"
         );
         assert!(err.to_string().contains("cargo build"), "{err}");
+    }
+
+    #[test]
+    fn the_world_binary_is_looked_up_in_one_order() {
+        let dir = std::env::temp_dir().join(format!("sim-lookup-{}", std::process::id()));
+        let [given, env, beside, path_a, path_b] =
+            ["given", "env", "beside", "path-a", "path-b"].map(|d| dir.join(d));
+        for d in [&given, &env, &beside, &path_a, &path_b] {
+            std::fs::create_dir_all(d).unwrap();
+            std::fs::write(d.join(SIM_BIN), "").unwrap();
+        }
+        let path_var = std::env::join_paths([&path_a, &path_b]).unwrap();
+        let find = |explicit: Option<&Path>, from_env: Option<&Path>, exe_dir: Option<&Path>| {
+            locate_sim_binary(explicit, from_env, exe_dir, Some(&path_var))
+        };
+        let bin = |d: &Path| d.join(SIM_BIN);
+        // --sim-bin, then PUSHLEARN_SIM_BIN, then beside the executable, then PATH in order.
+        let everything = find(Some(&bin(&given)), Some(&bin(&env)), Some(&beside));
+        assert_eq!(everything.unwrap(), bin(&given));
+        let no_flag = find(None, Some(&bin(&env)), Some(&beside));
+        assert_eq!(no_flag.unwrap(), bin(&env));
+        assert_eq!(find(None, None, Some(&beside)).unwrap(), bin(&beside));
+        assert_eq!(find(None, None, Some(&dir)).unwrap(), bin(&path_a));
+        std::fs::remove_file(bin(&path_a)).unwrap();
+        assert_eq!(find(None, None, None).unwrap(), bin(&path_b));
+        // A variable naming nothing is an error naming it, not a fallback.
+        let missing = dir.join("nothing");
+        let err = find(None, Some(&missing), Some(&beside))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("PUSHLEARN_SIM_BIN="), "{err}");
+        assert!(err.contains("nothing, which is not a file"), "{err}");
+        std::fs::remove_file(bin(&path_b)).unwrap();
+        let err = find(None, None, Some(&dir)).unwrap_err().to_string();
+        assert!(err.contains("and on PATH"), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

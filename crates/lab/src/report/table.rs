@@ -1,8 +1,8 @@
 //! The pieces every experiment's terminal tables are made of, in the
 //! thesis's layout: every value of ours is followed by the thesis's value in
 //! brackets where the thesis has one (`[…]`, source section in the table's
-//! title; `reference.rs` holds the numbers). The tables themselves live with
-//! their experiments (`crate::experiments`).
+//! title; `reference` reads the numbers from `crates/lab/data/reference.toml`).
+//! The tables themselves live with their experiments (`crate::experiments`).
 
 use super::layout::{Cell, Column, Kind};
 use super::plural;

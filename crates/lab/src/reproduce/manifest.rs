@@ -324,26 +324,63 @@ fn move_to_target(model: ModelKind, repetitions: usize) -> Spec {
     }
 }
 
-/// The baselines a reviewer asks for (`python/pushlearn/baselines.py`):
-/// (document name, learner class, seconds its slowest answer may take),
-/// served from the Python package. A GP's fit when training ends takes a
-/// few seconds (`baselines.py`: at most 600 samples, O(n³)), and so do the
-/// MLP ensemble's last epochs over its memory; the timeout leaves room for
-/// a machine ten times slower.
-pub const BASELINES: [(&str, &str, u64); 3] = [
-    ("baseline-knn", "pushlearn.baselines:KnnLearner", 60),
-    ("baseline-gp", "pushlearn.baselines:GpLearner", 60),
-    ("baseline-mlp", "pushlearn.baselines:MlpLearner", 60),
-];
-
-/// The baseline `class` of the Python package, served for the driver, its
-/// slowest answer allowed `timeout_s` seconds.
-fn baseline(class: &str, timeout_s: u64) -> LearnerChoice {
-    LearnerChoice::External(drive::external::LearnerSpec {
-        source: drive::external::Source::Command(python_learner(class)),
-        timeout: std::time::Duration::from_secs(timeout_s),
-    })
+/// One baseline a reviewer asks for, a learner of the Python package
+/// (`python/pushlearn/baselines.py`) served for the driver.
+#[derive(Clone, Copy, Debug)]
+pub struct Baseline {
+    /// Its name: `python -m pushlearn.baselines NAME`'s (the key of the
+    /// package's `BASELINES`) and the one it has in the new-object and
+    /// cross-object documents.
+    pub name: &'static str,
+    /// The learner class, as `pushlearn.serve` takes it.
+    pub class: &'static str,
+    /// Seconds its slowest answer may take.
+    pub timeout_s: u64,
 }
+
+impl Baseline {
+    /// The name of its learning-curve document (`baseline-knn`).
+    #[must_use]
+    pub fn document(&self) -> String {
+        format!("baseline-{}", self.name)
+    }
+
+    /// The learner the driver runs: the class served by `python3 -m
+    /// pushlearn.serve`, its slowest answer allowed `timeout_s` seconds.
+    fn learner(&self) -> LearnerChoice {
+        LearnerChoice::External(drive::external::LearnerSpec {
+            source: drive::external::Source::Command(python_learner(self.class)),
+            timeout: std::time::Duration::from_secs(self.timeout_s),
+        })
+    }
+}
+
+/// The baselines, in the order the page shows them. A new one is a class
+/// in the Python package's `BASELINES` and one entry here: the learning
+/// curves, the baseline table and figure, "Beyond the thesis" and the
+/// new-object table take every entry (the cross-object table only those
+/// in [`CROSS_LEARNERS`]); `tests::the_baselines_are_the_python_packages`
+/// keeps this list and the package's equal. A GP's fit when training ends
+/// takes a few seconds (`baselines.py`: at most 600 samples, O(n³)), and so
+/// do the MLP ensemble's last epochs over its memory; the timeout leaves
+/// room for a machine ten times slower.
+pub const BASELINES: &[Baseline] = &[
+    Baseline {
+        name: "knn",
+        class: "pushlearn.baselines:KnnLearner",
+        timeout_s: 60,
+    },
+    Baseline {
+        name: "gp",
+        class: "pushlearn.baselines:GpLearner",
+        timeout_s: 60,
+    },
+    Baseline {
+        name: "mlp",
+        class: "pushlearn.baselines:MlpLearner",
+        timeout_s: 60,
+    },
+];
 
 /// The numbers of training runs of the baseline table.
 pub const BASELINE_RUNS: [usize; 4] = [1, 3, 10, 30];
@@ -426,11 +463,11 @@ pub fn full() -> Vec<Entry> {
         if suffix.is_empty() {
             // Beside the default curves: the same world, so the baselines'
             // runs are the curves' recorded ones.
-            for (name, class, timeout) in BASELINES {
+            for b in BASELINES {
                 entries.push(Entry::new(
-                    name,
+                    b.document(),
                     Spec::PushTask {
-                        model: baseline(class, timeout),
+                        model: b.learner(),
                         options: ModelOptions::default(),
                         variant: Variant::Random,
                         transfer: None,
@@ -597,16 +634,13 @@ pub fn reference_entry_name(reference: &str, suffix: &str) -> String {
 /// reference rows.
 #[must_use]
 pub fn object_learners() -> Vec<(&'static str, LearnerChoice)> {
-    let [(_, knn, knn_timeout), (_, gp, gp_timeout), (_, mlp, mlp_timeout)] = BASELINES;
     let mut learners = vec![
         ("gate", ModelKind::Gate.into()),
         ("interaction", ModelKind::Interaction.into()),
         ("gate-plus", ModelKind::GatePlus.into()),
         ("hybrid", ModelKind::Hybrid.into()),
-        ("knn", baseline(knn, knn_timeout)),
-        ("gp", baseline(gp, gp_timeout)),
-        ("mlp", baseline(mlp, mlp_timeout)),
     ];
+    learners.extend(BASELINES.iter().map(|b| (b.name, b.learner())));
     learners.extend(references());
     learners
 }
@@ -829,20 +863,61 @@ mod tests {
     fn every_baseline_runs_in_the_baselines_and_new_object_tables() {
         let names: Vec<String> = full().into_iter().map(|e| e.name).collect();
         let objects: Vec<&str> = object_learners().into_iter().map(|(n, _)| n).collect();
-        for (name, class, _) in BASELINES {
-            assert!(names.iter().any(|n| n == name), "{name} is not run");
-            let short = name.trim_start_matches("baseline-");
+        for b in BASELINES {
+            let name = b.document();
+            assert!(names.contains(&name), "{name} is not run");
             assert!(
-                objects.contains(&short),
-                "{short} is not in the new-object table"
+                objects.contains(&b.name),
+                "{} is not in the new-object table",
+                b.name
             );
             for transfer in transfers() {
-                let entry = object_entry_name(short, &transfer);
+                let entry = object_entry_name(b.name, &transfer);
                 assert!(names.contains(&entry), "{entry} is not run");
             }
-            assert!(class.starts_with("pushlearn.baselines:"), "{class}");
+            assert!(b.class.starts_with("pushlearn.baselines:"), "{}", b.class);
         }
-        assert!(BASELINES.iter().any(|(n, ..)| *n == "baseline-mlp"));
+        assert!(BASELINES.iter().any(|b| b.name == "mlp"));
+    }
+
+    /// The package's `BASELINES` (`python/pushlearn/baselines.py`), read
+    /// from its source: (name, class) in order. The Rust tests run without
+    /// the package installed, and the dict is a literal of one
+    /// `"name": Class,` line per baseline.
+    fn python_baselines() -> Vec<(String, String)> {
+        let source = include_str!("../../../../python/pushlearn/baselines.py");
+        let start = "BASELINES: dict[str, type[BaselineLearner]] = {";
+        let Some((_, rest)) = source.split_once(start) else {
+            panic!("baselines.py has no `{start}`");
+        };
+        let Some((body, _)) = rest.split_once('}') else {
+            panic!("baselines.py's BASELINES does not end");
+        };
+        body.lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .map(|l| {
+                let Some((key, class)) = l.trim_end_matches(',').split_once(':') else {
+                    panic!("not a `\"name\": Class,` line in BASELINES: {l}");
+                };
+                (
+                    key.trim().trim_matches('"').to_owned(),
+                    class.trim().to_owned(),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_baselines_are_the_python_packages() {
+        let ours: Vec<(String, String)> = BASELINES
+            .iter()
+            .map(|b| {
+                let class = b.class.trim_start_matches("pushlearn.baselines:");
+                (b.name.to_owned(), class.to_owned())
+            })
+            .collect();
+        assert_eq!(ours, python_baselines());
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //!
 //! * [`protocol`]: the variants, the driver's configuration bits and the
 //!   jobs ([`protocol::PushJob`]);
-//! * [`task`]: [`task::PushTask`], the §3 handler for one job;
+//! * [`task`]: [`task::PushJobTask`], the §3 handler for one job;
 //! * [`objects`]: the new-object experiments' objects and what the learner
 //!   is shown of them.
 //!

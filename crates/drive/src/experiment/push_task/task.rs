@@ -16,9 +16,12 @@ use crate::results::push_task::{EndPoses, PushJobResult, SelectionCount};
 use crate::results::run_info::{Counters, Timing};
 use crate::scene::{push_task_blocks, Object, Transfer, BLOCK_Z, PUSH_TASK_START_Y};
 
-/// The §3 handler for one job.
+/// The §3 handler for one job: the driver's [`Task`] for a [`PushJob`].
+/// Named for the job, not the experiment: `PushTask` is the push-task
+/// experiment (the lab's `experiments::push_task::PushTask`, `Spec::PushTask`
+/// and the `push-task` command), of which this runs one (N_train, fold).
 #[derive(Debug)]
-pub struct PushTask {
+pub struct PushJobTask {
     n_train: usize,
     fixed_starts: Vec<f64>,
     start_range: f64,
@@ -56,7 +59,7 @@ pub struct PushTask {
     pub end_poses: Vec<Option<EndPoses>>,
 }
 
-impl PushTask {
+impl PushJobTask {
     /// The handler for `job`.
     #[must_use]
     pub fn new(job: &PushJob) -> Self {
@@ -130,7 +133,7 @@ impl PushTask {
     }
 }
 
-impl<M: Model> Task<M> for PushTask {
+impl<M: Model> Task<M> for PushJobTask {
     fn initial_view(&self) -> Option<View> {
         self.transfer.as_ref().map(|_| View {
             object: Object::Blue,
@@ -227,7 +230,7 @@ impl PushJobResult {
     /// A test run without a prediction, or a job that did not finish.
     pub fn from_task(
         job: &PushJob,
-        task: PushTask,
+        task: PushJobTask,
         counters: Counters,
         timing: Timing,
     ) -> Result<Self, ExperimentError> {
@@ -274,7 +277,7 @@ mod tests {
     /// after SetPose the actuator is where it was put, after Move it advances
     /// by v · 0.01 per message, after Reset everything is home. Returns every
     /// command batch.
-    fn simulate(driver: &mut Driver<Probe, PushTask>, limit: usize) -> Vec<Vec<String>> {
+    fn simulate(driver: &mut Driver<Probe, PushJobTask>, limit: usize) -> Vec<Vec<String>> {
         let mut actuator = (0.0, 0.0);
         let mut velocity = (0.0, 0.0);
         let mut batches = Vec::new();
@@ -316,7 +319,7 @@ mod tests {
     #[test]
     fn one_job_trains_149_updates_per_run_then_tests_every_position() {
         let job = job(2, Variant::FixedThree);
-        let mut driver = Driver::new(Probe::default(), PushTask::new(&job), 100);
+        let mut driver = Driver::new(Probe::default(), PushJobTask::new(&job), 100);
         let batches = simulate(&mut driver, 100_000);
         assert!(driver.is_done());
         let (task, model, counters) = driver.into_parts();
@@ -381,7 +384,7 @@ mod tests {
         let jobs = PushJob::all(Variant::Random, &[1, 2], 2, 7);
         let mut runs = Vec::new();
         for job in &jobs {
-            let mut driver = Driver::new(untrained.clone(), PushTask::new(job), 100);
+            let mut driver = Driver::new(untrained.clone(), PushJobTask::new(job), 100);
             let batches = simulate(&mut driver, 100_000);
             assert_eq!(batches[0], ["rate(100)", "move(0,0)", "reset"]);
             let (task, model, _) = driver.into_parts();
@@ -394,7 +397,7 @@ mod tests {
         assert_ne!(runs[0].0, runs[1].0);
         assert_ne!(runs[0].0[0], runs[2].0[0]);
         // Replaying job 3 alone gives exactly the same command sequence.
-        let mut again = Driver::new(untrained, PushTask::new(&jobs[3]), 100);
+        let mut again = Driver::new(untrained, PushJobTask::new(&jobs[3]), 100);
         assert_eq!(simulate(&mut again, 100_000), runs[3].1);
     }
 
@@ -404,8 +407,8 @@ mod tests {
             protocol: Variant::Random.into(),
             ..job(3, Variant::FixedThree)
         };
-        let mut a = PushTask::new(&random);
-        let mut b = PushTask::new(&job(3, Variant::FixedThree));
+        let mut a = PushJobTask::new(&random);
+        let mut b = PushJobTask::new(&job(3, Variant::FixedThree));
         let drawn: Vec<f64> = (0..3).map(|k| a.training_start(k)).collect();
         assert!(drawn.iter().all(|x| (-0.25..0.25).contains(x)));
         let fixed: Vec<f64> = (0..4).map(|k| b.training_start(k)).collect();
@@ -434,7 +437,7 @@ mod tests {
         );
         // ALLOWMISSPOSITIONS: starts in [−0.35, 0.35), some beyond ±0.25.
         let wide = Protocol::new(Variant::Random, flags::ALLOWMISSPOSITIONS);
-        let mut t = PushTask::new(&PushJob::all(wide, &[200], 1, 3).remove(0));
+        let mut t = PushJobTask::new(&PushJob::all(wide, &[200], 1, 3).remove(0));
         let starts: Vec<f64> = (0..200).map(|k| t.training_start(k)).collect();
         assert!(starts.iter().all(|x| (-0.35..0.35).contains(x)));
         assert!(starts.iter().any(|x| x.abs() > 0.3));
@@ -443,7 +446,7 @@ mod tests {
     #[test]
     fn two_object_jobs_use_their_table_and_positions() {
         let j = job(7, Variant::TwoObjects);
-        let mut t = PushTask::new(&j);
+        let mut t = PushJobTask::new(&j);
         let starts: Vec<f64> = (0..7).map(|k| t.training_start(k)).collect();
         assert_eq!(starts, TWO_OBJECT_TRAINING_STARTS);
         assert_eq!(Variant::TwoObjects.test_positions()[0], -0.8);
@@ -453,7 +456,7 @@ mod tests {
     #[test]
     fn a_missed_prediction_is_an_error_not_a_zero() {
         let j = job(1, Variant::Random);
-        let mut task = PushTask::new(&j);
+        let mut task = PushJobTask::new(&j);
         task.errors = vec![None];
         let err = PushJobResult::from_task(&j, task, Counters::default(), Default::default());
         assert!(matches!(

@@ -15,7 +15,9 @@ use super::{draft, Experiment};
 use crate::report::layout::Printout;
 use crate::report::plot::PlotError;
 
-/// The push task.
+/// The push-task experiment (`Spec::PushTask`, `pushlearn experiment
+/// push-task`), the one thing the name `PushTask` means; the engine's
+/// handler of one of its jobs is `drive`'s `PushJobTask`.
 pub struct PushTask;
 
 impl Experiment for PushTask {

@@ -269,9 +269,7 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
             );
             let predictor = MapName::Predictor(BLUE_ID);
             for e in results {
-                let r = reference::GATE_NODES
-                    .iter()
-                    .find(|r| r.train_runs == e.train_runs);
+                let r = reference::gate_nodes(e.train_runs);
                 let f = e.folds;
                 t.rows.push(vec![
                     whole(e.train_runs),
@@ -317,9 +315,7 @@ fn nodes(results: &[CurveEntry], model: ModelKind) -> Table {
                 ],
             );
             for e in results {
-                let r = reference::INTERACTION_NODES
-                    .iter()
-                    .find(|r| r.train_runs == e.train_runs);
+                let r = reference::interaction_nodes(e.train_runs);
                 let acs = e.nodes.acs.as_ref();
                 let f = e.folds;
                 t.rows.push(vec![

@@ -215,7 +215,7 @@ pub fn baseline_curves(results: &Reproduction) -> Result<Vec<(String, &PushRepor
     .chain(
         crate::reproduce::manifest::BASELINES
             .iter()
-            .map(|(name, ..)| (*name).to_owned()),
+            .map(crate::reproduce::manifest::Baseline::document),
     )
     .chain(reference_names());
     names
@@ -286,7 +286,7 @@ pub fn beyond_curves(results: &Reproduction) -> Result<Vec<(String, &PushReport)
     names.extend(
         crate::reproduce::manifest::BASELINES
             .iter()
-            .map(|(n, ..)| (*n).to_owned()),
+            .map(crate::reproduce::manifest::Baseline::document),
     );
     names.extend(reference_names());
     names

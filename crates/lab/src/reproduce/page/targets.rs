@@ -189,7 +189,7 @@ pub(super) fn beyond_targets(results: &Reproduction) -> Result<String, String> {
     }
     let baselines: Vec<&PushReport> = crate::reproduce::manifest::BASELINES
         .iter()
-        .map(|(name, ..)| push_doc(results, name))
+        .map(|b| push_doc(results, &b.document()))
         .collect::<Result<_, _>>()?;
     let mut worse = Vec::new();
     for n in crate::reproduce::manifest::BEYOND_RUNS {
