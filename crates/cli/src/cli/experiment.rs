@@ -32,8 +32,7 @@ use super::parse::parse_pose;
 ///
 /// Each worker has its own world (in the lock-step modes a world inside
 /// the worker, by default; with --world spawn or --mode realtime a
-/// `pushlearn-sim serve` child on a free port, found next to this
-/// executable, on PATH, or at --sim-bin) and runs independent jobs; results
+/// `pushlearn-sim serve` child on a free port, found as --sim-bin says) and runs independent jobs; results
 /// are gathered in job order, so they do not depend on --workers. In the
 /// lock-step modes the same --seed gives the same results.
 #[derive(Debug, Args)]
@@ -99,7 +98,8 @@ struct WorldArgs {
     workers: Option<u32>,
 
     /// The world daemon binary to spawn (implies --world spawn) [default:
-    /// `pushlearn-sim` next to this executable, else on PATH].
+    /// $PUSHLEARN_SIM_BIN, else `pushlearn-sim` next to this executable, else
+    /// on PATH: docs/simulator.md].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
 

@@ -80,8 +80,8 @@ pub struct ReproduceArgs {
     world: Worlds,
 
     /// The world daemon binary, for the calibration sweep, the sweeps and
-    /// --world spawn [default: `pushlearn-sim` next to this executable,
-    /// else on PATH].
+    /// --world spawn [default: $PUSHLEARN_SIM_BIN, else `pushlearn-sim` next
+    /// to this executable, else on PATH: docs/simulator.md].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
 

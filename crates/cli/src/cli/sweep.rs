@@ -93,7 +93,8 @@ struct RunArgs {
     #[arg(long, value_parser = named::<Worlds>())]
     world: Option<Worlds>,
     /// The world daemon binary to spawn (implies --world spawn) [default:
-    /// `pushlearn-sim` next to this executable, else on PATH].
+    /// $PUSHLEARN_SIM_BIN, else `pushlearn-sim` next to this executable, else
+    /// on PATH: docs/simulator.md].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
     /// Run only these jobs (ids, comma-separated), if not done; merges only
@@ -135,8 +136,9 @@ struct SlurmArgs {
     /// The job name (--job-name).
     #[arg(long, value_name = "NAME", default_value = "pushlearn-sweep")]
     job_name: String,
-    /// The world daemon binary the tasks run [default: `pushlearn-sim`
-    /// next to this executable, else on PATH].
+    /// The world daemon binary the tasks run [default:
+    /// $PUSHLEARN_SIM_BIN, else `pushlearn-sim` next to this executable, else
+    /// on PATH: docs/simulator.md].
     #[arg(long, value_name = "PATH")]
     sim_bin: Option<PathBuf>,
     /// Submit only these jobs (ids, comma-separated), if not done.
