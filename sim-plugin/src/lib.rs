@@ -5,6 +5,7 @@
 //! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
 //!   per-step actuator drive, commands, ghosts and publishing;
 //! * [`calibration`]: the calibration sweep of `docs/spec/world.md` §10;
+//! * [`generate`]: objects drawn from seeded distributions, as scenes;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
 //! * [`server`]: the `pushlearn-sim` daemon serving the world over TCP
 //!   (`docs/protocol.md`);
@@ -14,6 +15,7 @@
 //!   the fuzzers and the tests that replay their inputs.
 
 pub mod calibration;
+pub mod generate;
 pub mod lockstep;
 pub mod push_run;
 pub mod replay;

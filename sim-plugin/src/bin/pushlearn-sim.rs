@@ -85,6 +85,69 @@ enum Cmd {
             pushlearn-sim replay run.plrec --listen 127.0.0.1:0"
     )]
     Replay(ReplayArgs),
+    /// Scene files: generate objects nobody has seen.
+    #[command(subcommand)]
+    Scene(SceneCmd),
+}
+
+#[derive(Debug, Subcommand)]
+enum SceneCmd {
+    /// Draw objects from seeded distributions and write one scene file per object.
+    #[command(
+        long_about = "Draw objects from seeded distributions (docs/world.md \"Generated objects\", \
+                      with the sources of every range) and write one scene file per object, \
+                      DIR/SET-000.toml, DIR/SET-001.toml, …, and DIR/SET-index.json listing the \
+                      values drawn.\n\n\
+                      Each scene is the push task's world (one_block: ground, physics, drive and \
+                      actuator unchanged) with one object in place of the blue block, under its \
+                      name and id (blockA, 15) and at its start (0, 0.25), so that every experiment \
+                      and learner runs it: `pushlearn-sim serve --scene DIR/test-000.toml`.\n\n\
+                      Every value is uniform on its range and independent of the others:\n  \
+                      box           width (across the push, x) 0.1–0.5 m, depth (along it, y) 0.1–0.3 m\n  \
+                      cylinder      radius 0.05–0.15 m (held-out set only)\n  \
+                      height        0.06–0.1 m (above the pusher's top, 0.055 m; never taller than wide)\n  \
+                      mass          0.5–2 kg\n  \
+                      centre of mass  offset ±0.5 of the way to the side (box: x and y each; cylinder: \
+                      radius fraction at a uniform angle), at mid-height; inertia: the uniform solid's \
+                      about the centre of mass\n  \
+                      friction      object–ground 0.1–0.3, object–pusher 0.1–0.5 (isotropic, [[friction]] tables)\n\n\
+                      Sets: train and test are boxes from disjoint streams; held-out is cylinders, a \
+                      shape family no training or test object belongs to. Object i of a set depends \
+                      only on the seed, the set and i: a larger --count adds objects, it changes none.",
+        after_help = "Examples:\n  \
+            pushlearn-sim scene generate --set train --count 100 --seed 1 --out objects/\n  \
+            pushlearn-sim scene generate --set test --count 50 --seed 1 --out objects/\n  \
+            pushlearn-sim scene generate --set held-out --count 20 --seed 1 --out objects/"
+    )]
+    Generate(GenerateArgs),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SetArg {
+    /// Boxes, for training and tuning.
+    Train,
+    /// Boxes from another stream than train's.
+    Test,
+    /// Cylinders: the shape family no train or test object belongs to.
+    HeldOut,
+}
+
+#[derive(Debug, Args)]
+struct GenerateArgs {
+    /// Which objects to draw.
+    #[arg(long, value_enum)]
+    set: SetArg,
+    /// How many objects, 1 to 10000 (one file each).
+    #[arg(long, value_name = "N",
+          value_parser = clap::value_parser!(u64).range(1..=10_000).map(|n| n as usize))]
+    count: usize,
+    /// Seed of the generators (with the set and the object's index).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    seed: u64,
+    /// Directory the scene files go to (created if missing; files of the same names are
+    /// replaced).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -197,6 +260,7 @@ fn main() -> ExitCode {
         None | Some(Cmd::Serve(_)) => "info",
         Some(Cmd::Sweep(_)) => "warn",
         Some(Cmd::Replay(_)) => "info",
+        Some(Cmd::Scene(_)) => "warn",
     };
     tracing_subscriber::fmt()
         .with_env_filter(
@@ -211,6 +275,7 @@ fn main() -> ExitCode {
         Some(Cmd::Serve(args)) => run_serve(&args),
         Some(Cmd::Sweep(args)) => run_sweep(&args),
         Some(Cmd::Replay(args)) => run_replay(&args),
+        Some(Cmd::Scene(SceneCmd::Generate(args))) => run_generate(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -375,6 +440,56 @@ fn run_replay(args: &ReplayArgs) -> anyhow::Result<()> {
         }
         Ok(())
     })
+}
+
+fn run_generate(args: &GenerateArgs) -> anyhow::Result<()> {
+    use sim_plugin::generate::{generate, Distributions, Set};
+    let set = match args.set {
+        SetArg::Train => Set::Train,
+        SetArg::Test => Set::Test,
+        SetArg::HeldOut => Set::HeldOut,
+    };
+    let dist = Distributions::default();
+    let objects = generate(set, args.count, args.seed, &dist).context("drawing the objects")?;
+    let out = &args.out;
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("--out: cannot create the directory {}", out.display()))?;
+    let write = |name: String, text: String| {
+        let path = out.join(name);
+        std::fs::write(&path, text)
+            .with_context(|| format!("--out: cannot write {}", path.display()))
+    };
+    let command = format!(
+        "pushlearn-sim scene generate --set {set} --count {} --seed {}",
+        args.count, args.seed
+    );
+    for (i, g) in objects.iter().enumerate() {
+        let toml = g
+            .scene
+            .to_toml_string()
+            .with_context(|| format!("writing object {i} as TOML"))?;
+        write(
+            format!("{}.toml", g.object.name),
+            format!("# Object {i} of `{command}` (docs/world.md \"Generated objects\").\n{toml}"),
+        )?;
+    }
+    let index = serde_json::json!({
+        "command": command,
+        "set": set,
+        "seed": args.seed,
+        "distributions": dist,
+        "objects": objects.iter().map(|g| &g.object).collect::<Vec<_>>(),
+    });
+    write(
+        format!("{set}-index.json"),
+        format!("{}\n", serde_json::to_string_pretty(&index)?),
+    )?;
+    println!(
+        "wrote {} scene files and {set}-index.json to {}",
+        objects.len(),
+        out.display()
+    );
+    Ok(())
 }
 
 fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {
