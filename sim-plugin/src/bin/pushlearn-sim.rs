@@ -538,3 +538,41 @@ fn write_table(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+    use sim_plugin::generate::Distributions;
+
+    /// `scene generate --help` spells the default ranges out for a reader;
+    /// this keeps the text equal to what the generator draws from.
+    #[test]
+    fn the_generate_help_states_the_default_ranges() {
+        let mut cli = Cli::command();
+        let help = cli
+            .find_subcommand_mut("scene")
+            .and_then(|scene| scene.find_subcommand_mut("generate"))
+            .map(|generate| generate.render_long_help().to_string())
+            .unwrap_or_default();
+        let d = Distributions::default();
+        for (what, range) in [
+            ("box width", d.box_width),
+            ("box depth", d.box_depth),
+            ("cylinder radius", d.cylinder_radius),
+            ("height", d.height),
+            ("mass", d.mass),
+            ("object–ground friction", d.ground_friction),
+            ("object–pusher friction", d.pusher_friction),
+        ] {
+            let text = format!("{}–{}", range.lo, range.hi);
+            assert!(help.contains(&text), "{what}: {text} is not in:\n{help}");
+        }
+        let com = format!("±{}", d.com_fraction.hi);
+        assert_eq!(d.com_fraction.lo, -d.com_fraction.hi);
+        assert!(
+            help.contains(&com),
+            "centre of mass: {com} is not in:\n{help}"
+        );
+    }
+}
