@@ -36,7 +36,10 @@ const CRATES: &[(&str, Table)] = &[
             ("body", &["arena", "check"]),
             ("geom", &["arena", "check"]),
             ("contact", &["check"]),
-            ("world", &["arena", "body", "contact", "geom", "init"]),
+            (
+                "world",
+                &["arena", "body", "check", "contact", "geom", "init"],
+            ),
         ],
     ),
     // The world: the scene as data, the world on it, what runs it (the
@@ -47,6 +50,8 @@ const CRATES: &[(&str, Table)] = &[
         "sim-plugin/src",
         &[
             ("scene", &[]),
+            // Objects drawn from distributions, written as scenes.
+            ("generate", &["scene"]),
             ("world", &["scene"]),
             ("calibration", &["scene", "world"]),
             ("push_run", &["calibration", "scene", "world"]),
