@@ -14,7 +14,9 @@ use rand::rngs::ChaCha8Rng;
 use rand::{RngExt, SeedableRng};
 use serde::Serialize;
 
-use crate::scene::{BodySpec, PairFriction, Scene, SceneError, ShapeSpec, ACTUATOR};
+use crate::scene::{
+    parallel_axis_shift, BodySpec, PairFriction, Scene, SceneError, ShapeSpec, ACTUATOR,
+};
 use pushlearn_core::body::{BLUE_NAME, GROUND_NAME};
 
 /// Which objects a set draws.
@@ -415,17 +417,16 @@ fn scene_of(base: &Scene, object: &Object) -> Scene {
     let mut scene = base.clone();
     scene.name = object.name.clone();
     let start_y = blue(base).start.y;
-    let [cx, cy, cz] = object.centre_of_mass;
     // The object is uniform about its centre of mass (the solid's moments
     // there) with its mass shifted by c: the file gives the inertia about
     // the shape's centre, so add what the parallel-axis theorem takes off
     // (`BodySpec::inertia_about_centre_of_mass`).
     let solid = object.shape.solid_inertia(object.mass);
-    let m = object.mass;
+    let shift = parallel_axis_shift(object.mass, object.centre_of_mass);
     let inertia = [
-        solid[0] + m * (cy * cy + cz * cz),
-        solid[1] + m * (cx * cx + cz * cz),
-        solid[2] + m * (cx * cx + cy * cy),
+        solid[0] + shift[0],
+        solid[1] + shift[1],
+        solid[2] + shift[2],
     ];
     let height = match object.shape {
         ShapeSpec::Box { size } => size[2],

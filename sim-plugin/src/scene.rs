@@ -309,15 +309,27 @@ impl BodySpec {
         }
         let m = self.mass;
         let [x, y, z] = c;
+        let shift = parallel_axis_shift(m, c);
         (
             [
-                centre[0] - m * (y * y + z * z),
-                centre[1] - m * (x * x + z * z),
-                centre[2] - m * (x * x + y * y),
+                centre[0] - shift[0],
+                centre[1] - shift[1],
+                centre[2] - shift[2],
             ],
             [m * x * y, m * x * z, m * y * z],
         )
     }
+}
+
+/// What the parallel-axis theorem adds to the diagonal of an inertia tensor
+/// when the axes move from a body's centre of mass to a point `c` away.
+pub fn parallel_axis_shift(mass: f64, c: [f64; 3]) -> [f64; 3] {
+    let [x, y, z] = c;
+    [
+        mass * (y * y + z * z),
+        mass * (x * x + z * z),
+        mass * (x * x + y * y),
+    ]
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
