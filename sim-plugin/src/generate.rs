@@ -12,7 +12,7 @@ use std::fmt;
 
 use rand::rngs::ChaCha8Rng;
 use rand::{RngExt, SeedableRng};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::scene::{
     parallel_axis_shift, BodySpec, PairFriction, Scene, SceneError, ShapeSpec, ACTUATOR,
@@ -68,7 +68,7 @@ impl fmt::Display for Set {
 
 /// The shape families the world supports today (spheres roll and are the
 /// pusher's shape, so they are no object to push).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Family {
     Box,
@@ -77,7 +77,7 @@ pub enum Family {
 
 /// A closed interval a value is drawn from, uniformly. `lo == hi` fixes the
 /// value.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Range {
     pub lo: f64,
     pub hi: f64,
@@ -110,7 +110,7 @@ impl fmt::Display for Range {
 /// The distributions objects are drawn from: every value uniform on its
 /// range, each independent of the others. [`Distributions::default`] is the
 /// documented one (`docs/world.md` "Generated objects", with sources).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Distributions {
     /// A box's edge across the push (along x), m.
     pub box_width: Range,
@@ -191,7 +191,7 @@ pub struct Generated {
 }
 
 /// The values drawn for one object (what `index.json` lists).
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Object {
     pub name: String,
     pub family: Family,
@@ -204,6 +204,21 @@ pub struct Object {
 
 /// The scene objects are put in.
 const BASE_SCENE: &str = "one_block";
+
+impl Object {
+    /// The push task's world with this object as its blue block: what
+    /// [`generate`] builds for the values drawn, and what an identification
+    /// builds for values it tries (`drive::oracle::identify`).
+    ///
+    /// # Errors
+    /// Values that make no valid scene (e.g. a centre of mass that leaves
+    /// the inertia indefinite), naming the field.
+    pub fn scene(&self) -> Result<Scene, SceneError> {
+        let scene = scene_of(&Scene::builtin(BASE_SCENE)?, self);
+        scene.validate()?;
+        Ok(scene)
+    }
+}
 
 impl Distributions {
     /// Checks every range against the push task's world (`base`): names the
@@ -362,10 +377,10 @@ pub fn generate(
         .map(|index| {
             let mut rng = object_rng(seed, set, index);
             let object = draw(&mut rng, set, index, dist);
-            let scene = scene_of(&base, &object);
-            scene
-                .validate()
-                .map_err(|source| GenerateError::Invalid { set, index, source })?;
+            let scene =
+                object
+                    .scene()
+                    .map_err(|source| GenerateError::Invalid { set, index, source })?;
             Ok(Generated { scene, object })
         })
         .collect()

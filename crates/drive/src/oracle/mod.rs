@@ -40,6 +40,9 @@ use sim_plugin::Scene;
 
 use crate::scene::Object;
 
+pub mod identify;
+pub use identify::IdentificationOracle;
+
 /// What an oracle knows of the world's latency emulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -108,6 +111,26 @@ pub struct OracleWorld {
     /// What the world's bodies were shown as (empty until the copies
     /// stepped it).
     shown: Vec<Shown>,
+    /// A state shown to copies that are mid-chain: they take its poses and
+    /// keep their own velocities instead of starting it at rest
+    /// ([`OracleWorld::resynced`]).
+    keep_motion: bool,
+}
+
+impl OracleWorld {
+    /// This state, to be taken up by copies still moving from the chain
+    /// before it: the bodies are put where it shows them and keep the
+    /// velocities the copies gave them. A shown state carries no
+    /// velocities; this is how a fit restarts chains mid-run
+    /// ([`identify`]) without starting a moving object at rest.
+    #[must_use]
+    pub fn resynced(&self) -> OracleWorld {
+        OracleWorld {
+            token: 0,
+            keep_motion: true,
+            ..self.clone()
+        }
+    }
 }
 
 /// The world copies, one per latency hypothesis, and the token of the
@@ -132,7 +155,7 @@ impl std::fmt::Debug for Copies {
 /// The world as a predictor of itself; see the module documentation.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Oracle {
-    scene: String,
+    scene: Scene,
     publish_rate_hz: u32,
     latency: OracleLatency,
     /// The largest delay of the world's latency emulation (0: none).
@@ -172,16 +195,28 @@ impl Oracle {
         latency: OracleLatency,
         latency_max: u32,
     ) -> Result<Self, OracleError> {
-        Scene::builtin(scene).map_err(|err| OracleError::Scene(err.to_string()))?;
-        Ok(Self {
-            scene: scene.to_owned(),
+        let scene = Scene::builtin(scene).map_err(|err| OracleError::Scene(err.to_string()))?;
+        Ok(Self::of_scene(scene, publish_rate_hz, latency, latency_max))
+    }
+
+    /// The oracle `latency` of `scene` (its bodies, masses and frictions
+    /// are what the copies step), as [`Oracle::new`] for a built-in one.
+    #[must_use]
+    pub fn of_scene(
+        scene: Scene,
+        publish_rate_hz: u32,
+        latency: OracleLatency,
+        latency_max: u32,
+    ) -> Self {
+        Self {
+            scene,
             publish_rate_hz,
             latency,
             latency_max,
             training: true,
             next_delay: 0,
             copies: Arc::default(),
-        })
+        }
     }
 
     fn lock(&self) -> MutexGuard<'_, Copies> {
@@ -205,21 +240,26 @@ impl Oracle {
         let mut copies = self.lock();
         let copies = &mut *copies;
         if copies.worlds.len() != delays.len() {
-            let scene = Scene::builtin(&self.scene).ok()?;
+            let scene = &self.scene;
             copies.shapes = Shapes::from_hello(&pb::Hello {
-                shapes: sim_plugin::server::shapes(&scene),
+                shapes: sim_plugin::server::shapes(scene),
                 ..pb::Hello::default()
             });
             copies.worlds = delays
                 .iter()
-                .map(|_| World::new(&scene).ok())
+                .map(|_| World::new(scene).ok())
                 .collect::<Option<_>>()?;
             copies.token = 0;
         }
         let shown = if from.token == 0 || from.token != copies.token {
             let shown = shown_bodies(&from.frame, &copies.shapes)?;
+            // Copies that never stepped have no motion to keep.
+            let keep_motion = from.keep_motion && copies.token != 0;
             for world in &mut copies.worlds {
-                self.show(world, &from.frame, &shown)?;
+                if !keep_motion {
+                    self.stop(world)?;
+                }
+                place(world, &from.frame, &shown)?;
             }
             shown
         } else {
@@ -244,14 +284,15 @@ impl Oracle {
             poses,
             token: copies.token,
             shown,
+            keep_motion: false,
         })
     }
 
-    /// Brings `world` to the state `frame` shows, at rest, the actuator
-    /// stopped: as the driver's `reset_world` leaves the world before a
-    /// run (Move(0, 0), then Reset), so that a Move that comes late is
-    /// late from a standstill, not from the previous run's push.
-    fn show(&self, world: &mut World, frame: &Frame, shown: &[Shown]) -> Option<()> {
+    /// Brings `world` to rest, the actuator stopped: as the driver's
+    /// `reset_world` leaves the world before a run (Move(0, 0), then
+    /// Reset), so that a Move that comes late is late from a standstill,
+    /// not from the previous run's push.
+    fn stop(&self, world: &mut World) -> Option<()> {
         world
             .apply(Command::Actuator {
                 mode: ActuatorMode::Move,
@@ -262,38 +303,43 @@ impl Oracle {
         world.apply(Command::Unpause).ok()?;
         world
             .apply(Command::SetPublishRate(self.publish_rate_hz))
-            .ok()?;
-        for (body, seen) in shown
-            .iter()
-            .zip(frame.objects.iter().filter(|o| !is_skipped(&o.name)))
-        {
-            if body.body != body.name {
-                // The new-object view: the object shown under another
-                // body's name took that body's start, and that body its
-                // parking place (`experiment::push_task::objects`).
-                let object = Object::ALL.into_iter().find(|o| o.body() == body.body)?;
-                let park = object.park()?;
-                let z = world.scene().bodies[world.scene().body_index(&body.name)?]
-                    .start
-                    .position()[2];
-                world
-                    .apply(Command::SetPose {
-                        name: body.name.as_str().into(),
-                        position: [park.x, park.y, z],
-                        orientation: pushlearn_core::orientation::from_yaw(park.theta),
-                    })
-                    .ok()?;
-            }
+            .ok()
+    }
+}
+
+/// Puts `world`'s bodies where `frame` shows them (their velocities as they
+/// are).
+fn place(world: &mut World, frame: &Frame, shown: &[Shown]) -> Option<()> {
+    for (body, seen) in shown
+        .iter()
+        .zip(frame.objects.iter().filter(|o| !is_skipped(&o.name)))
+    {
+        if body.body != body.name {
+            // The new-object view: the object shown under another
+            // body's name took that body's start, and that body its
+            // parking place (`experiment::push_task::objects`).
+            let object = Object::ALL.into_iter().find(|o| o.body() == body.body)?;
+            let park = object.park()?;
+            let z = world.scene().bodies[world.scene().body_index(&body.name)?]
+                .start
+                .position()[2];
             world
                 .apply(Command::SetPose {
-                    name: body.body.as_str().into(),
-                    position: seen.position,
-                    orientation: seen.orientation,
+                    name: body.name.as_str().into(),
+                    position: [park.x, park.y, z],
+                    orientation: pushlearn_core::orientation::from_yaw(park.theta),
                 })
                 .ok()?;
         }
-        Some(())
+        world
+            .apply(Command::SetPose {
+                name: body.body.as_str().into(),
+                position: seen.position,
+                orientation: seen.orientation,
+            })
+            .ok()?;
     }
+    Some(())
 }
 
 /// Steps `world` to its next publish with `action` in force from step
@@ -415,6 +461,7 @@ impl Model for Oracle {
             frame: frame.clone(),
             token: 0,
             shown: Vec::new(),
+            keep_motion: false,
         })
     }
 
