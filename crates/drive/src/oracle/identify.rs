@@ -224,7 +224,8 @@ impl Problem<'_> {
             self.publish_rate_hz,
             OracleLatency::Known,
             self.latency_max,
-        );
+        )
+        .forgetting_chains();
         copy.start_fold(0);
         replay_error(&mut copy, self.runs, rim_radius(&self.object.shape))
     }

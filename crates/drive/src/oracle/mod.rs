@@ -40,6 +40,7 @@ use sim_plugin::Scene;
 
 use crate::scene::Object;
 
+mod chains;
 pub mod identify;
 pub use identify::IdentificationOracle;
 
@@ -115,6 +116,9 @@ pub struct OracleWorld {
     /// keep their own velocities instead of starting it at rest
     /// ([`OracleWorld::resynced`]).
     keep_motion: bool,
+    /// Its node in the tree of chains already stepped ([`chains`]; 0: not
+    /// in it).
+    node: u64,
 }
 
 impl OracleWorld {
@@ -141,6 +145,13 @@ struct Copies {
     /// The scene's bodies' shapes.
     shapes: Shapes,
     token: u64,
+    /// What the tree of chains knows the oracle by: everything its chains
+    /// depend on but the states and actions.
+    key: Arc<str>,
+    /// The chain node the copies hold, and the one they would hold had
+    /// they stepped every prediction handed out from the tree.
+    held: u64,
+    handed_out: u64,
 }
 
 impl std::fmt::Debug for Copies {
@@ -161,6 +172,9 @@ pub struct Oracle {
     /// The largest delay of the world's latency emulation (0: none).
     latency_max: u32,
     training: bool,
+    /// Whether its chains are kept in the tree ([`chains`]).
+    #[serde(skip, default = "remembering")]
+    remember_chains: bool,
     /// The delay of the next Move, as the harness said it.
     #[serde(skip)]
     next_delay: u32,
@@ -214,19 +228,42 @@ impl Oracle {
             latency,
             latency_max,
             training: true,
+            remember_chains: true,
             next_delay: 0,
             copies: Arc::default(),
         }
+    }
+
+    /// This oracle, stepping every chain it is asked for even if it was
+    /// stepped before: for copies whose chains never repeat (an
+    /// identification's candidates), which would only fill the tree.
+    #[must_use]
+    pub fn forgetting_chains(self) -> Self {
+        Self {
+            remember_chains: false,
+            ..self
+        }
+    }
+
+    /// Whether its chains are worth keeping: in testing (training predicts
+    /// from each real state, once), and only when a chain is the same
+    /// whatever the harness tells the copies — the oracle that ignores the
+    /// delays, or a world without latency emulation.
+    fn chains_repeat(&self) -> bool {
+        self.remember_chains
+            && !self.training
+            && (self.latency == OracleLatency::Unknown || self.latency_max == 0)
     }
 
     fn lock(&self) -> MutexGuard<'_, Copies> {
         self.copies.lock().unwrap_or_else(PoisonError::into_inner)
     }
 
-    /// The delay each copy applies the next Move after.
-    fn delays(&self) -> Vec<u32> {
+    /// The delay each copy applies the next Move after, the harness having
+    /// told `told`.
+    fn delays_for(&self, told: u32) -> Vec<u32> {
         match self.latency {
-            OracleLatency::Known => vec![self.next_delay],
+            OracleLatency::Known => vec![told],
             OracleLatency::Unknown => (0..=self.latency_max).collect(),
         }
     }
@@ -234,24 +271,121 @@ impl Oracle {
     /// One message of the copies from `from` under `action`: their next
     /// states if they hold `from`, else from `from`'s poses at rest (what is
     /// shown carries no velocities). `None` if the copies refused the state
-    /// (a body the scene does not have) or could not step.
+    /// (a body the scene does not have) or could not step. A chain stepped
+    /// before is taken from the tree of chains instead ([`chains`]).
     fn step(&self, from: &OracleWorld, action: Action) -> Option<OracleWorld> {
-        let delays = self.delays();
         let mut copies = self.lock();
         let copies = &mut *copies;
-        if copies.worlds.len() != delays.len() {
-            let scene = &self.scene;
-            copies.shapes = Shapes::from_hello(&pb::Hello {
-                shapes: sim_plugin::server::shapes(scene),
-                ..pb::Hello::default()
-            });
-            copies.worlds = delays
-                .iter()
-                .map(|_| World::new(scene).ok())
-                .collect::<Option<_>>()?;
-            copies.token = 0;
+        self.build(copies)?;
+        if from.keep_motion || !self.chains_repeat() {
+            let show = from.token == 0 || from.token != copies.token;
+            return self.advance(copies, from, show, action);
         }
-        let shown = if from.token == 0 || from.token != copies.token {
+        // The delay told matters only to the copy that is told it.
+        let told = match self.latency {
+            OracleLatency::Known => self.next_delay,
+            OracleLatency::Unknown => 0,
+        };
+        let step = chains::StepKey::of(action, told);
+        // In turn: the copies hold `from`, or would had they stepped every
+        // prediction handed out since.
+        let in_turn = from.node != 0 && from.node == copies.handed_out;
+        let parent = if in_turn {
+            from.node
+        } else {
+            chains::root(&copies.key, &from.frame)
+        };
+        if let Some((id, world)) = chains::stepped(parent, step) {
+            copies.handed_out = id;
+            return Some(world);
+        }
+        let mut next = if !in_turn {
+            self.advance(copies, from, true, action)?
+        } else if copies.held == from.node {
+            self.advance(copies, from, false, action)?
+        } else {
+            // Behind the chain handed out: step through it from its shown
+            // state, as the copies would have.
+            let (frame, steps) = chains::history(from.node)?;
+            let mut world = self.parse_shown(frame).ok()?;
+            let mut show = true;
+            for past in steps {
+                world = self.advance_by(copies, &world, show, past.action(), past.delay())?;
+                show = false;
+            }
+            self.advance(copies, &world, show, action)?
+        };
+        let id = chains::keep(parent, step, &next);
+        next.node = id;
+        copies.held = id;
+        copies.handed_out = id;
+        Some(next)
+    }
+
+    /// The copies, one per latency hypothesis, built at a fold's first
+    /// prediction.
+    fn build(&self, copies: &mut Copies) -> Option<()> {
+        let count = self.delays_for(0).len();
+        if copies.worlds.len() == count {
+            return Some(());
+        }
+        let scene = &self.scene;
+        copies.shapes = Shapes::from_hello(&pb::Hello {
+            shapes: sim_plugin::server::shapes(scene),
+            ..pb::Hello::default()
+        });
+        copies.worlds = (0..count)
+            .map(|_| World::new(scene).ok())
+            .collect::<Option<_>>()?;
+        copies.token = 0;
+        copies.key = format!(
+            "{}|{}|{}|{}",
+            serde_json::to_string(scene).ok()?,
+            self.publish_rate_hz,
+            self.latency.name(),
+            self.latency_max
+        )
+        .into();
+        copies.held = 0;
+        copies.handed_out = 0;
+        Some(())
+    }
+
+    /// `frame` as a state shown to the oracle.
+    fn parse_shown(&self, frame: Frame) -> Result<OracleWorld, ParseError> {
+        Ok(OracleWorld {
+            poses: parse_frame_at(&frame, ActuatorYaw::ForceZero, Precision::Full)?,
+            frame,
+            token: 0,
+            shown: Vec::new(),
+            keep_motion: false,
+            node: 0,
+        })
+    }
+
+    fn advance(
+        &self,
+        copies: &mut Copies,
+        from: &OracleWorld,
+        show: bool,
+        action: Action,
+    ) -> Option<OracleWorld> {
+        self.advance_by(copies, from, show, action, self.next_delay)
+    }
+
+    /// Steps the copies one message under `action`, the told delay being
+    /// `told`: from `from` shown to them first if `show`, else from the
+    /// state they hold (which is `from`).
+    fn advance_by(
+        &self,
+        copies: &mut Copies,
+        from: &OracleWorld,
+        show: bool,
+        action: Action,
+        told: u32,
+    ) -> Option<OracleWorld> {
+        let delays = self.delays_for(told);
+        let shown = if show {
             let shown = shown_bodies(&from.frame, &copies.shapes)?;
             // Copies that never stepped have no motion to keep.
             let keep_motion = from.keep_motion && copies.token != 0;
@@ -285,6 +419,7 @@ impl Oracle {
             token: copies.token,
             shown,
             keep_motion: false,
+            node: 0,
         })
     }
 
@@ -305,6 +440,10 @@ impl Oracle {
             .apply(Command::SetPublishRate(self.publish_rate_hz))
             .ok()
     }
+}
+
+fn remembering() -> bool {
+    true
 }
 
 /// Puts `world`'s bodies where `frame` shows them (their velocities as they
@@ -456,13 +595,7 @@ impl Model for Oracle {
     type World = OracleWorld;
 
     fn parse(&self, frame: &Frame) -> Result<OracleWorld, ParseError> {
-        Ok(OracleWorld {
-            poses: parse_frame_at(frame, ActuatorYaw::ForceZero, Precision::Full)?,
-            frame: frame.clone(),
-            token: 0,
-            shown: Vec::new(),
-            keep_motion: false,
-        })
+        self.parse_shown(frame.clone())
     }
 
     fn poses(world: &OracleWorld) -> Poses {
@@ -478,6 +611,7 @@ impl Model for Oracle {
     fn predict(&self, world: &OracleWorld, action: Action) -> OracleWorld {
         self.step(world, action).unwrap_or_else(|| OracleWorld {
             token: 0,
+            node: 0,
             ..world.clone()
         })
     }
@@ -640,6 +774,70 @@ mod tests {
         let blue = shapes.of(learner::BLUE_NAME);
         assert_eq!(body(blue).as_deref(), Some(learner::BLUE_NAME));
         assert_eq!(body(Some(BodyShape::Sphere { radius: 7.0 })), None);
+    }
+
+    /// Chains taken from the tree, or stepped through it to catch up, are
+    /// the chains the copies step, bit for bit: folds that repeat a chain,
+    /// one that leaves it half way, one handed a state out of turn.
+    #[test]
+    fn chains_from_the_tree_are_the_copies_chains() {
+        let scene = Scene::builtin("one_block").unwrap();
+        let mut world = World::new(&scene).unwrap();
+        world.apply(Command::SetPublishRate(100)).unwrap();
+        let run = record_push_run(&mut world, 0.05, [0.0, 0.5], 2).unwrap();
+        let push = Action::new(0.0, 0.5);
+        let turn = Action::new(0.2, 0.4);
+        // Distinct from every other test's chains: the tree is the process's.
+        let start = frame_of(&run[1]);
+        let chain = |oracle: &Oracle, actions: &[Action], out_of_turn: Option<usize>| {
+            let mut at = oracle.parse(&start).unwrap();
+            let mut seen = Vec::new();
+            for (i, &a) in actions.iter().enumerate() {
+                let next = oracle.predict(&at, a);
+                seen.push((Oracle::poses(&next), next.frame.clone()));
+                at = if out_of_turn == Some(i) {
+                    // Handed back a state from before: shown at rest.
+                    oracle.parse(&next.frame).unwrap()
+                } else {
+                    next
+                };
+            }
+            seen
+        };
+        let straight = [push; 30];
+        let mut bent = [push; 30];
+        bent[15..].fill(turn);
+        for latency in OracleLatency::ALL {
+            for latency_max in [0, 3] {
+                let fresh = || {
+                    let mut o = Oracle::new("one_block", 100, *latency, latency_max).unwrap();
+                    o.start_fold(1);
+                    // Testing: an oracle keeps no chain in training.
+                    o.set_training(false);
+                    o
+                };
+                let truth = |actions: &[Action], out: Option<usize>| {
+                    chain(&fresh().forgetting_chains(), actions, out)
+                };
+                for (actions, out) in [
+                    (&straight, None),
+                    (&straight, None),
+                    (&bent, None),
+                    (&bent, Some(20)),
+                    (&straight, Some(5)),
+                ] {
+                    // Twice: the second time every step is in the tree.
+                    for _ in 0..2 {
+                        let remembered = fresh();
+                        let (l, r) = (chain(&remembered, actions, out), truth(actions, out));
+                        assert_eq!(
+                            l, r,
+                            "{latency:?}, latency up to {latency_max}, out of turn at {out:?}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
