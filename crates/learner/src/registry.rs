@@ -14,10 +14,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::gate::{GateError, Improvements, VelocityFeatures};
-pub use crate::hybrid::Parts;
+use crate::gate::GateError;
 use crate::interaction::{InteractionError, SelectorKind};
-use crate::{flags, GateConfig, GateParams, HybridConfig, InteractionConfig, InteractionParams};
+use crate::{flags, gate, hybrid};
+
+pub use crate::gate::options::Improvement;
+pub use crate::hybrid::Parts;
+pub use crate::interaction::options::selector;
 
 /// The publish rate that selects the LOWFREQ thresholds, as bit 2 does
 /// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
@@ -99,6 +102,19 @@ impl ModelKind {
         }
     }
 
+    /// Whether this is a reference row rather than a learner: it learns
+    /// nothing (the `still` reference, the zero of the normalised score).
+    /// Figures of what learners learn leave it out; tables keep it.
+    #[must_use]
+    pub fn is_reference(self) -> bool {
+        match self {
+            ModelKind::Still => true,
+            ModelKind::Gate | ModelKind::Interaction | ModelKind::GatePlus | ModelKind::Hybrid => {
+                false
+            }
+        }
+    }
+
     /// The model a report's `model` names, if it is a name
     /// [`ModelOptions::report_name`] gives: `gate`, `interaction`, `gate+`,
     /// or the gate model with some changes (`gate+unrounded+interpolate`,
@@ -109,24 +125,10 @@ impl ModelKind {
         if let Some(kind) = ModelKind::from_name(name) {
             return Some(kind);
         }
-        if let Some(parts) = name.strip_prefix("hybrid-") {
-            return crate::hybrid::Parts::ALL
-                .iter()
-                .any(|p| *p != crate::hybrid::Parts::Full && p.as_str() == parts)
-                .then_some(ModelKind::Hybrid);
+        if hybrid::options::is_partial_report_name(name) {
+            return Some(ModelKind::Hybrid);
         }
-        let improve = name
-            .strip_prefix("gate+")?
-            .split('+')
-            .map(Improvement::from_name)
-            .collect::<Option<Vec<_>>>()?;
-        let options = ModelOptions {
-            improve,
-            ..ModelOptions::default()
-        };
-        // Only the spelling reports use: no repeats, no other order, no
-        // `all` or every change spelt out (that is `gate+`).
-        (options.report_name(ModelKind::Gate) == name).then_some(ModelKind::GatePlus)
+        gate::options::is_improved_report_name(name).then_some(ModelKind::GatePlus)
     }
 
     /// Whether `options` configure a model of this kind at this publish
@@ -217,124 +219,6 @@ pub trait WithModel {
     fn run<M: crate::Model + 'static>(self, untrained: M) -> Self::Output;
 }
 
-/// One change of the improved gate model (`docs/models.md` "Beyond the
-/// thesis"), by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Improvement {
-    Unrounded,
-    Interpolate,
-    ForwardCheck,
-    SharedBlocks,
-    AdaptActuator,
-    AverageOutputs,
-    /// Every change (what `gate+` has).
-    All,
-}
-
-impl Named for Improvement {
-    const ALL: &'static [Self] = &[
-        Improvement::Unrounded,
-        Improvement::Interpolate,
-        Improvement::ForwardCheck,
-        Improvement::SharedBlocks,
-        Improvement::AdaptActuator,
-        Improvement::AverageOutputs,
-        Improvement::All,
-    ];
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            Improvement::Unrounded => {
-                "Features, changes and predictions at full precision, not rounded to 3 decimals"
-            }
-            Improvement::Interpolate => {
-                "Forward models blend the winner with all its neighbours instead of the two \
-                 nearest nodes"
-            }
-            Improvement::ForwardCheck => {
-                "The planner ranks the inverse model's push and variants of it with the \
-                 forward model"
-            }
-            Improvement::SharedBlocks => {
-                "One forward and inverse model for every block, block ids left out of the \
-                 features"
-            }
-            Improvement::AdaptActuator => {
-                "The actuator's forward model averages its samples (η = 0.1)"
-            }
-            Improvement::AverageOutputs => {
-                "The block forward models' nodes average the changes they win (η_out = 0.1)"
-            }
-            Improvement::All => "Every change (what `--model gate+` has)",
-        }
-    }
-}
-
-impl Improvement {
-    /// Every single change, in the order of reports and tables.
-    pub const EACH: [Improvement; 6] = [
-        Improvement::Unrounded,
-        Improvement::Interpolate,
-        Improvement::AdaptActuator,
-        Improvement::AverageOutputs,
-        Improvement::ForwardCheck,
-        Improvement::SharedBlocks,
-    ];
-
-    /// The name on the command line.
-    #[must_use]
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Improvement::Unrounded => "unrounded",
-            Improvement::Interpolate => "interpolate",
-            Improvement::ForwardCheck => "forward-check",
-            Improvement::SharedBlocks => "shared-blocks",
-            Improvement::AdaptActuator => "adapt-actuator",
-            Improvement::AverageOutputs => "average-outputs",
-            Improvement::All => "all",
-        }
-    }
-
-    /// The change called `name`.
-    ///
-    /// # Errors
-    /// An unknown name, with the names there are.
-    pub fn named(name: &str) -> Result<Improvement, ModelOptionsError> {
-        Improvement::from_name(name).ok_or_else(|| ModelOptionsError::UnknownImprovement {
-            name: name.to_owned(),
-        })
-    }
-
-    fn set(self, on: &mut Improvements) {
-        match self {
-            Improvement::Unrounded => on.unrounded = true,
-            Improvement::Interpolate => on.interpolate = true,
-            Improvement::ForwardCheck => on.forward_check = true,
-            Improvement::SharedBlocks => on.shared_blocks = true,
-            Improvement::AdaptActuator => on.adapt_actuator = true,
-            Improvement::AverageOutputs => on.average_outputs = true,
-            Improvement::All => *on = Improvements::ALL,
-        }
-    }
-
-    fn is_in(self, on: Improvements) -> bool {
-        match self {
-            Improvement::Unrounded => on.unrounded,
-            Improvement::Interpolate => on.interpolate,
-            Improvement::ForwardCheck => on.forward_check,
-            Improvement::SharedBlocks => on.shared_blocks,
-            Improvement::AdaptActuator => on.adapt_actuator,
-            Improvement::AverageOutputs => on.average_outputs,
-            Improvement::All => on == Improvements::ALL,
-        }
-    }
-}
-
 /// A name for each configuration bit of the original
 /// (`docs/spec/experiments.md` §1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -412,51 +296,6 @@ impl ConfigFlag {
             ConfigFlag::PredictionBoost => flags::USINGPREDICTIONBOOST,
         }
     }
-}
-
-impl Named for SelectorKind {
-    const ALL: &'static [Self] = &SelectorKind::ALL;
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            SelectorKind::Aitm => "the final thesis's AITM classifier",
-            SelectorKind::Tree => "the draft's decision tree, refitted on every stored reference",
-            SelectorKind::IncrementalTree => "Hoeffding tree, keeps no references",
-            SelectorKind::Nearest => "the nearest stored reference: the draft's naive baseline",
-        }
-    }
-}
-
-impl Named for Parts {
-    const ALL: &'static [Self] = &Parts::ALL;
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            Parts::Mechanics => {
-                "the mechanics alone, with the parameters the shape suggests; learns nothing"
-            }
-            Parts::Identified => "the mechanics with parameters identified from the messages",
-            Parts::Full => "the identified mechanics and the memory of their residual",
-        }
-    }
-}
-
-/// The interaction model's selector called `name`.
-///
-/// # Errors
-/// An unknown name, with the names there are.
-pub fn selector(name: &str) -> Result<SelectorKind, ModelOptionsError> {
-    SelectorKind::from_name(name).ok_or_else(|| ModelOptionsError::UnknownSelector {
-        name: name.to_owned(),
-    })
 }
 
 /// Whether `eta` can be a learning rate: finite and not negative.
@@ -554,44 +393,18 @@ impl ModelOptions {
         line
     }
 
-    /// The names of the changes `improve` turns on, in the order of
-    /// [`Improvement::EACH`] (`all` spelt out), whatever the given order.
-    #[must_use]
-    pub fn improvement_names(&self) -> Vec<&'static str> {
-        let on = self.improvements();
-        Improvement::EACH
-            .into_iter()
-            .filter(|i| i.is_in(on))
-            .map(Improvement::as_str)
-            .collect()
-    }
-
-    /// The changes of `improve`.
-    #[must_use]
-    pub fn improvements(&self) -> Improvements {
-        let mut on = Improvements::default();
-        for i in &self.improve {
-            i.set(&mut on);
-        }
-        on
-    }
-
     /// The name reports give a built-in model under these options: the
     /// model's own, or for the gate model with changes `gate+` (all) or
     /// `gate+CHANGE+…` in the order of [`Improvement::EACH`].
     #[must_use]
     pub fn report_name(&self, kind: ModelKind) -> String {
-        if kind == ModelKind::Hybrid && self.parts != Parts::Full {
-            return format!("hybrid-{}", self.parts.as_str());
+        match kind {
+            ModelKind::Gate => self.gate_report_name(),
+            ModelKind::Hybrid => self.hybrid_report_name(),
+            ModelKind::Interaction | ModelKind::GatePlus | ModelKind::Still => {
+                kind.as_str().to_owned()
+            }
         }
-        let on = self.improvements();
-        if kind != ModelKind::Gate || !on.any() {
-            return kind.as_str().to_owned();
-        }
-        if on == Improvements::ALL {
-            return ModelKind::GatePlus.as_str().to_owned();
-        }
-        format!("gate+{}", self.improvement_names().join("+"))
     }
 
     /// Refuses what only configures a built-in model: the options of the
@@ -617,111 +430,12 @@ impl ModelOptions {
         self.config_number() & flags::LOWFREQ != 0
     }
 
-    /// The gate model's parameters; a 10 Hz world selects the LOWFREQ
-    /// thresholds as bit 2 does.
-    ///
-    /// # Errors
-    /// Options that do not apply to the gate model or invalid values.
-    pub fn gate(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
-        self.check_eta()?;
-        self.check_no_parts(ModelKind::Gate)?;
-        if self.selector != SelectorKind::Aitm {
-            return Err(ModelOptionsError::NotForModel {
-                option: "--selector",
-                model: ModelKind::Gate,
-            });
-        }
-        let mut params = GateParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.forward_learning_rate = self.eta;
-        params.improvements = self.improvements();
-        if self.no_angular_velocity {
-            if params.velocity_features != VelocityFeatures::LinearAngular {
-                return Err(ModelOptionsError::NoVelocities);
-            }
-            params.velocity_features = VelocityFeatures::Linear;
-        }
-        Ok(params.check()?)
-    }
-
-    /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
-    ///
-    /// # Errors
-    /// As [`ModelOptions::gate`], and --improve, which gate+ does not take.
-    pub fn gate_plus(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
-        if !self.improve.is_empty() {
-            return Err(ModelOptionsError::ImproveOnGatePlus);
-        }
-        let mut params = *self.gate(publish_rate_hz)?.params();
-        params.improvements = Improvements::ALL;
-        Ok(params.check()?)
-    }
-
-    /// The interaction model's parameters (see [`ModelOptions::gate`]).
-    ///
-    /// # Errors
-    /// Options that do not apply to the interaction model or invalid values.
-    pub fn interaction(
-        &self,
-        publish_rate_hz: u32,
-    ) -> Result<InteractionConfig, ModelOptionsError> {
-        self.check_eta()?;
-        self.check_no_parts(ModelKind::Interaction)?;
-        if self.no_angular_velocity || !self.improve.is_empty() {
-            return Err(ModelOptionsError::NotForModel {
-                option: if self.no_angular_velocity {
-                    "--no-angular-velocity"
-                } else {
-                    "--improve"
-                },
-                model: ModelKind::Interaction,
-            });
-        }
-        let mut params = InteractionParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.ac_learning_rate = self.eta;
-        params.selector = self.selector;
-        Ok(params.check()?)
-    }
-
-    /// The hybrid model's configuration. It has no thesis variants: the
-    /// configuration bits of the model (1, 16, 32, 64), --eta, --selector,
-    /// --no-angular-velocity and --improve are refused.
-    ///
-    /// # Errors
-    /// The first option that does not apply, named.
-    pub fn hybrid(&self, publish_rate_hz: u32) -> Result<HybridConfig, ModelOptionsError> {
-        if let Some(option) = self.thesis_model_option() {
-            return Err(ModelOptionsError::ThesisOptionOnModel {
-                option,
-                model: ModelKind::Hybrid,
-            });
-        }
-        Ok(HybridConfig {
-            parts: self.parts,
-            publish_rate_hz,
-        })
-    }
-
-    /// Checks that nothing configures the `still` reference: it has no
-    /// options.
-    ///
-    /// # Errors
-    /// The first option set, named.
-    pub fn still(&self) -> Result<(), ModelOptionsError> {
-        if let Some(option) = self.thesis_model_option() {
-            return Err(ModelOptionsError::ThesisOptionOnModel {
-                option,
-                model: ModelKind::Still,
-            });
-        }
-        self.check_no_parts(ModelKind::Still)
-    }
-
     /// The first option set that configures only the thesis's models
     /// (--eta, --selector, --no-angular-velocity, --improve, the model bits
     /// of --config/--flag: 1, 16, 32, 64), named as the refusals name it.
     /// The driver's bits (2, 4, 8: rate and training starts) apply to any
     /// learner.
-    fn thesis_model_option(&self) -> Option<String> {
+    pub(crate) fn thesis_model_option(&self) -> Option<String> {
         if self.eta != 0.0 {
             return Some("--eta".to_owned());
         }
@@ -742,7 +456,7 @@ impl ModelOptions {
         (bits != 0).then(|| format!("configuration bits {bits} (of --config/--flag)"))
     }
 
-    fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
+    pub(crate) fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
         if self.parts == Parts::Full {
             Ok(())
         } else {
@@ -752,7 +466,7 @@ impl ModelOptions {
 
     /// The command line refuses a bad --eta as it parses it; options built
     /// as data (the Python arguments, a document) are checked here.
-    fn check_eta(&self) -> Result<(), ModelOptionsError> {
+    pub(crate) fn check_eta(&self) -> Result<(), ModelOptionsError> {
         if is_learning_rate(self.eta) {
             Ok(())
         } else {
@@ -760,7 +474,7 @@ impl ModelOptions {
         }
     }
 
-    fn number_at(&self, publish_rate_hz: u32) -> u32 {
+    pub(crate) fn number_at(&self, publish_rate_hz: u32) -> u32 {
         let low = publish_rate_hz == LOW_RATE_HZ;
         self.config_number() | if low { flags::LOWFREQ } else { 0 }
     }
@@ -769,6 +483,8 @@ impl ModelOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gate::{Improvements, VelocityFeatures};
+    use crate::{GateConfig, InteractionConfig};
 
     fn improve(changes: &[Improvement]) -> ModelOptions {
         ModelOptions {
@@ -1002,54 +718,6 @@ mod tests {
                 format!("\"{}\"", f.name())
             );
         }
-    }
-
-    #[test]
-    fn the_hybrid_model_refuses_the_thesis_models_options_and_only_it_takes_parts() {
-        let parts = ModelOptions {
-            parts: Parts::Mechanics,
-            ..ModelOptions::default()
-        };
-        assert_eq!(parts.hybrid(100).unwrap().parts, Parts::Mechanics);
-        assert_eq!(parts.report_name(ModelKind::Hybrid), "hybrid-mechanics");
-        assert_eq!(
-            ModelKind::of_report_name("hybrid-mechanics"),
-            Some(ModelKind::Hybrid)
-        );
-        assert_eq!(ModelKind::of_report_name("hybrid-full"), None);
-        assert!(matches!(
-            parts.gate(100),
-            Err(ModelOptionsError::PartsNotForModel(ModelKind::Gate))
-        ));
-        assert!(parts.check_external().is_err());
-        let eta = ModelOptions {
-            eta: 0.1,
-            ..ModelOptions::default()
-        };
-        let bits = ModelOptions {
-            config: 16 | 8,
-            ..ModelOptions::default()
-        };
-        for (options, named) in [
-            (eta, "--eta"),
-            (bits, "configuration bits 16 (of --config/--flag)"),
-        ] {
-            match options.hybrid(100) {
-                Err(ModelOptionsError::ThesisOptionOnModel {
-                    option,
-                    model: ModelKind::Hybrid,
-                }) => {
-                    assert_eq!(option, named);
-                }
-                other => panic!("{other:?}"),
-            }
-        }
-        // The driver's bits apply to any learner.
-        let driver = ModelOptions {
-            config: 2 | 4 | 8,
-            ..ModelOptions::default()
-        };
-        assert!(driver.hybrid(10).is_ok() && driver.check_external().is_ok());
     }
 
     #[test]
