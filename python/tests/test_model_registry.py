@@ -124,7 +124,9 @@ def test_a_world_belongs_to_its_model_kind() -> None:
     gate, hybrid = Model("gate"), Model("hybrid")
     world = gate.parse(frame(0.12))
     assert world.model == "gate"
-    with pytest.raises(TypeError, match="a world of the gate model given to the hybrid"):
+    with pytest.raises(
+        TypeError, match="a world of the gate model given to the hybrid"
+    ):
         hybrid.update(world, *ACTION)
     with pytest.raises(TypeError):
         hybrid.predict(world, *ACTION)
