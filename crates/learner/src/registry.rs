@@ -14,13 +14,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::gate::GateError;
+use crate::gate::Improvements;
 use crate::interaction::{InteractionError, SelectorKind};
-use crate::{flags, gate, hybrid};
+use crate::{flags, GateConfig, HybridConfig, InteractionConfig};
 
-pub use crate::gate::options::Improvement;
+pub use crate::gate::options::{GateOptionsError, Improvement};
 pub use crate::hybrid::Parts;
-pub use crate::interaction::options::selector;
 
 /// The publish rate that selects the LOWFREQ thresholds, as bit 2 does
 /// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
@@ -125,10 +124,24 @@ impl ModelKind {
         if let Some(kind) = ModelKind::from_name(name) {
             return Some(kind);
         }
-        if hybrid::options::is_partial_report_name(name) {
-            return Some(ModelKind::Hybrid);
+        if let Some(parts) = name.strip_prefix("hybrid-") {
+            return crate::hybrid::Parts::ALL
+                .iter()
+                .any(|p| *p != crate::hybrid::Parts::Full && p.as_str() == parts)
+                .then_some(ModelKind::Hybrid);
         }
-        gate::options::is_improved_report_name(name).then_some(ModelKind::GatePlus)
+        let improve = name
+            .strip_prefix("gate+")?
+            .split('+')
+            .map(Improvement::from_name)
+            .collect::<Option<Vec<_>>>()?;
+        let options = ModelOptions {
+            improve,
+            ..ModelOptions::default()
+        };
+        // Only the spelling reports use: no repeats, no other order, no
+        // `all` or every change spelt out (that is `gate+`).
+        (options.report_name(ModelKind::Gate) == name).then_some(ModelKind::GatePlus)
     }
 
     /// Whether `options` configure a model of this kind at this publish
@@ -219,6 +232,18 @@ pub trait WithModel {
     fn run<M: crate::Model + 'static>(self, untrained: M) -> Self::Output;
 }
 
+impl Improvement {
+    /// The change called `name`.
+    ///
+    /// # Errors
+    /// An unknown name, with the names there are.
+    pub fn named(name: &str) -> Result<Improvement, ModelOptionsError> {
+        Improvement::from_name(name).ok_or_else(|| ModelOptionsError::UnknownImprovement {
+            name: name.to_owned(),
+        })
+    }
+}
+
 /// A name for each configuration bit of the original
 /// (`docs/spec/experiments.md` §1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -298,6 +323,16 @@ impl ConfigFlag {
     }
 }
 
+/// The interaction model's selector called `name`.
+///
+/// # Errors
+/// An unknown name, with the names there are.
+pub fn selector(name: &str) -> Result<SelectorKind, ModelOptionsError> {
+    SelectorKind::from_name(name).ok_or_else(|| ModelOptionsError::UnknownSelector {
+        name: name.to_owned(),
+    })
+}
+
 /// Whether `eta` can be a learning rate: finite and not negative.
 #[must_use]
 pub fn is_learning_rate(eta: f64) -> bool {
@@ -333,8 +368,8 @@ pub struct ModelOptions {
 /// Why a combination of [`ModelOptions`] cannot configure a model.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelOptionsError {
-    #[error("gate model: {0}")]
-    Gate(#[from] GateError),
+    #[error(transparent)]
+    Gate(#[from] GateOptionsError),
     #[error("interaction model: {0}")]
     Interaction(#[from] InteractionError),
     #[error("{option} does not apply to the {model} model")]
@@ -342,10 +377,6 @@ pub enum ModelOptionsError {
         option: &'static str,
         model: ModelKind,
     },
-    #[error(
-        "--no-angular-velocity needs velocity features (--flag use-dyns or bit 1 of --config)"
-    )]
-    NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
     #[error("{option} configures the thesis's models; the {model} model has none of it")]
@@ -393,18 +424,44 @@ impl ModelOptions {
         line
     }
 
+    /// The names of the changes `improve` turns on, in the order of
+    /// [`Improvement::EACH`] (`all` spelt out), whatever the given order.
+    #[must_use]
+    pub fn improvement_names(&self) -> Vec<&'static str> {
+        let on = self.improvements();
+        Improvement::EACH
+            .into_iter()
+            .filter(|i| i.is_in(on))
+            .map(Improvement::as_str)
+            .collect()
+    }
+
+    /// The changes of `improve`.
+    #[must_use]
+    pub fn improvements(&self) -> Improvements {
+        let mut on = Improvements::default();
+        for i in &self.improve {
+            i.set(&mut on);
+        }
+        on
+    }
+
     /// The name reports give a built-in model under these options: the
     /// model's own, or for the gate model with changes `gate+` (all) or
     /// `gate+CHANGE+…` in the order of [`Improvement::EACH`].
     #[must_use]
     pub fn report_name(&self, kind: ModelKind) -> String {
-        match kind {
-            ModelKind::Gate => self.gate_report_name(),
-            ModelKind::Hybrid => self.hybrid_report_name(),
-            ModelKind::Interaction | ModelKind::GatePlus | ModelKind::Still => {
-                kind.as_str().to_owned()
-            }
+        if kind == ModelKind::Hybrid && self.parts != Parts::Full {
+            return format!("hybrid-{}", self.parts.as_str());
         }
+        let on = self.improvements();
+        if kind != ModelKind::Gate || !on.any() {
+            return kind.as_str().to_owned();
+        }
+        if on == Improvements::ALL {
+            return ModelKind::GatePlus.as_str().to_owned();
+        }
+        format!("gate+{}", self.improvement_names().join("+"))
     }
 
     /// Refuses what only configures a built-in model: the options of the
@@ -430,12 +487,110 @@ impl ModelOptions {
         self.config_number() & flags::LOWFREQ != 0
     }
 
+    /// The gate model's parameters; a 10 Hz world selects the LOWFREQ
+    /// thresholds as bit 2 does.
+    ///
+    /// # Errors
+    /// Options that do not apply to the gate model or invalid values.
+    pub fn gate(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
+        self.check_eta()?;
+        self.check_no_parts(ModelKind::Gate)?;
+        if self.selector != SelectorKind::Aitm {
+            return Err(ModelOptionsError::NotForModel {
+                option: "--selector",
+                model: ModelKind::Gate,
+            });
+        }
+        Ok(GateConfig::from_options(
+            self.number_at(publish_rate_hz),
+            self.eta,
+            self.no_angular_velocity,
+            self.improvements(),
+        )?)
+    }
+
+    /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
+    ///
+    /// # Errors
+    /// As [`ModelOptions::gate`], and --improve, which gate+ does not take.
+    pub fn gate_plus(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
+        if !self.improve.is_empty() {
+            return Err(ModelOptionsError::ImproveOnGatePlus);
+        }
+        let mut params = *self.gate(publish_rate_hz)?.params();
+        params.improvements = Improvements::ALL;
+        params
+            .check()
+            .map_err(|e| ModelOptionsError::Gate(e.into()))
+    }
+
+    /// The interaction model's parameters (see [`ModelOptions::gate`]).
+    ///
+    /// # Errors
+    /// Options that do not apply to the interaction model or invalid values.
+    pub fn interaction(
+        &self,
+        publish_rate_hz: u32,
+    ) -> Result<InteractionConfig, ModelOptionsError> {
+        self.check_eta()?;
+        self.check_no_parts(ModelKind::Interaction)?;
+        if self.no_angular_velocity || !self.improve.is_empty() {
+            return Err(ModelOptionsError::NotForModel {
+                option: if self.no_angular_velocity {
+                    "--no-angular-velocity"
+                } else {
+                    "--improve"
+                },
+                model: ModelKind::Interaction,
+            });
+        }
+        Ok(InteractionConfig::from_options(
+            self.number_at(publish_rate_hz),
+            self.eta,
+            self.selector,
+        )?)
+    }
+
+    /// The hybrid model's configuration. It has no thesis variants: the
+    /// configuration bits of the model (1, 16, 32, 64), --eta, --selector,
+    /// --no-angular-velocity and --improve are refused.
+    ///
+    /// # Errors
+    /// The first option that does not apply, named.
+    pub fn hybrid(&self, publish_rate_hz: u32) -> Result<HybridConfig, ModelOptionsError> {
+        if let Some(option) = self.thesis_model_option() {
+            return Err(ModelOptionsError::ThesisOptionOnModel {
+                option,
+                model: ModelKind::Hybrid,
+            });
+        }
+        Ok(HybridConfig {
+            parts: self.parts,
+            publish_rate_hz,
+        })
+    }
+
+    /// Checks that nothing configures the `still` reference: it has no
+    /// options.
+    ///
+    /// # Errors
+    /// The first option set, named.
+    pub fn still(&self) -> Result<(), ModelOptionsError> {
+        if let Some(option) = self.thesis_model_option() {
+            return Err(ModelOptionsError::ThesisOptionOnModel {
+                option,
+                model: ModelKind::Still,
+            });
+        }
+        self.check_no_parts(ModelKind::Still)
+    }
+
     /// The first option set that configures only the thesis's models
     /// (--eta, --selector, --no-angular-velocity, --improve, the model bits
     /// of --config/--flag: 1, 16, 32, 64), named as the refusals name it.
     /// The driver's bits (2, 4, 8: rate and training starts) apply to any
     /// learner.
-    pub(crate) fn thesis_model_option(&self) -> Option<String> {
+    fn thesis_model_option(&self) -> Option<String> {
         if self.eta != 0.0 {
             return Some("--eta".to_owned());
         }
@@ -456,7 +611,7 @@ impl ModelOptions {
         (bits != 0).then(|| format!("configuration bits {bits} (of --config/--flag)"))
     }
 
-    pub(crate) fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
+    fn check_no_parts(&self, model: ModelKind) -> Result<(), ModelOptionsError> {
         if self.parts == Parts::Full {
             Ok(())
         } else {
@@ -466,7 +621,7 @@ impl ModelOptions {
 
     /// The command line refuses a bad --eta as it parses it; options built
     /// as data (the Python arguments, a document) are checked here.
-    pub(crate) fn check_eta(&self) -> Result<(), ModelOptionsError> {
+    fn check_eta(&self) -> Result<(), ModelOptionsError> {
         if is_learning_rate(self.eta) {
             Ok(())
         } else {
@@ -474,7 +629,7 @@ impl ModelOptions {
         }
     }
 
-    pub(crate) fn number_at(&self, publish_rate_hz: u32) -> u32 {
+    fn number_at(&self, publish_rate_hz: u32) -> u32 {
         let low = publish_rate_hz == LOW_RATE_HZ;
         self.config_number() | if low { flags::LOWFREQ } else { 0 }
     }
@@ -483,8 +638,7 @@ impl ModelOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gate::{Improvements, VelocityFeatures};
-    use crate::{GateConfig, InteractionConfig};
+    use crate::gate::VelocityFeatures;
 
     fn improve(changes: &[Improvement]) -> ModelOptions {
         ModelOptions {
@@ -657,7 +811,7 @@ mod tests {
         };
         assert!(matches!(
             noav.gate(100),
-            Err(ModelOptionsError::NoVelocities)
+            Err(ModelOptionsError::Gate(GateOptionsError::NoVelocities))
         ));
         assert!(matches!(
             noav.interaction(100),
@@ -669,7 +823,7 @@ mod tests {
         };
         assert!(matches!(
             unknown_bits.gate(100),
-            Err(ModelOptionsError::Gate(_))
+            Err(ModelOptionsError::Gate(GateOptionsError::Gate(_)))
         ));
         for eta in [-1.0, f64::NAN, f64::INFINITY] {
             let o = ModelOptions {
@@ -718,6 +872,54 @@ mod tests {
                 format!("\"{}\"", f.name())
             );
         }
+    }
+
+    #[test]
+    fn the_hybrid_model_refuses_the_thesis_models_options_and_only_it_takes_parts() {
+        let parts = ModelOptions {
+            parts: Parts::Mechanics,
+            ..ModelOptions::default()
+        };
+        assert_eq!(parts.hybrid(100).unwrap().parts, Parts::Mechanics);
+        assert_eq!(parts.report_name(ModelKind::Hybrid), "hybrid-mechanics");
+        assert_eq!(
+            ModelKind::of_report_name("hybrid-mechanics"),
+            Some(ModelKind::Hybrid)
+        );
+        assert_eq!(ModelKind::of_report_name("hybrid-full"), None);
+        assert!(matches!(
+            parts.gate(100),
+            Err(ModelOptionsError::PartsNotForModel(ModelKind::Gate))
+        ));
+        assert!(parts.check_external().is_err());
+        let eta = ModelOptions {
+            eta: 0.1,
+            ..ModelOptions::default()
+        };
+        let bits = ModelOptions {
+            config: 16 | 8,
+            ..ModelOptions::default()
+        };
+        for (options, named) in [
+            (eta, "--eta"),
+            (bits, "configuration bits 16 (of --config/--flag)"),
+        ] {
+            match options.hybrid(100) {
+                Err(ModelOptionsError::ThesisOptionOnModel {
+                    option,
+                    model: ModelKind::Hybrid,
+                }) => {
+                    assert_eq!(option, named);
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+        // The driver's bits apply to any learner.
+        let driver = ModelOptions {
+            config: 2 | 4 | 8,
+            ..ModelOptions::default()
+        };
+        assert!(driver.hybrid(10).is_ok() && driver.check_external().is_ok());
     }
 
     #[test]

@@ -10,7 +10,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::features::{parse_frame_at, ActuatorYaw, ParseError, Precision};
 use crate::model::Model;
-use crate::registry::{ModelKind, ModelOptions, ModelOptionsError};
 use crate::stats::{ModelStats, OtherStats};
 use crate::types::{Action, Frame, Poses, Target, TargetError};
 
@@ -74,23 +73,6 @@ impl Model for StillModel {
 
     fn actuator_yaw(&self) -> ActuatorYaw {
         ActuatorYaw::ForceZero
-    }
-}
-
-impl ModelOptions {
-    /// Checks that nothing configures the `still` reference: it has no
-    /// options.
-    ///
-    /// # Errors
-    /// The first option set, named.
-    pub fn still(&self) -> Result<(), ModelOptionsError> {
-        if let Some(option) = self.thesis_model_option() {
-            return Err(ModelOptionsError::ThesisOptionOnModel {
-                option,
-                model: ModelKind::Still,
-            });
-        }
-        self.check_no_parts(ModelKind::Still)
     }
 }
 

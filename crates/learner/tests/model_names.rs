@@ -157,21 +157,23 @@ fn code(root: &Path, file: &str) -> String {
 fn names(text: &str, kind: ModelKind) -> bool {
     let variant = format!("{kind:?}");
     let name = kind.name();
-    let word = |needle: &str| {
+    let word = |text: &str, needle: &str| {
+        let identifier = |c: char| c.is_alphanumeric() || c == '_';
         text.match_indices(needle).any(|(i, _)| {
+            let before = text[..i].chars().next_back();
             let after = text[i + needle.len()..].chars().next();
-            !after.is_some_and(|c| c.is_alphanumeric() || c == '_')
+            !before.is_some_and(identifier) && !after.is_some_and(identifier)
         })
     };
     let typed = ["Model", "World", "Config", "Learner"]
         .iter()
         .any(|suffix| text.contains(&format!("{variant}{suffix}")));
     let english = ["gate", "interaction", "still"].contains(&name);
-    word(&format!("ModelKind::{variant}"))
+    word(text, &format!("ModelKind::{variant}"))
         || typed
         || text.contains(&format!("\"{name}\""))
         || text.contains(&format!("\"{name}-"))
-        || (!english && !name.contains('+') && text.to_lowercase().contains(name))
+        || (!english && !name.contains('+') && word(&text.to_lowercase(), name))
 }
 
 #[test]
@@ -220,6 +222,7 @@ fn the_name_rules_find_what_they_should() {
     assert!(!names("ModelKind::GatePlus =>", ModelKind::Gate));
     assert!(!names("a gate that is still open", ModelKind::Gate));
     assert!(!names("a gate that is still open", ModelKind::Still));
+    assert!(!names("hybridisation", ModelKind::Hybrid));
     assert_eq!(
         code(&repo(), "crates/learner/src/registry.rs").contains("mod tests"),
         false

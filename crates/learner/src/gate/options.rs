@@ -1,12 +1,12 @@
-//! The gate model's options: its checks and its constructor from the
-//! registry's [`ModelOptions`], and the changes beyond the thesis
-//! (`--improve`) with the names reports give them.
+//! The gate model's own options: the changes beyond the thesis
+//! (`--improve`) by name, and its configuration from the command line's
+//! options, which the registry hands it after refusing those of other
+//! models.
 
+use pushlearn_core::Named;
 use serde::{Deserialize, Serialize};
 
-use crate::gate::{GateConfig, GateParams, Improvements, VelocityFeatures};
-use crate::interaction::SelectorKind;
-use crate::registry::{ModelKind, ModelOptions, ModelOptionsError, Named};
+use crate::gate::{GateConfig, GateError, GateParams, Improvements, VelocityFeatures};
 
 /// One change of the improved gate model (`docs/models.md` "Beyond the
 /// thesis"), by name.
@@ -91,17 +91,7 @@ impl Improvement {
         }
     }
 
-    /// The change called `name`.
-    ///
-    /// # Errors
-    /// An unknown name, with the names there are.
-    pub fn named(name: &str) -> Result<Improvement, ModelOptionsError> {
-        Improvement::from_name(name).ok_or_else(|| ModelOptionsError::UnknownImprovement {
-            name: name.to_owned(),
-        })
-    }
-
-    fn set(self, on: &mut Improvements) {
+    pub(crate) fn set(self, on: &mut Improvements) {
         match self {
             Improvement::Unrounded => on.unrounded = true,
             Improvement::Interpolate => on.interpolate = true,
@@ -113,7 +103,7 @@ impl Improvement {
         }
     }
 
-    fn is_in(self, on: Improvements) -> bool {
+    pub(crate) fn is_in(self, on: Improvements) -> bool {
         match self {
             Improvement::Unrounded => on.unrounded,
             Improvement::Interpolate => on.interpolate,
@@ -126,100 +116,41 @@ impl Improvement {
     }
 }
 
-impl ModelOptions {
-    /// The gate model's parameters; a 10 Hz world selects the LOWFREQ
-    /// thresholds as bit 2 does.
+/// Why the command line's options cannot configure the gate model.
+#[derive(Debug, thiserror::Error)]
+pub enum GateOptionsError {
+    #[error("gate model: {0}")]
+    Gate(#[from] GateError),
+    #[error(
+        "--no-angular-velocity needs velocity features (--flag use-dyns or bit 1 of --config)"
+    )]
+    NoVelocities,
+}
+
+impl GateConfig {
+    /// The configuration of the original's configuration number `number`
+    /// (the rate's bits included) with the forward models' learning rate
+    /// `eta`, the block's angular velocity left out of the USE_DYNS
+    /// features if `no_angular_velocity`, and the changes `improvements`.
     ///
     /// # Errors
-    /// Options that do not apply to the gate model or invalid values.
-    pub fn gate(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
-        self.check_eta()?;
-        self.check_no_parts(ModelKind::Gate)?;
-        if self.selector != SelectorKind::Aitm {
-            return Err(ModelOptionsError::NotForModel {
-                option: "--selector",
-                model: ModelKind::Gate,
-            });
-        }
-        let mut params = GateParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.forward_learning_rate = self.eta;
-        params.improvements = self.improvements();
-        if self.no_angular_velocity {
+    /// Unknown bits, an invalid value, or `no_angular_velocity` without
+    /// velocity features.
+    pub fn from_options(
+        number: u32,
+        eta: f64,
+        no_angular_velocity: bool,
+        improvements: Improvements,
+    ) -> Result<GateConfig, GateOptionsError> {
+        let mut params = GateParams::from_config_number(number)?;
+        params.forward_learning_rate = eta;
+        params.improvements = improvements;
+        if no_angular_velocity {
             if params.velocity_features != VelocityFeatures::LinearAngular {
-                return Err(ModelOptionsError::NoVelocities);
+                return Err(GateOptionsError::NoVelocities);
             }
             params.velocity_features = VelocityFeatures::Linear;
         }
         Ok(params.check()?)
     }
-
-    /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
-    ///
-    /// # Errors
-    /// As [`ModelOptions::gate`], and --improve, which gate+ does not take.
-    pub fn gate_plus(&self, publish_rate_hz: u32) -> Result<GateConfig, ModelOptionsError> {
-        if !self.improve.is_empty() {
-            return Err(ModelOptionsError::ImproveOnGatePlus);
-        }
-        let mut params = *self.gate(publish_rate_hz)?.params();
-        params.improvements = Improvements::ALL;
-        Ok(params.check()?)
-    }
-
-    /// The changes of `improve`.
-    #[must_use]
-    pub fn improvements(&self) -> Improvements {
-        let mut on = Improvements::default();
-        for i in &self.improve {
-            i.set(&mut on);
-        }
-        on
-    }
-
-    /// The names of the changes `improve` turns on, in the order of
-    /// [`Improvement::EACH`] (`all` spelt out), whatever the given order.
-    #[must_use]
-    pub fn improvement_names(&self) -> Vec<&'static str> {
-        let on = self.improvements();
-        Improvement::EACH
-            .into_iter()
-            .filter(|i| i.is_in(on))
-            .map(Improvement::as_str)
-            .collect()
-    }
-
-    /// The name reports give the gate model under these options: `gate`,
-    /// `gate+` (every change) or `gate+CHANGE+…` in the order of
-    /// [`Improvement::EACH`].
-    pub(crate) fn gate_report_name(&self) -> String {
-        let on = self.improvements();
-        if !on.any() {
-            return ModelKind::Gate.as_str().to_owned();
-        }
-        if on == Improvements::ALL {
-            return ModelKind::GatePlus.as_str().to_owned();
-        }
-        format!("gate+{}", self.improvement_names().join("+"))
-    }
-}
-
-/// Whether `name` is a name [`ModelOptions::gate_report_name`] gives the
-/// gate model with some changes (spelt as reports spell them: no repeats,
-/// no other order, no `all` or every change spelt out, which is `gate+`).
-pub(crate) fn is_improved_report_name(name: &str) -> bool {
-    let Some(changes) = name.strip_prefix("gate+") else {
-        return false;
-    };
-    let Some(improve) = changes
-        .split('+')
-        .map(Improvement::from_name)
-        .collect::<Option<Vec<_>>>()
-    else {
-        return false;
-    };
-    let options = ModelOptions {
-        improve,
-        ..ModelOptions::default()
-    };
-    options.gate_report_name() == name
 }

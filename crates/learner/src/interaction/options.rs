@@ -1,8 +1,10 @@
-//! The interaction model's options: its checks and its constructor from
-//! the registry's [`ModelOptions`], and the selectors by name.
+//! The interaction model's own options: its selectors by name, and its
+//! configuration from the command line's options, which the registry hands
+//! it after refusing those of other models.
 
-use crate::interaction::{InteractionConfig, InteractionParams, SelectorKind};
-use crate::registry::{ModelKind, ModelOptions, ModelOptionsError, Named};
+use pushlearn_core::Named;
+
+use crate::interaction::{InteractionConfig, InteractionError, InteractionParams, SelectorKind};
 
 impl Named for SelectorKind {
     const ALL: &'static [Self] = &SelectorKind::ALL;
@@ -21,40 +23,21 @@ impl Named for SelectorKind {
     }
 }
 
-/// The interaction model's selector called `name`.
-///
-/// # Errors
-/// An unknown name, with the names there are.
-pub fn selector(name: &str) -> Result<SelectorKind, ModelOptionsError> {
-    SelectorKind::from_name(name).ok_or_else(|| ModelOptionsError::UnknownSelector {
-        name: name.to_owned(),
-    })
-}
-
-impl ModelOptions {
-    /// The interaction model's parameters (see [`ModelOptions::gate`]).
+impl InteractionConfig {
+    /// The configuration of the original's configuration number `number`
+    /// (the rate's bits included) with the Abstract Collections' learning
+    /// rate `eta` and the selector `selector`.
     ///
     /// # Errors
-    /// Options that do not apply to the interaction model or invalid values.
-    pub fn interaction(
-        &self,
-        publish_rate_hz: u32,
-    ) -> Result<InteractionConfig, ModelOptionsError> {
-        self.check_eta()?;
-        self.check_no_parts(ModelKind::Interaction)?;
-        if self.no_angular_velocity || !self.improve.is_empty() {
-            return Err(ModelOptionsError::NotForModel {
-                option: if self.no_angular_velocity {
-                    "--no-angular-velocity"
-                } else {
-                    "--improve"
-                },
-                model: ModelKind::Interaction,
-            });
-        }
-        let mut params = InteractionParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.ac_learning_rate = self.eta;
-        params.selector = self.selector;
-        Ok(params.check()?)
+    /// Bits that do not apply, or an invalid value.
+    pub fn from_options(
+        number: u32,
+        eta: f64,
+        selector: SelectorKind,
+    ) -> Result<InteractionConfig, InteractionError> {
+        let mut params = InteractionParams::from_config_number(number)?;
+        params.ac_learning_rate = eta;
+        params.selector = selector;
+        params.check()
     }
 }
