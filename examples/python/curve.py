@@ -10,7 +10,7 @@ is drawn against N beside the thesis's gate model.
 
     python3 examples/python/curve.py --out figures                 # the page's protocol, 20 folds
     python3 examples/python/curve.py --train-runs 1,3 --folds 2 --out /tmp/curve
-    python3 examples/python/curve.py --model hybrid --out figures  # a built-in model instead
+    python3 examples/python/curve.py --model gate+ --out figures   # a built-in model instead
 
 Needs the ``pushlearn`` package with matplotlib (and scikit-learn for the
 kNN baseline).
@@ -107,7 +107,8 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--model",
-        help="a built-in model (gate, hybrid, …) instead of the kNN baseline",
+        help="a built-in model (gate, …: pushlearn.model_names()) instead of "
+        "the kNN baseline",
     )
     args = parser.parse_args(argv)
     try:

@@ -18,8 +18,9 @@ baselines, ``numpy`` and ``scikit-learn``):
   (``pushlearn/PushBlock-v0``, ``pushlearn/PushTwoBlocks-v0``), registered
   on import when Gymnasium is installed.
 
-``GateModel``, ``InteractionModel``, ``HybridModel`` and ``Aitm`` are the
-Rust models themselves, and ``World`` the world of ``pushlearn-sim`` in this
+``Model`` (any model of the registry by name, e.g. ``Model("gate",
+improve="all")``), the typed ``GateModel``, ``InteractionModel``,
+``HybridModel``, and ``Aitm`` are the Rust models themselves, and ``World`` the world of ``pushlearn-sim`` in this
 process (no daemon, no socket), from the native extension
 ``pushlearn._native``; they are imported only when first used, so everything
 else works without it.
@@ -61,7 +62,15 @@ from .learner import (
 from .sim import SimClient, SimError, WorldHello
 
 if TYPE_CHECKING:  # pragma: no cover
-    from ._native import Aitm, GateModel, HybridModel, InteractionModel, World
+    from ._native import (
+        Aitm,
+        GateModel,
+        HybridModel,
+        InteractionModel,
+        Model,
+        World,
+        model_names,
+    )
 
 __version__ = "0.1.0"
 """The package's version."""
@@ -82,6 +91,7 @@ __all__ = [
     "Learner",
     "LearnerFactory",
     "LearnerServer",
+    "Model",
     "Pose",
     "Prediction",
     "ProtocolError",
@@ -97,12 +107,21 @@ __all__ = [
     "WorldHello",
     "__version__",
     "is_skipped",
+    "model_names",
     "quaternion_to_yaw",
     "serve",
     "serve_tcp",
 ]
 
-_NATIVE = ("GateModel", "InteractionModel", "HybridModel", "Aitm", "World")
+_NATIVE = (
+    "Model",
+    "model_names",
+    "GateModel",
+    "InteractionModel",
+    "HybridModel",
+    "Aitm",
+    "World",
+)
 
 
 def native() -> Any:

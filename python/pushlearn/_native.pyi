@@ -1,7 +1,9 @@
 """The pushlearn models, implemented in Rust (crates/python, PyO3).
 
-GateModel, InteractionModel and HybridModel are the learners, one method
-per method of the Rust ``learner::Model`` trait; GateWorld, InteractionWorld
+Model is any model of the registry by its name, with the command line's
+options by keyword. GateModel, InteractionModel and HybridModel are typed
+classes of three of them, one method per method of the Rust
+``learner::Model`` trait; GateWorld, InteractionWorld
 and HybridWorld are their world states, returned by ``parse`` and
 ``predict``. Aitm is the memory-based regressor and classifier the thesis's
 learners are built from.
@@ -504,6 +506,101 @@ class HybridModel:
     def copy(self) -> HybridModel:
         """A deep copy: the learned memory, the stored state, the target and
         the generator's state, shared with nothing."""
+
+def model_names() -> list[str]:
+    """The registry's models by name, in its order: the names ``Model`` and
+    ``pushlearn experiment --model`` take."""
+
+def model_options_names() -> list[str]:
+    """The keyword options ``Model`` takes: the command line's model options
+    spelt with underscores (each model refuses those it does not take)."""
+
+class ModelWorld:
+    """A world state of a :class:`Model`, parsed or predicted (returned by
+    Model.parse and Model.predict; not constructible). It belongs to the
+    model kind that made it: a model of another kind refuses it with
+    TypeError."""
+
+    def poses(self) -> npt.NDArray[np.float64]:
+        """The world's bodies as a float64 array of shape (n, 4), one row
+        ``[id, x, y, theta]`` per body: the actuator (id 8) first, then the
+        blocks in ascending id order (``Model::poses``)."""
+    @property
+    def model(self) -> str:
+        """The report name of the model that made this world."""
+
+class Model:
+    """Any model of the registry by its name: ``Model(name,
+    publish_rate_hz=100, **options)``.
+
+    ``name`` is a model of ``pushlearn experiment --model``
+    (:func:`model_names` lists them); the options are the command line's
+    model options by keyword, spelt with underscores
+    (:func:`model_options_names`: ``config``, ``flags``, ``eta``,
+    ``selector``, ``no_angular_velocity``, ``improve``, ``parts``), their
+    values by the command line's names; ``flags`` and ``improve`` take a
+    list or one comma-separated string. The model is built and checked by
+    the registry the command line uses, so a new model needs no binding of
+    its own.
+
+    The methods are the typed classes' (:class:`GateModel`, …), with worlds
+    of type :class:`ModelWorld`. Thread safety as theirs.
+    """
+
+    def __init__(self, name: str, publish_rate_hz: int = 100, **options: Any) -> None:
+        """Raises ValueError for an unknown model (the message lists the
+        names), an option the model does not take or a bad value (the
+        command line's reason); TypeError for an unknown option (the
+        message lists the options)."""
+    @property
+    def name(self) -> str:
+        """The name reports give this model under its options, as
+        ``pushlearn experiment`` names it (e.g. "gate+unrounded",
+        "hybrid-mechanics")."""
+    @property
+    def kind(self) -> str:
+        """The registry's name the model was built by."""
+    @property
+    def options(self) -> str:
+        """The options in one canonical line (``ModelOptions::canonical``)."""
+    @property
+    def ignores_actuator_yaw(self) -> bool:
+        """Whether the driver reads the actuator's yaw as 0 for this model
+        (``Hello.ignores_actuator_yaw``)."""
+    def parse(self, bodies: Sequence[_Body]) -> ModelWorld:
+        """Parse one world-state message into a world of this model; as
+        GateModel.parse."""
+    def reset_objects(self, world: ModelWorld) -> None:
+        """Re-synchronise with ``world`` at the first message of a run,
+        without learning. TypeError for another model's world."""
+    def update(self, world: ModelWorld, vx: float, vy: float) -> None:
+        """Learn from the transition into ``world`` under (vx, vy); as
+        GateModel.update. TypeError for another model's world."""
+    def predict(self, world: ModelWorld, vx: float, vy: float) -> ModelWorld:
+        """The predicted world one message after ``world`` under (vx, vy);
+        learns nothing. TypeError for another model's world."""
+    def set_training(self, on: bool) -> None:
+        """Turn training on (a new model's default) or off."""
+    @property
+    def is_training(self) -> bool:
+        """Whether ``update`` currently trains."""
+    def set_target(self, id: int, x: float, y: float, theta: float) -> None:
+        """Set the Move-to-Target goal; ValueError with the model's reason."""
+    def clear_target(self) -> None:
+        """Clear the Move-to-Target goal."""
+    @property
+    def has_target(self) -> bool:
+        """Whether a target is set."""
+    def seed(self, seed: int) -> None:
+        """Seed the exploration generator ``act`` draws from; as
+        GateModel.seed."""
+    def act(self) -> tuple[float, float]:
+        """The next action (vx, vy) in m/s towards the target."""
+    def stats(self) -> dict[str, Any]:
+        """The model's statistics in their serialised form; as
+        GateModel.stats."""
+    def copy(self) -> Model:
+        """A deep copy, shared with nothing."""
 
 class Aitm:
     """The Adapted Instantaneous Topological Map (docs/spec/aitm.md): a

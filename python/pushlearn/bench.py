@@ -24,7 +24,7 @@ between the driver and your learner::
 
 ``learner`` is a :class:`~pushlearn.Learner` (an instance, or its class or
 any function that makes one, called once), or the name of a built-in model
-(``"gate"``, ``"hybrid"``, ``"still"``, …, or an oracle, ``"oracle-known"`` or
+(``"gate"``, ``"still"``, …: :func:`pushlearn.model_names` lists them; or an oracle, ``"oracle-known"`` or
 ``"oracle-unknown"``: a copy of the world predicting itself, docs/models.md
 "Reference rows").
 A learner object is called exactly as :func:`pushlearn.serve` calls it for

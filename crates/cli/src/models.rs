@@ -66,10 +66,11 @@ pub struct ModelArgs {
     #[arg(long, value_name = "CHANGE,…", value_parser = named::<Improvement>(), value_delimiter = ',')]
     pub improve: Vec<Improvement>,
 
-    /// The hybrid model's parts, for its ablation: mechanics (the shape's
-    /// mechanics alone, learning nothing), identified (their parameters
-    /// identified online) or full (and the memory of their residual).
-    /// Reports name a partial model `hybrid-PARTS`.
+    /// The parts of a model built of parts, for its ablation (the models'
+    /// descriptions say which takes them): mechanics (the shape's mechanics
+    /// alone, learning nothing), identified (their parameters identified
+    /// online) or full (and the memory of their residual). Reports name a
+    /// partial model `MODEL-PARTS`.
     #[arg(long, value_name = "PARTS", default_value = "full", value_parser = named::<Parts>())]
     pub parts: Parts,
 }

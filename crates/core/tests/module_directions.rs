@@ -126,6 +126,9 @@ const CRATES: &[(&str, Table)] = &[
             ("args", &[]),
             ("aitm", &["args"]),
             ("models", &["args"]),
+            // Any model of the registry by name, on the typed classes'
+            // helpers.
+            ("any_model", &["args", "models"]),
             // The world of the daemon in the process (the sim-plugin
             // crate's, so no edges beyond the argument helpers).
             ("world", &["args"]),

@@ -14,10 +14,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::gate::{GateError, Improvements, VelocityFeatures};
-pub use crate::hybrid::Parts;
+use crate::gate::Improvements;
 use crate::interaction::{InteractionError, SelectorKind};
-use crate::{flags, GateConfig, GateParams, HybridConfig, InteractionConfig, InteractionParams};
+use crate::{flags, GateConfig, HybridConfig, InteractionConfig};
+
+pub use crate::gate::options::{GateOptionsError, Improvement};
+pub use crate::hybrid::Parts;
 
 /// The publish rate that selects the LOWFREQ thresholds, as bit 2 does
 /// (`docs/spec/experiments.md` §3.4: the constant-feedback images' rate).
@@ -96,6 +98,19 @@ impl ModelKind {
                 ThesisModel::Gate
             }
             ModelKind::Interaction => ThesisModel::Interaction,
+        }
+    }
+
+    /// Whether this is a reference row rather than a learner: it learns
+    /// nothing (the `still` reference, the zero of the normalised score).
+    /// Figures of what learners learn leave it out; tables keep it.
+    #[must_use]
+    pub fn is_reference(self) -> bool {
+        match self {
+            ModelKind::Still => true,
+            ModelKind::Gate | ModelKind::Interaction | ModelKind::GatePlus | ModelKind::Hybrid => {
+                false
+            }
         }
     }
 
@@ -217,89 +232,7 @@ pub trait WithModel {
     fn run<M: crate::Model + 'static>(self, untrained: M) -> Self::Output;
 }
 
-/// One change of the improved gate model (`docs/models.md` "Beyond the
-/// thesis"), by name.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Improvement {
-    Unrounded,
-    Interpolate,
-    ForwardCheck,
-    SharedBlocks,
-    AdaptActuator,
-    AverageOutputs,
-    /// Every change (what `gate+` has).
-    All,
-}
-
-impl Named for Improvement {
-    const ALL: &'static [Self] = &[
-        Improvement::Unrounded,
-        Improvement::Interpolate,
-        Improvement::ForwardCheck,
-        Improvement::SharedBlocks,
-        Improvement::AdaptActuator,
-        Improvement::AverageOutputs,
-        Improvement::All,
-    ];
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            Improvement::Unrounded => {
-                "Features, changes and predictions at full precision, not rounded to 3 decimals"
-            }
-            Improvement::Interpolate => {
-                "Forward models blend the winner with all its neighbours instead of the two \
-                 nearest nodes"
-            }
-            Improvement::ForwardCheck => {
-                "The planner ranks the inverse model's push and variants of it with the \
-                 forward model"
-            }
-            Improvement::SharedBlocks => {
-                "One forward and inverse model for every block, block ids left out of the \
-                 features"
-            }
-            Improvement::AdaptActuator => {
-                "The actuator's forward model averages its samples (η = 0.1)"
-            }
-            Improvement::AverageOutputs => {
-                "The block forward models' nodes average the changes they win (η_out = 0.1)"
-            }
-            Improvement::All => "Every change (what `--model gate+` has)",
-        }
-    }
-}
-
 impl Improvement {
-    /// Every single change, in the order of reports and tables.
-    pub const EACH: [Improvement; 6] = [
-        Improvement::Unrounded,
-        Improvement::Interpolate,
-        Improvement::AdaptActuator,
-        Improvement::AverageOutputs,
-        Improvement::ForwardCheck,
-        Improvement::SharedBlocks,
-    ];
-
-    /// The name on the command line.
-    #[must_use]
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Improvement::Unrounded => "unrounded",
-            Improvement::Interpolate => "interpolate",
-            Improvement::ForwardCheck => "forward-check",
-            Improvement::SharedBlocks => "shared-blocks",
-            Improvement::AdaptActuator => "adapt-actuator",
-            Improvement::AverageOutputs => "average-outputs",
-            Improvement::All => "all",
-        }
-    }
-
     /// The change called `name`.
     ///
     /// # Errors
@@ -308,30 +241,6 @@ impl Improvement {
         Improvement::from_name(name).ok_or_else(|| ModelOptionsError::UnknownImprovement {
             name: name.to_owned(),
         })
-    }
-
-    fn set(self, on: &mut Improvements) {
-        match self {
-            Improvement::Unrounded => on.unrounded = true,
-            Improvement::Interpolate => on.interpolate = true,
-            Improvement::ForwardCheck => on.forward_check = true,
-            Improvement::SharedBlocks => on.shared_blocks = true,
-            Improvement::AdaptActuator => on.adapt_actuator = true,
-            Improvement::AverageOutputs => on.average_outputs = true,
-            Improvement::All => *on = Improvements::ALL,
-        }
-    }
-
-    fn is_in(self, on: Improvements) -> bool {
-        match self {
-            Improvement::Unrounded => on.unrounded,
-            Improvement::Interpolate => on.interpolate,
-            Improvement::ForwardCheck => on.forward_check,
-            Improvement::SharedBlocks => on.shared_blocks,
-            Improvement::AdaptActuator => on.adapt_actuator,
-            Improvement::AverageOutputs => on.average_outputs,
-            Improvement::All => on == Improvements::ALL,
-        }
     }
 }
 
@@ -414,41 +323,6 @@ impl ConfigFlag {
     }
 }
 
-impl Named for SelectorKind {
-    const ALL: &'static [Self] = &SelectorKind::ALL;
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            SelectorKind::Aitm => "the final thesis's AITM classifier",
-            SelectorKind::Tree => "the draft's decision tree, refitted on every stored reference",
-            SelectorKind::IncrementalTree => "Hoeffding tree, keeps no references",
-            SelectorKind::Nearest => "the nearest stored reference: the draft's naive baseline",
-        }
-    }
-}
-
-impl Named for Parts {
-    const ALL: &'static [Self] = &Parts::ALL;
-
-    fn name(self) -> &'static str {
-        self.as_str()
-    }
-
-    fn description(self) -> &'static str {
-        match self {
-            Parts::Mechanics => {
-                "the mechanics alone, with the parameters the shape suggests; learns nothing"
-            }
-            Parts::Identified => "the mechanics with parameters identified from the messages",
-            Parts::Full => "the identified mechanics and the memory of their residual",
-        }
-    }
-}
-
 /// The interaction model's selector called `name`.
 ///
 /// # Errors
@@ -494,8 +368,8 @@ pub struct ModelOptions {
 /// Why a combination of [`ModelOptions`] cannot configure a model.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelOptionsError {
-    #[error("gate model: {0}")]
-    Gate(#[from] GateError),
+    #[error(transparent)]
+    Gate(#[from] GateOptionsError),
     #[error("interaction model: {0}")]
     Interaction(#[from] InteractionError),
     #[error("{option} does not apply to the {model} model")]
@@ -503,10 +377,6 @@ pub enum ModelOptionsError {
         option: &'static str,
         model: ModelKind,
     },
-    #[error(
-        "--no-angular-velocity needs velocity features (--flag use-dyns or bit 1 of --config)"
-    )]
-    NoVelocities,
     #[error("{option} configures a built-in model; an external learner takes its options on its own command line")]
     NotForExternal { option: String },
     #[error("{option} configures the thesis's models; the {model} model has none of it")]
@@ -631,16 +501,12 @@ impl ModelOptions {
                 model: ModelKind::Gate,
             });
         }
-        let mut params = GateParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.forward_learning_rate = self.eta;
-        params.improvements = self.improvements();
-        if self.no_angular_velocity {
-            if params.velocity_features != VelocityFeatures::LinearAngular {
-                return Err(ModelOptionsError::NoVelocities);
-            }
-            params.velocity_features = VelocityFeatures::Linear;
-        }
-        Ok(params.check()?)
+        Ok(GateConfig::from_options(
+            self.number_at(publish_rate_hz),
+            self.eta,
+            self.no_angular_velocity,
+            self.improvements(),
+        )?)
     }
 
     /// The parameters of `gate+`: [`ModelOptions::gate`] with every change.
@@ -653,7 +519,9 @@ impl ModelOptions {
         }
         let mut params = *self.gate(publish_rate_hz)?.params();
         params.improvements = Improvements::ALL;
-        Ok(params.check()?)
+        params
+            .check()
+            .map_err(|e| ModelOptionsError::Gate(e.into()))
     }
 
     /// The interaction model's parameters (see [`ModelOptions::gate`]).
@@ -676,10 +544,11 @@ impl ModelOptions {
                 model: ModelKind::Interaction,
             });
         }
-        let mut params = InteractionParams::from_config_number(self.number_at(publish_rate_hz))?;
-        params.ac_learning_rate = self.eta;
-        params.selector = self.selector;
-        Ok(params.check()?)
+        Ok(InteractionConfig::from_options(
+            self.number_at(publish_rate_hz),
+            self.eta,
+            self.selector,
+        )?)
     }
 
     /// The hybrid model's configuration. It has no thesis variants: the
@@ -769,6 +638,7 @@ impl ModelOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gate::VelocityFeatures;
 
     fn improve(changes: &[Improvement]) -> ModelOptions {
         ModelOptions {
@@ -941,7 +811,7 @@ mod tests {
         };
         assert!(matches!(
             noav.gate(100),
-            Err(ModelOptionsError::NoVelocities)
+            Err(ModelOptionsError::Gate(GateOptionsError::NoVelocities))
         ));
         assert!(matches!(
             noav.interaction(100),
@@ -953,7 +823,7 @@ mod tests {
         };
         assert!(matches!(
             unknown_bits.gate(100),
-            Err(ModelOptionsError::Gate(_))
+            Err(ModelOptionsError::Gate(GateOptionsError::Gate(_)))
         ));
         for eta in [-1.0, f64::NAN, f64::INFINITY] {
             let o = ModelOptions {

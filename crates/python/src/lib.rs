@@ -26,6 +26,7 @@
 //! after another; the worlds release it while they step.
 
 mod aitm;
+mod any_model;
 mod args;
 mod bench;
 mod models;
@@ -163,6 +164,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<models::PyHybridModel>()?;
     m.add_class::<models::PyInteractionWorld>()?;
     m.add_class::<models::PyHybridWorld>()?;
+    m.add_class::<any_model::PyModel>()?;
+    m.add_class::<any_model::PyModelWorld>()?;
+    m.add_function(wrap_pyfunction!(any_model::model_names, m)?)?;
+    m.add_function(wrap_pyfunction!(any_model::model_options_names, m)?)?;
     m.add_class::<aitm::PyAitm>()?;
     m.add_class::<world::PyWorld>()?;
     m.add_class::<world::PyWorlds>()?;

@@ -90,7 +90,10 @@ impl Options {
 
 /// The rows `[id, x, y, theta]` of `poses`: the actuator first, then the
 /// blocks in ascending id order.
-fn pose_rows<'py>(py: Python<'py>, poses: &Poses) -> PyResult<Bound<'py, PyArray2<f64>>> {
+pub(crate) fn pose_rows<'py>(
+    py: Python<'py>,
+    poses: &Poses,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let mut flat = Vec::with_capacity(4 * (1 + poses.blocks.len()));
     let actuator = (pushlearn_core::ACTUATOR_ID, poses.actuator);
     for (id, s) in std::iter::once(actuator).chain(poses.blocks.iter().map(|(&i, &s)| (i, s))) {
@@ -101,7 +104,7 @@ fn pose_rows<'py>(py: Python<'py>, poses: &Poses) -> PyResult<Bound<'py, PyArray
 }
 
 /// `poses` for a `__repr__`.
-fn poses_text(poses: &Poses) -> String {
+pub(crate) fn poses_text(poses: &Poses) -> String {
     let a = poses.actuator;
     let blocks: Vec<String> = poses
         .blocks

@@ -13,6 +13,7 @@
 mod algorithm;
 mod errors;
 mod hyperparams;
+pub(crate) mod options;
 mod planner;
 mod world;
 

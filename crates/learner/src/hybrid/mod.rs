@@ -13,6 +13,7 @@
 
 pub mod mechanics;
 mod model;
+pub(crate) mod options;
 mod planner;
 pub mod residual;
 #[cfg(test)]

@@ -20,6 +20,7 @@
 mod algorithm;
 mod errors;
 mod hyperparams;
+pub(crate) mod options;
 mod planner;
 mod selector;
 

@@ -30,10 +30,10 @@ pub fn learners(
         .max()
         .unwrap_or(1) as f64;
     let folds = curves.iter().map(|(_, r)| r.folds).max().unwrap_or(0);
-    // `still`'s actuator never moves: 0.75 m after a run, off the scale of
-    // every learner's actuator; it is in the tables.
+    // A reference's actuator never moves: 0.75 m after a run, off the scale
+    // of every learner's actuator; it is in the tables.
     let still = |report: &PushReport| {
-        ModelKind::of_report_name(&report.setup.model) == Some(ModelKind::Still)
+        ModelKind::of_report_name(&report.setup.model).is_some_and(ModelKind::is_reference)
     };
     let panel = |title: &str, y: &str, get: fn(&CurveEntry) -> MeanStd, actuator: bool| Panel {
         title: title.to_owned(),
