@@ -8,8 +8,9 @@ Measures, each ``--repeats`` times (the median is printed, with the range):
 
 * **physics floor**: the environment benchmark's actions stepped by the
   world library in Rust as Moves and Advances with nothing between them
-  (:func:`pushlearn._native.step_messages`): what stepping these messages
-  costs;
+  (:func:`pushlearn._native.step_messages`), the world reset where the
+  environment's time limit resets it (every :data:`~pushlearn.envs.push.MAX_STEPS`
+  messages): what stepping these messages costs;
 * **env**: ``PushBlock-v0.step`` with pre-drawn random actions, as
   ``gymnasium.make`` wraps it (time limit, order enforcing, the passive
   checker), episodes reset as they end: on its in-process world (the
@@ -43,7 +44,7 @@ import numpy as np
 from .. import native
 from ..local_world import SimNotFound, find_sim_binary
 from . import register_envs
-from .push import ACTUATOR_SPEED
+from .push import ACTUATOR_SPEED, MAX_STEPS
 
 
 def _median_of(
@@ -55,9 +56,14 @@ def _median_of(
 
 def physics_floor(steps: int) -> float:
     """Messages per second of the world library stepping the environment
-    benchmark's actions in Rust, a Move and an Advance each, nothing between."""
+    benchmark's actions in Rust, a Move and an Advance each, nothing between,
+    reset where :func:`env_rate`'s time limit resets the environment: the
+    states a push near the block's start reaches cost several times those
+    of an actuator that has wandered off, so the floor steps the same ones."""
     velocities = _actions(steps, 1)[:, 0].astype(np.float64) * ACTUATOR_SPEED
-    seconds: float = native().step_messages(velocities, "one_block", latency_max=2)
+    seconds: float = native().step_messages(
+        velocities, "one_block", latency_max=2, episode_steps=MAX_STEPS
+    )
     return steps / seconds
 
 
