@@ -16,8 +16,10 @@ use std::sync::{Mutex, MutexGuard, PoisonError};
 
 use learner::eval::{goal_distance, GOAL_TOLERANCE};
 use learner::ObjectState;
+use numpy::ndarray::Array2;
 use numpy::{
-    AllowTypeChange, PyArray1, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods,
+    AllowTypeChange, IntoPyArray, PyArray1, PyArrayDyn, PyArrayLikeDyn, PyArrayMethods,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::intern;
@@ -158,10 +160,13 @@ fn observation_dict<'py>(
             Some(n) if n > 0 => values.len() / n,
             _ => 0,
         };
-        let flat = PyArray1::from_vec(py, values);
         match n {
-            Some(n) => Ok(flat.reshape([n, width])?.into_any()),
-            None => Ok(flat.into_any()),
+            // One array object, not a flat one and a view of it.
+            Some(n) => Ok(Array2::from_shape_vec((n, width), values)
+                .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
+                .into_pyarray(py)
+                .into_any()),
+            None => Ok(PyArray1::from_vec(py, values).into_any()),
         }
     };
     let mut results = results;
@@ -372,8 +377,8 @@ impl PyGoalTask {
         })?;
         {
             let mut episodes = self.episodes();
-            for i in 0..n {
-                let truncated = if restarting[i] {
+            for (i, &restarted) in restarting.iter().enumerate() {
+                let truncated = if restarted {
                     results.reward[i] = 0.0;
                     results.terminated[i] = false;
                     episodes.elapsed[i] = 0;
