@@ -776,12 +776,56 @@ class Worlds:
         world's state stacked: shape ``(len, bodies, 13)``, or ``(len, bodies, 6)``
         with ``planar``. Everything is checked before any world steps."""
 
+class GoalTask:
+    """The Gymnasium goal environments' step in Rust (``pushlearn.envs``): the
+    action's checks, the Move and Advance, the observation's arrays, the goal
+    distance, the reward, the flags and the info in one call, with the
+    harness's arithmetic (``goal_distance``, ``GOAL_TOLERANCE``)."""
+
+    def __init__(
+        self,
+        worlds: Sequence[World],
+        actuator: int,
+        blocks: Sequence[int],
+        *,
+        speed: float,
+        dense: bool,
+        terminate_on_success: bool,
+        max_episode_steps: int | None = None,
+    ) -> None: ...
+    def __len__(self) -> int: ...
+    def restart(self, i: int, desired: npt.ArrayLike) -> None:
+        """World ``i``'s episode began (its reset is done) with target ``desired``."""
+    def step(
+        self, action: npt.ArrayLike
+    ) -> tuple[dict[str, npt.NDArray[np.float64]], float, bool, bool, dict[str, Any]]:
+        """One environment's step (a task of one world), as ``gymnasium.Env.step``
+        returns it; truncation is the time limit wrapper's."""
+    def step_all(
+        self, actions: npt.ArrayLike
+    ) -> tuple[
+        tuple[
+            dict[str, npt.NDArray[np.float64]],
+            npt.NDArray[np.float64],
+            npt.NDArray[np.bool_],
+            npt.NDArray[np.bool_],
+            dict[str, Any],
+        ],
+        list[int],
+    ]:
+        """A step of every world (actions ``(n, 2)``), batched as a vector
+        environment's; a world whose episode ended at the last step is not
+        stepped, and its index is in the list for Python to restart."""
+
 def step_messages(
     velocities: npt.NDArray[np.float64],
     scene: str = "one_block",
     *,
     latency_max: int | None = None,
+    episode_steps: int | None = None,
 ) -> float:
     """Seconds the world library takes to step ``velocities`` (shape ``(n, 2)``,
     m/s) as Moves, each followed by an Advance, on a fresh :class:`World` of
-    ``scene``, with nothing between them: the physics floor."""
+    ``scene``, with nothing between them: the physics floor. With
+    ``episode_steps``, the world is reset after every ``episode_steps``
+    messages, as an environment with that time limit resets it."""

@@ -598,3 +598,53 @@ def test_bad_reset_options_and_regions_are_refused_not_looped_on(
     for bad in bad_regions:
         with pytest.raises(ValueError, match="TargetRegion"):
             TargetRegion(**bad)
+
+
+def test_the_step_in_rust_refuses_what_the_python_step_refused() -> None:
+    world = pushlearn.World("one_block", latency_max=2)
+    task = pushlearn.native().GoalTask(
+        [world], 0, [1], speed=ACTUATOR_SPEED, dense=False, terminate_on_success=True
+    )
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        task.step(np.zeros(2, dtype=np.float32))
+    world.advance()
+    task.restart(0, (0.6, 0.7, -2.1))
+    with pytest.raises(ValueError, match=r"an action has shape \(2,\), got \(3,\)"):
+        task.step(np.zeros(3))
+    with pytest.raises(ValueError, match=r"must be finite, got \[inf, 0\]"):
+        task.step([math.inf, 0.0])
+    with pytest.raises(ValueError, match="use step_all"):
+        pushlearn.native().GoalTask(
+            [world, pushlearn.World("one_block")],
+            0,
+            [1],
+            speed=ACTUATOR_SPEED,
+            dense=False,
+            terminate_on_success=True,
+        ).step(np.zeros(2))
+    with pytest.raises(ValueError, match="row 5 is not a body"):
+        pushlearn.native().GoalTask(
+            [world],
+            0,
+            [5],
+            speed=ACTUATOR_SPEED,
+            dense=False,
+            terminate_on_success=True,
+        )
+    with pytest.raises(ValueError, match="desired must have 3 numbers"):
+        task.restart(0, (0.0, 0.0))
+    # A float32 array (read as it is), the same numbers as float64 and as a
+    # list (converted by numpy) are one action.
+    action32 = np.array([0.3, -0.2], dtype=np.float32)
+    observed = []
+    for action in (action32, action32.astype(np.float64), action32.tolist()):
+        fresh = pushlearn.World("one_block", latency_max=2)
+        fresh.advance()
+        one = pushlearn.native().GoalTask(
+            [fresh], 0, [1], speed=ACTUATOR_SPEED, dense=True, terminate_on_success=True
+        )
+        one.restart(0, (0.6, 0.7, -2.1))
+        observed.append(
+            [one.step(action)[0]["observation"].tobytes() for _ in range(5)]
+        )
+    assert observed[0] == observed[1] == observed[2]

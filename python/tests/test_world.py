@@ -187,6 +187,9 @@ def test_the_floor_steps_the_same_messages() -> None:
     assert step_messages(velocities, "one_block", latency_max=2) > 0.0
     with pytest.raises(ValueError, match=r"shape \(n, 2\)"):
         step_messages(np.zeros((4, 3)))
+    assert step_messages(velocities, latency_max=2, episode_steps=7) > 0.0
+    with pytest.raises(ValueError, match="episode_steps must be at least 1"):
+        step_messages(velocities, episode_steps=0)
 
 
 def refusals() -> list[tuple[str, Callable[[World], Any], str]]:

@@ -132,6 +132,8 @@ const CRATES: &[(&str, Table)] = &[
             // The world of the daemon in the process (the sim-plugin
             // crate's, so no edges beyond the argument helpers).
             ("world", &["args"]),
+            // The Gymnasium environments' step over those worlds.
+            ("task", &["args", "world"]),
             // The experiments of `lab` with a Python learner object: the
             // engine's, so no edges inside the crate.
             ("bench", &[]),

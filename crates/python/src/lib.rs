@@ -11,6 +11,7 @@
 //! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`);
 //! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
 //!   the process (`world.rs`);
+//! * `GoalTask`: the Gymnasium environments' step (`task.rs`);
 //! * `run_push_task`, `run_move_to_target`, `without_timing`: the
 //!   experiments of `pushlearn experiment` with a built-in model or a Python
 //!   learner object, for `pushlearn.bench` (`bench.rs`).
@@ -30,6 +31,7 @@ mod any_model;
 mod args;
 mod bench;
 mod models;
+mod task;
 mod world;
 
 use learner::ModelStats;
@@ -171,6 +173,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<aitm::PyAitm>()?;
     m.add_class::<world::PyWorld>()?;
     m.add_class::<world::PyWorlds>()?;
+    m.add_class::<task::PyGoalTask>()?;
     m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
     m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
     m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;

@@ -47,6 +47,12 @@ pub const COLUMNS: usize = 13;
 /// spin about z: what a pushing task on the table sees.
 pub const PLANAR_COLUMNS: usize = 6;
 
+/// A body's row ([`COLUMNS`] values) as its planar row ([`PLANAR_COLUMNS`]).
+pub fn planar(r: &[f64]) -> [f64; PLANAR_COLUMNS] {
+    let yaw = pushlearn_core::orientation::yaw([r[3], r[4], r[5], r[6]]);
+    [r[0], r[1], yaw, r[7], r[8], r[12]]
+}
+
 /// `rows` ([`COLUMNS`] each) as the caller asked for them, and the number
 /// of columns.
 fn view(rows: &[f64], planar: bool) -> (Vec<f64>, usize) {
@@ -55,8 +61,7 @@ fn view(rows: &[f64], planar: bool) -> (Vec<f64>, usize) {
     }
     let mut out = Vec::with_capacity(rows.len() / COLUMNS * PLANAR_COLUMNS);
     for r in rows.chunks_exact(COLUMNS) {
-        let yaw = pushlearn_core::orientation::yaw([r[3], r[4], r[5], r[6]]);
-        out.extend([r[0], r[1], yaw, r[7], r[8], r[12]]);
+        out.extend(self::planar(r));
     }
     (out, PLANAR_COLUMNS)
 }
@@ -110,7 +115,7 @@ impl Published {
 
 /// Why a command did not do what it was asked; becomes a Python exception.
 #[derive(Debug, thiserror::Error)]
-enum Failure {
+pub enum Failure {
     /// The daemon's checks refused it (its `Error` text): `ValueError`.
     #[error("{0}")]
     Refused(String),
@@ -139,7 +144,7 @@ impl From<Failure> for PyErr {
 }
 
 /// The world and its client's side of the conversation.
-struct Session {
+pub struct Session {
     world: EmbeddedWorld,
     /// The last seq sent (the commands are numbered as a `SimClient` does).
     seq: u64,
@@ -182,11 +187,12 @@ impl Session {
             .ok_or_else(|| Failure::Refused("no state yet: advance the world first".to_owned()))
     }
 
-    fn rows(&self) -> Result<&[f64], Failure> {
+    /// The last published state's rows ([`COLUMNS`] each, scene order).
+    pub fn rows(&self) -> Result<&[f64], Failure> {
         self.published().map(|p| &p.rows[..])
     }
 
-    fn move_and_advance(&mut self, vx: f64, vy: f64) -> Result<(), Failure> {
+    pub fn move_and_advance(&mut self, vx: f64, vy: f64) -> Result<(), Failure> {
         self.send(Payload::move_(vx, vy))?;
         self.send(Payload::advance())?;
         Ok(())
@@ -219,7 +225,12 @@ pub struct PyWorld {
 }
 
 impl PyWorld {
-    fn lock(&self) -> Result<MutexGuard<'_, Session>, Failure> {
+    /// The number of dynamic bodies: the rows of a state.
+    pub fn body_count(&self) -> usize {
+        self.names.len()
+    }
+
+    pub fn lock(&self) -> Result<MutexGuard<'_, Session>, Failure> {
         // A panic while stepping leaves a world whose next command is
         // checked like any other; nothing half-written to guard.
         let pid = std::process::id();
@@ -536,56 +547,82 @@ impl PyWorlds {
                 moves[i].0, moves[i].1
             )));
         }
-        let bodies = self.bodies;
-        let worlds = &self.worlds;
         let columns = if planar { PLANAR_COLUMNS } else { COLUMNS };
-        let values = py.detach(|| -> Result<Vec<f64>, Failure> {
-            // Every world locked (in one global order, so that two calls on
-            // overlapping lists cannot deadlock) and checked before any
-            // steps: all or nothing, as the docstring promises.
-            let mut order: Vec<usize> = (0..n).collect();
-            order.sort_by_key(|&i| worlds[i].as_ptr() as usize);
-            let mut locked: Vec<Option<MutexGuard<'_, Session>>> = (0..n).map(|_| None).collect();
-            for i in order {
-                locked[i] = Some(worlds[i].get().lock()?);
-            }
-            let mut sessions: Vec<MutexGuard<'_, Session>> = locked.into_iter().flatten().collect();
-            for (i, (session, (&(vx, vy), &step))) in
-                sessions.iter().zip(moves.iter().zip(&stepped)).enumerate()
-            {
-                let checked = if step {
-                    session.check_move_and_advance(vx, vy)
-                } else {
-                    session.rows().map(|_| ())
-                };
-                checked.map_err(|failure| failure.in_world(i))?;
-            }
-            let mut values = Vec::with_capacity(n * bodies * columns);
-            for (session, (&(vx, vy), &step)) in sessions.iter_mut().zip(moves.iter().zip(&stepped))
-            {
-                if step {
-                    session.move_and_advance(vx, vy)?;
-                }
-                values.extend(view(session.rows()?, planar).0);
-            }
-            Ok(values)
+        let mut values = Vec::with_capacity(n * self.bodies * columns);
+        py.detach(|| {
+            step_together(&self.worlds, &moves, &stepped, |_, rows| {
+                values.extend(view(rows, planar).0);
+            })
         })?;
-        numpy::PyArray1::from_vec(py, values).reshape([n, bodies, columns])
+        numpy::PyArray1::from_vec(py, values).reshape([n, self.bodies, columns])
     }
+}
+
+/// Moves world i at `moves[i]` and advances it where `stepped[i]`, and
+/// hands `each` every world's rows in order (the last state of a world not
+/// stepped). Every world is locked, in one global order so that two calls
+/// on overlapping lists cannot deadlock, and checked before any steps: all
+/// or nothing. Call it without the GIL.
+pub fn step_together(
+    worlds: &[Py<PyWorld>],
+    moves: &[(f64, f64)],
+    stepped: &[bool],
+    mut each: impl FnMut(usize, &[f64]),
+) -> Result<(), Failure> {
+    let n = worlds.len();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by_key(|&i| worlds[i].as_ptr() as usize);
+    let mut locked: Vec<Option<MutexGuard<'_, Session>>> = (0..n).map(|_| None).collect();
+    for i in order {
+        locked[i] = Some(worlds[i].get().lock()?);
+    }
+    let mut sessions: Vec<MutexGuard<'_, Session>> = locked.into_iter().flatten().collect();
+    for (i, (session, (&(vx, vy), &step))) in
+        sessions.iter().zip(moves.iter().zip(stepped)).enumerate()
+    {
+        let checked = if step {
+            session.check_move_and_advance(vx, vy)
+        } else {
+            session.rows().map(|_| ())
+        };
+        checked.map_err(|failure| failure.in_world(i))?;
+    }
+    for (i, (session, (&(vx, vy), &step))) in sessions
+        .iter_mut()
+        .zip(moves.iter().zip(stepped))
+        .enumerate()
+    {
+        if step {
+            session.move_and_advance(vx, vy)?;
+        }
+        each(i, session.rows()?);
+    }
+    Ok(())
 }
 
 /// Seconds the world library takes to step `velocities` (shape `(n, 2)`,
 /// m/s) as Moves, each followed by an Advance, on a fresh world of `scene`
 /// (latency emulation as `World`'s), with nothing between them: the physics
-/// floor of `python -m pushlearn.envs.throughput`.
+/// floor of `python -m pushlearn.envs.throughput`. With `episode_steps`,
+/// the world is reset after every `episode_steps` messages (a stop, the
+/// Reset, a latency seed counting the episodes, an Advance: an
+/// environment's reset), so that the floor steps the states an environment
+/// with that time limit steps: a push near the block's start costs several
+/// times one of an actuator that has wandered off.
 #[pyfunction]
-#[pyo3(signature = (velocities, scene = "one_block", *, latency_max = None))]
+#[pyo3(signature = (velocities, scene = "one_block", *, latency_max = None, episode_steps = None))]
 pub fn step_messages(
     py: Python<'_>,
     velocities: PyReadonlyArray2<'_, f64>,
     scene: &str,
     latency_max: Option<Unsigned<u32>>,
+    episode_steps: Option<Unsigned<usize>>,
 ) -> PyResult<f64> {
+    let episode = match episode_steps {
+        Some(Unsigned(0)) => return Err(value_error("episode_steps must be at least 1")),
+        Some(Unsigned(steps)) => steps,
+        None => usize::MAX,
+    };
     let shape = velocities.shape();
     if shape.len() != 2 || shape[1] != 2 {
         return Err(value_error(format!(
@@ -600,15 +637,28 @@ pub fn step_messages(
         .map(|r| (r[0], r[1]))
         .collect();
     let world = PyWorld::new(scene, latency_max, Unsigned(0), None)?;
+    let latency = world.latency_max.is_some();
     let seconds = py.detach(|| -> Result<f64, Failure> {
         let mut session = world.lock()?;
-        if world.latency_max.is_some() {
+        if latency {
             session.send(Payload::latency_seed(0))?;
         }
         session.send(Payload::advance())?;
         let start = Instant::now();
-        for &(vx, vy) in &moves {
-            session.move_and_advance(vx, vy)?;
+        for (episode, chunk) in moves.chunks(episode).enumerate() {
+            if episode > 0 {
+                session.send(Payload::move_(0.0, 0.0))?;
+                session.send(Payload::reset())?;
+                if latency {
+                    session.send(Payload::latency_seed(
+                        u64::try_from(episode).unwrap_or(u64::MAX),
+                    ))?;
+                }
+                session.send(Payload::advance())?;
+            }
+            for &(vx, vy) in chunk {
+                session.move_and_advance(vx, vy)?;
+            }
         }
         Ok(start.elapsed().as_secs_f64())
     })?;

@@ -287,10 +287,14 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self._world: LocalWorld | None = None
         self._client: SimClient | None = None
         self._native: Any = None
+        # The step in Rust, over the in-process world (`None` with a daemon).
+        self._task: Any = None
+        # A daemon's last state; an in-process world's is built when asked for.
         self._state: State | None = None
-        # The last state's planar rows (x, y, yaw, vx, vy, spin) in the
-        # scene's body order; `None` before the first reset.
+        # A daemon's last state's planar rows (x, y, yaw, vx, vy, spin) in
+        # the scene's body order.
         self._rows: Rows | None = None
+        self._started = False
         self._target_values: tuple[float, ...] = (0.0,) * (3 * len(self.blocks))
         self._closed = False
 
@@ -329,6 +333,15 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         self._names = [body.name for body in hello.bodies]
         self._actuator_row = self._names.index(ACTUATOR_NAME)
         self._block_rows = [self._names.index(name) for name in self.blocks]
+        if self._native is not None:
+            self._task = native().GoalTask(
+                [self._native],
+                self._actuator_row,
+                self._block_rows,
+                speed=ACTUATOR_SPEED,
+                dense=reward_type == "dense",
+                terminate_on_success=terminate_on_success,
+            )
 
         # Positions and velocities are unbounded (the world has no walls);
         # yaws lie in [−π, π].
@@ -413,15 +426,15 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
     def state(self) -> State:
         """The last world state, with every body as the world sent it (for models
         that parse the world themselves, such as :class:`pushlearn.GateModel`)."""
-        if self._rows is None:
+        if not self._started:
             raise RuntimeError("no world state yet: call reset() first")
-        if self._state is None:
-            # In-process: built when asked for, not at every step.
-            self._state = State.from_world_state(
-                pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes()),
-                self._shapes,
-            )
-        return self._state
+        if self._state is not None:
+            return self._state
+        # In-process: built when asked for, not at every step.
+        return State.from_world_state(
+            pushlearn_pb2.WorldState.FromString(self._live_native().state_bytes()),
+            self._shapes,
+        )
 
     @property
     def address(self) -> str:
@@ -505,7 +518,10 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
                 world.set_pose(
                     name, (x, y, z), (0.0, 0.0, math.sin(half), math.cos(half))
                 )
-            return self._observe_rows(world.advance(planar=True).tolist())
+            observation = self._observe_rows(world.advance(planar=True).tolist())
+            self._task.restart(0, observation[0]["desired_goal"])
+            self._started = True
+            return observation
         client = self._live_client()
         client.move(0.0, 0.0)
         last = client.reset()
@@ -513,24 +529,30 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
             last = client.latency_seed(latency_seed)
         for name, x, y, z, yaw in poses:
             last = client.set_pose(name, x, y, z, yaw)
-        return self._observe(client.next_state(after=last))
+        observation = self._observe(client.next_state(after=last))
+        self._started = True
+        return observation
 
     def step(
         self, action: npt.ArrayLike
     ) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
         """Sends the action as a Move of ``ACTUATOR_SPEED · action`` m/s (clipped to
         [−1, 1] first) and returns the first state with it in force."""
-        if self._native is not None:
-            vx, vy = self._velocity(action)
-            rows = self._native.move_and_advance(vx, vy, planar=True).tolist()
-            return self._result(*self._observe_rows(rows))
+        task = self._task
+        if task is not None:
+            # Everything in one call into Rust (`pushlearn._native.GoalTask`):
+            # Python's arithmetic on a step's few numbers cost more than
+            # the physics.
+            step: tuple[Observation, float, bool, bool, dict[str, Any]] = task.step(
+                action
+            )
+            return step
         return self._finish_step(self._start_step(action))
 
     def _velocity(self, action: npt.ArrayLike) -> tuple[float, float]:
         """The checked action as the Move's velocity (m/s)."""
-        if self._native is None:
-            self._live_client()
-        if self._rows is None:
+        self._live_client()
+        if not self._started:
             raise RuntimeError("call reset() before step()")
         values = np.asarray(action, dtype=np.float64)
         if values.shape != (2,):
@@ -593,8 +615,14 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
         """An ``rgb_array`` picture of the world from above (``None`` without a render mode)."""
         if self._canvas is None:
             return None
-        if self._rows is None:
+        if not self._started:
             raise RuntimeError("call reset() before render()")
+        rows = (
+            self._live_native().state(planar=True).tolist()
+            if self._native is not None
+            else self._rows
+        )
+        assert rows is not None  # a daemon's, kept by every reset and step
         goal = self._target_values
         things = [
             Drawn(
@@ -608,7 +636,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
             for i, name in enumerate(self.blocks)
             if name in self._shapes
         ]
-        for name, (x, y, yaw, *_) in zip(self._names, self._rows, strict=True):
+        for name, (x, y, yaw, *_) in zip(self._names, rows, strict=True):
             if name in self._shapes:
                 things.append(Drawn(name, self._shapes[name], x, y, yaw))
         return self._canvas.draw(things)
@@ -616,6 +644,7 @@ class _PushEnv(gym.Env[Observation, npt.NDArray[np.float32]]):
     def close(self) -> None:
         """Disconnects and stops the world this environment started; safe to call again."""
         self._native = None
+        self._task = None
         if self._client is not None:
             self._client.close()
             self._client = None

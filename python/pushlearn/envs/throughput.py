@@ -8,8 +8,11 @@ Measures, each ``--repeats`` times (the median is printed, with the range):
 
 * **physics floor**: the environment benchmark's actions stepped by the
   world library in Rust as Moves and Advances with nothing between them
-  (:func:`pushlearn._native.step_messages`): what stepping these messages
-  costs;
+  (:func:`pushlearn._native.step_messages`), the world reset where the
+  environment's time limit resets it (every :data:`~pushlearn.envs.push.MAX_STEPS`
+  messages): what stepping these messages costs; and, for comparison with
+  figures measured before issue 53, the same messages without the resets
+  (the actuator soon wanders off the block, which costs less);
 * **env**: ``PushBlock-v0.step`` with pre-drawn random actions, as
   ``gymnasium.make`` wraps it (time limit, order enforcing, the passive
   checker), episodes reset as they end: on its in-process world (the
@@ -43,7 +46,7 @@ import numpy as np
 from .. import native
 from ..local_world import SimNotFound, find_sim_binary
 from . import register_envs
-from .push import ACTUATOR_SPEED
+from .push import ACTUATOR_SPEED, MAX_STEPS
 
 
 def _median_of(
@@ -53,11 +56,17 @@ def _median_of(
     return statistics.median(values), min(values), max(values)
 
 
-def physics_floor(steps: int) -> float:
+def physics_floor(steps: int, episode_steps: int | None = MAX_STEPS) -> float:
     """Messages per second of the world library stepping the environment
-    benchmark's actions in Rust, a Move and an Advance each, nothing between."""
+    benchmark's actions in Rust, a Move and an Advance each, nothing between,
+    reset where :func:`env_rate`'s time limit resets the environment: the
+    states a push near the block's start reaches cost several times those
+    of an actuator that has wandered off, so the floor steps the same ones.
+    ``episode_steps=None``: no resets, the floor as measured before issue 53."""
     velocities = _actions(steps, 1)[:, 0].astype(np.float64) * ACTUATOR_SPEED
-    seconds: float = native().step_messages(velocities, "one_block", latency_max=2)
+    seconds: float = native().step_messages(
+        velocities, "one_block", latency_max=2, episode_steps=episode_steps
+    )
     return steps / seconds
 
 
@@ -130,6 +139,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     rows: list[tuple[str, tuple[float, float, float]]] = []
     floor = measured(partial(physics_floor, args.steps))
     rows.append(("physics floor (world library, Moves and Advances in Rust)", floor))
+    rows.append(
+        (
+            "physics floor without the resets (before issue 53)",
+            measured(partial(physics_floor, args.steps, None)),
+        )
+    )
     one = measured(partial(env_rate, args.steps))
     rows.append(("env (gymnasium.make, 1 env, in-process world)", one))
     try:

@@ -5,8 +5,9 @@ ids' vector entry point; ``vectorization_mode="async"`` still gives
 Gymnasium's ``AsyncVectorEnv``). Each sub-environment is a
 :class:`~pushlearn.envs.push.PushBlockEnv` (or ``PushTwoBlocksEnv``) with a
 lock-step world of its own. In-process worlds (the default) are stepped
-all together by one call into Rust (:class:`pushlearn._native.Worlds`),
-with the GIL released; with daemons (``sim="daemon"``) a step sends every
+all together by one call into Rust (:class:`pushlearn._native.GoalTask`,
+which also computes the observations, rewards, flags and infos), with the
+GIL released; with daemons (``sim="daemon"``) a step sends every
 world its Move and Advance first and only then reads the states, so the
 daemons step in parallel while this process waits. Autoreset follows
 Gymnasium's default, ``NEXT_STEP``: the step after an episode ended resets
@@ -26,7 +27,6 @@ from .. import native
 from .push import (
     ACTUATOR_SPEED,
     MAX_STEPS,
-    REACHED,
     PushBlockEnv,
     PushTwoBlocksEnv,
     _PushEnv,
@@ -89,21 +89,19 @@ class _PushVectorEnv(
         self.action_space = batch_space(self.single_action_space, num_envs)
         self._elapsed = np.zeros(num_envs, dtype=np.int64)
         self._autoreset = np.zeros(num_envs, dtype=np.bool_)
-        self._worlds: Any = None
-        self._native = native()
+        # In-process worlds: the whole step in one call into Rust, the
+        # sub-environments' own arithmetic (`pushlearn._native.GoalTask`).
+        self._task: Any = None
         if all(env.in_process for env in self.envs):
-            self._worlds = self._native.Worlds([env._native for env in self.envs])
-        # The blocks' rows in a state: a slice where they follow each other
-        # (every built-in scene), which numpy takes faster than a list.
-        rows = first._block_rows
-        consecutive = rows == list(range(rows[0], rows[0] + len(rows)))
-        self._block_slice: slice | list[int] = (
-            slice(rows[0], rows[0] + len(rows)) if consecutive else rows
-        )
-        self._every = np.ones(num_envs, dtype=np.bool_)
-        self._started = False
-        # Every sub-environment's target, as its reset drew it.
-        self._desired = np.zeros((num_envs, 3 * len(first.blocks)))
+            self._task = native().GoalTask(
+                [env._native for env in self.envs],
+                first._actuator_row,
+                first._block_rows,
+                speed=ACTUATOR_SPEED,
+                dense=first.reward_type == "dense",
+                terminate_on_success=first.terminate_on_success,
+                max_episode_steps=max_episode_steps,
+            )
 
     def reset(
         self,
@@ -126,15 +124,21 @@ class _PushVectorEnv(
             observation, info = env.reset(seed=env_seed, options=options)
             observations.append(observation)
             infos = self._add_info(infos, info, i)
-            self._desired[i] = observation["desired_goal"]
+            if self._task is not None:
+                self._task.restart(i, observation["desired_goal"])
         self._elapsed[:] = 0
         self._autoreset[:] = False
-        self._started = True
         return _stacked(observations), infos
 
     def step(self, actions: npt.ArrayLike) -> _StepResult:
         """Steps every sub-environment: in-process worlds in one call, daemons
         all sent their Moves first, then all states read."""
+        if self._task is not None:
+            result: _StepResult
+            result, restarts = self._task.step_all(actions)
+            if restarts:
+                self._restart(result, restarts)
+            return result
         batch = np.asarray(actions)
         if batch.shape != (self.num_envs, 2):
             raise ValueError(
@@ -147,8 +151,6 @@ class _PushVectorEnv(
         if not np.logical_and.reduce(finite):
             bad = np.flatnonzero(~finite).tolist()
             raise ValueError(f"the actions of environments {bad} are not finite")
-        if self._worlds is not None:
-            return self._step_in_process(batch)
         moves = [
             None if reset else env._start_step(batch[i])
             for i, (env, reset) in enumerate(
@@ -187,71 +189,18 @@ class _PushVectorEnv(
             _batched(infos),
         )
 
-    def _step_in_process(self, batch: npt.NDArray[Any]) -> _StepResult:
-        """:meth:`step` of in-process worlds: one call steps them all, and the
-        observations, rewards and infos are computed for all at once, with
-        the sub-environments' arithmetic (so the same bits as theirs)."""
-        envs = self.envs
-        if not self._started:
-            raise RuntimeError("call reset() before step()")
-        n = self.num_envs
-        resetting = self._autoreset
-        any_reset = bool(np.logical_or.reduce(resetting))
-        # The ufuncs themselves: np.clip's dispatch costs more than the clipping.
-        velocities = np.minimum(np.maximum(batch, -1.0, dtype=np.float64), 1.0)
-        velocities *= ACTUATOR_SPEED
-        states = self._worlds.move_and_advance(
-            velocities,
-            planar=True,
-            stepped=(~resetting).tolist() if any_reset else None,
-        )
-        first = envs[0]
-        blocks = states[:, self._block_slice]
-        actuator = states[:, first._actuator_row]
-        observation = np.empty((n, 4 + blocks.shape[1] * 6))
-        observation[:, 0:2] = actuator[:, 0:2]
-        observation[:, 2:4] = actuator[:, 3:5]
-        observation[:, 4:] = blocks.reshape(n, -1)
-        achieved = blocks[:, :, :3].reshape(n, -1)
-        desired = self._desired.copy()
-        distances = self._native.goal_distances(achieved, desired)
-        success = np.logical_and.reduce(distances < REACHED, axis=1)
-        distance = np.add.reduce(distances, axis=1)
-        if first.reward_type == "sparse":
-            rewards = success - 1.0
-        else:
-            rewards = -distance
-        terminations = success & first.terminate_on_success
-        for env, rows in zip(envs, states, strict=True):
-            env._rows = rows
-            env._state = None
-        self._elapsed += 1
-        if self.max_episode_steps is not None:
-            truncations = (self._elapsed >= self.max_episode_steps) & ~terminations
-        else:
-            truncations = np.zeros(n, dtype=np.bool_)
-        if any_reset:
-            for i in np.flatnonzero(resetting).tolist():
-                reset, info = envs[i].reset()
-                observation[i] = reset["observation"]
-                achieved[i] = reset["achieved_goal"]
-                desired[i] = self._desired[i] = reset["desired_goal"]
-                success[i], distance[i] = info["is_success"], info["distance"]
-                rewards[i], terminations[i], truncations[i] = 0.0, False, False
-                self._elapsed[i] = 0
-        self._autoreset = terminations | truncations
-        infos = {
-            "is_success": success,
-            "_is_success": self._every.copy(),
-            "distance": distance,
-            "_distance": self._every.copy(),
-        }
-        observations = {
-            "observation": observation,
-            "achieved_goal": achieved,
-            "desired_goal": desired,
-        }
-        return observations, rewards, terminations, truncations, infos
+    def _restart(self, result: _StepResult, restarts: list[int]) -> None:
+        """Resets the sub-environments in ``restarts``, whose episodes ended at
+        the last step, into ``result`` (their rewards and flags are 0 and
+        false already): the NEXT_STEP autoreset of in-process worlds."""
+        observations, _, _, _, infos = result
+        for i in restarts:
+            reset, info = self.envs[i].reset()
+            for key, value in reset.items():
+                observations[key][i] = value
+            infos["is_success"][i] = info["is_success"]
+            infos["distance"][i] = info["distance"]
+            self._task.restart(i, reset["desired_goal"])
 
     def render(self) -> tuple[Any, ...] | None:
         """Each sub-environment's picture (``rgb_array``), or ``None`` without a render mode."""
@@ -261,7 +210,7 @@ class _PushVectorEnv(
 
     def close_extras(self, **kwargs: Any) -> None:
         """Closes every sub-environment and stops its world."""
-        self._worlds = None
+        self._task = None
         for env in self.envs:
             env.close()
 

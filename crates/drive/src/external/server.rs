@@ -29,6 +29,8 @@ use pushlearn::wire::{
 
 use learner::registry::{ModelKind, ModelOptions, WithModel};
 
+use super::session::steady_timeout;
+
 /// Why serving ended early.
 #[derive(Debug, thiserror::Error)]
 pub enum ServeError {
@@ -392,6 +394,8 @@ pub struct Requests<R> {
     /// A daemon's idle limit: each request must be complete within this
     /// long of the previous one, however its bytes trickle in.
     idle: Option<(Duration, SetReadTimeout)>,
+    /// The read timeout last set through `idle`'s setter.
+    timeout_set: Option<Duration>,
 }
 
 impl<R: Read> Requests<R> {
@@ -401,6 +405,7 @@ impl<R: Read> Requests<R> {
             decoder: FrameDecoder::new(),
             buffer: BytesMut::with_capacity(4096),
             idle: None,
+            timeout_set: None,
         }
     }
 
@@ -432,7 +437,11 @@ impl<R: Read> Requests<R> {
                 if left.is_zero() {
                     return Err(ServeError::Idle(*limit));
                 }
-                set_timeout(Some(left)).map_err(|e| ServeError::Read(WireError::Io(e)))?;
+                let timeout = steady_timeout(left);
+                if self.timeout_set != Some(timeout) {
+                    set_timeout(Some(timeout)).map_err(|e| ServeError::Read(WireError::Io(e)))?;
+                    self.timeout_set = Some(timeout);
+                }
             }
             let n = match self.input.read(&mut chunk) {
                 Ok(n) => n,

@@ -41,6 +41,20 @@ use crate::process::kill_group;
 /// figures behind the choice are in `docs/performance.md` §7.
 pub const SPIN: Duration = Duration::from_micros(50);
 
+/// A read timeout for `left` that stays the same from one read to the
+/// next: `left` rounded down to whole milliseconds (exact below one). A
+/// read that times out early finds its deadline not passed and reads
+/// again; in return, the socket's timeout is set once, not before every
+/// read (a `setsockopt` each).
+pub fn steady_timeout(left: Duration) -> Duration {
+    let ms = Duration::from_millis(1);
+    if left < ms {
+        left
+    } else {
+        ms * u32::try_from(left.as_millis()).unwrap_or(u32::MAX)
+    }
+}
+
 /// Where a learner runs.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Source {
@@ -99,17 +113,24 @@ impl Transport {
         }
     }
 
-    /// Reads what is there, waiting at most `timeout` (not zero).
-    fn read(&mut self, chunk: &mut [u8], timeout: Duration) -> std::io::Result<usize> {
+    /// Reads what is there, waiting at most `timeout` (not zero), which
+    /// is set on the socket unless `set` says it is already.
+    fn read(
+        &mut self,
+        chunk: &mut [u8],
+        timeout: Duration,
+        set: &mut Option<Duration>,
+    ) -> std::io::Result<usize> {
+        if *set != Some(timeout) {
+            match self {
+                Transport::Child { stream, .. } => stream.set_read_timeout(Some(timeout))?,
+                Transport::Socket(stream) => stream.set_read_timeout(Some(timeout))?,
+            }
+            *set = Some(timeout);
+        }
         match self {
-            Transport::Child { stream, .. } => {
-                stream.set_read_timeout(Some(timeout))?;
-                stream.read(chunk)
-            }
-            Transport::Socket(stream) => {
-                stream.set_read_timeout(Some(timeout))?;
-                stream.read(chunk)
-            }
+            Transport::Child { stream, .. } => stream.read(chunk),
+            Transport::Socket(stream) => stream.read(chunk),
         }
     }
 }
@@ -131,6 +152,8 @@ pub struct Session {
     failed: bool,
     /// The previous reply came within [`SPIN`]: poll for the next one.
     spin: bool,
+    /// The socket's read timeout as last set.
+    timeout_set: Option<Duration>,
 }
 
 impl std::fmt::Debug for Session {
@@ -234,6 +257,7 @@ impl Session {
             timeout,
             failed: false,
             spin: true,
+            timeout_set: None,
         })
     }
 
@@ -268,7 +292,8 @@ impl Session {
                     Err(e) => Err(e),
                 }
             } else {
-                self.transport.read(&mut chunk, left)
+                self.transport
+                    .read(&mut chunk, steady_timeout(left), &mut self.timeout_set)
             };
             if matches!(read, Ok(n) if n > 0) {
                 self.spin = sent.elapsed() < SPIN;
@@ -519,6 +544,32 @@ impl Drop for Session {
             Transport::Socket(stream) => {
                 let _ = stream.shutdown(Shutdown::Both);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_steady_timeout_is_whole_milliseconds_never_more_than_what_is_left() {
+        let ms = Duration::from_millis;
+        assert_eq!(steady_timeout(Duration::from_micros(9_999_990)), ms(9_999));
+        assert_eq!(steady_timeout(Duration::from_micros(9_999_001)), ms(9_999));
+        assert_eq!(steady_timeout(ms(2)), ms(2));
+        assert_eq!(
+            steady_timeout(Duration::from_micros(1_999)),
+            Duration::from_millis(1)
+        );
+        // Below a millisecond it is exact, so a deadline is still met.
+        assert_eq!(
+            steady_timeout(Duration::from_micros(400)),
+            Duration::from_micros(400)
+        );
+        for left in [1_u64, 999, 1_000, 1_001, 123_456_789] {
+            let left = Duration::from_micros(left);
+            assert!(steady_timeout(left) <= left && !steady_timeout(left).is_zero());
         }
     }
 }
