@@ -103,6 +103,18 @@ pub struct FreeJoint {
     dof: usize,
 }
 
+impl FreeJoint {
+    /// Where the joint's 7 numbers start in [`Simulation::qpos`].
+    pub fn qpos_index(self) -> usize {
+        self.qpos
+    }
+
+    /// Where the joint's 6 numbers start in [`Simulation::qvel`].
+    pub fn dof(self) -> usize {
+        self.dof
+    }
+}
+
 /// One contact of the last step, between two geoms by id.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {
