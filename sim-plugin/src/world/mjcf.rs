@@ -33,8 +33,14 @@ pub(super) fn mjcf(scene: &Scene) -> String {
     let mut x = String::new();
     // Writing into a String cannot fail; `let _` keeps that visible once.
     let _ = writeln!(x, "<mujoco model=\"{}\">", escape(&scene.name));
-    // Masses and inertias are the scene's, never computed from geoms.
-    let _ = writeln!(x, "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>");
+    // Masses and inertias are the scene's, never computed from geoms. ODE
+    // accepts a diagonal no solid can have (A + B < C: the thesis's blockB);
+    // MuJoCo refuses it unless told to replace it by the mean of the three
+    // (`unphysical_inertia` names such bodies for a warning).
+    let _ = writeln!(
+        x,
+        "  <compiler angle=\"radian\" inertiafromgeom=\"false\" balanceinertia=\"true\"/>"
+    );
     let _ = writeln!(
         x,
         "  <option timestep=\"{}\" gravity=\"{}\" cone=\"elliptic\" integrator=\"Euler\"/>",
@@ -120,6 +126,16 @@ pub(super) fn mjcf(scene: &Scene) -> String {
     x
 }
 
+/// The bodies whose inertia about the centre of mass breaks the triangle
+/// inequality, which MuJoCo replaces by the mean of its diagonal.
+pub(super) fn unphysical_inertia(scene: &Scene) -> impl Iterator<Item = &str> {
+    scene.bodies.iter().filter_map(|b| {
+        let (d, _) = b.inertia_about_centre_of_mass();
+        let broken = (0..3).any(|k| d[k] > d[(k + 1) % 3] + d[(k + 2) % 3]);
+        broken.then_some(b.name.as_str())
+    })
+}
+
 /// The pair's `(mu1, mu2)` by ODE's world's rule: the scene's `[[friction]]`
 /// entry for it, else the minimum of the two materials' coefficients.
 fn pair_friction(scene: &Scene, a: &str, b: &str) -> (f64, f64) {
@@ -188,6 +204,14 @@ mod tests {
         assert!(xml.contains("geom1=\"ground_plane\" geom2=\"blockA\" condim=\"3\" friction=\"0.3 0.2 "));
         // Every pair once: three geoms, three pairs.
         assert_eq!(xml.matches("<pair ").count(), 3);
+    }
+
+    #[test]
+    fn the_thesis_s_flat_block_has_an_inertia_no_solid_has() {
+        let two = Scene::builtin("two_blocks").unwrap();
+        assert_eq!(unphysical_inertia(&two).collect::<Vec<_>>(), ["blockB"]);
+        let one = Scene::builtin("one_block").unwrap();
+        assert_eq!(unphysical_inertia(&one).count(), 0);
     }
 
     #[test]

@@ -25,6 +25,12 @@ pub(super) struct OnMujoco {
 impl OnMujoco {
     /// The MuJoCo model of `scene` (validated).
     pub(super) fn new(scene: &Scene) -> Result<OnMujoco, MujocoError> {
+        for name in mjcf::unphysical_inertia(scene) {
+            tracing::warn!(
+                "`{name}`: its inertia breaks A + B ≥ C, which no solid does; MuJoCo uses the \
+                 mean of its diagonal instead (ODE takes it as given)"
+            );
+        }
         let sim = Simulation::from_mjcf(&mjcf::mjcf(scene))?;
         let mut bodies = Vec::with_capacity(scene.bodies.len());
         for (i, spec) in scene.bodies.iter().enumerate() {
