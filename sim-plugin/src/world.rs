@@ -157,9 +157,7 @@ pub enum WorldError {
     #[cfg(feature = "mujoco")]
     #[error("MuJoCo: {0}")]
     Mujoco(#[from] mujoco::MujocoError),
-    #[error(
-        "this build has no {0} engine (sim-plugin was built without its `{0}` cargo feature)"
-    )]
+    #[error("this build has no {0} engine (sim-plugin was built without its `{0}` cargo feature)")]
     EngineMissing(Engine),
 }
 
@@ -825,7 +823,9 @@ impl World {
                 on.drive_actuator(self.actuator, drive, self.mode, &mut self.direction);
                 // MuJoCo resets its data itself when a state goes bad, so
                 // which body it was is no longer known.
-                on.step().err().map(|reason| ("the MuJoCo model".to_owned(), reason))
+                on.step()
+                    .err()
+                    .map(|reason| ("the MuJoCo model".to_owned(), reason))
             }
         };
         self.step_count += 1;

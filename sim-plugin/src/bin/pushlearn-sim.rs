@@ -55,7 +55,8 @@ enum Cmd {
         after_help = "Examples:\n  \
             pushlearn-sim                                   realtime, 127.0.0.1:11345\n  \
             pushlearn-sim serve --mode lockstep --port 0    lock-step on a free port\n  \
-            pushlearn-sim serve --mode lockstep --latency-max 2 --latency-seed 7"
+            pushlearn-sim serve --mode lockstep --latency-max 2 --latency-seed 7\n  \
+            pushlearn-sim serve --mode lockstep --engine mujoco"
     )]
     Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
@@ -230,6 +231,10 @@ struct ServeArgs {
     /// it is killed with SIGKILL and cannot stop it.
     #[arg(long)]
     stop_with_stdin: bool,
+    /// Physics engine: `ode` (the thesis's, every published number) or `mujoco` (the
+    /// held-out engine, docs/world.md "Two engines"; the Hello names it).
+    #[arg(long, value_name = "ENGINE", default_value_t = Engine::Ode)]
+    engine: Engine,
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
@@ -315,6 +320,7 @@ fn serve_config(args: &ServeArgs) -> anyhow::Result<Config> {
         client_queue: args.client_queue,
         slow_client_limit: args.slow_client_timeout,
         idle_limit: args.idle_timeout,
+        engine: args.engine,
         ..Config::new(scene)
     })
 }

@@ -201,7 +201,8 @@ mod tests {
         });
         assert_eq!(pair_friction(&scene, GROUND_NAME, "blockA"), (0.3, 0.2));
         let xml = mjcf(&scene);
-        assert!(xml.contains("geom1=\"ground_plane\" geom2=\"blockA\" condim=\"3\" friction=\"0.3 0.2 "));
+        assert!(xml
+            .contains("geom1=\"ground_plane\" geom2=\"blockA\" condim=\"3\" friction=\"0.3 0.2 "));
         // Every pair once: three geoms, three pairs.
         assert_eq!(xml.matches("<pair ").count(), 3);
     }
@@ -219,7 +220,10 @@ mod tests {
         let mut scene = Scene::builtin("one_block").unwrap();
         scene.bodies[1].name = "a<b&\"c".into();
         let xml = mjcf(&scene);
-        assert!(xml.contains("type=\"box\" size=\"0.25 0.05 0.05\""), "{xml}");
+        assert!(
+            xml.contains("type=\"box\" size=\"0.25 0.05 0.05\""),
+            "{xml}"
+        );
         assert!(xml.contains("name=\"a&lt;b&amp;&quot;c\""), "{xml}");
     }
 }

@@ -73,7 +73,10 @@ impl OnMujoco {
 
     pub(super) fn set_pose(&mut self, i: usize, position: [f64; 3], orientation: [f64; 4]) {
         // Every value was checked by the world, so the engine cannot refuse it.
-        if let Err(e) = self.sim.set_pose(self.bodies[i].joint, position, orientation) {
+        if let Err(e) = self
+            .sim
+            .set_pose(self.bodies[i].joint, position, orientation)
+        {
             tracing::error!("SetPose refused by MuJoCo: {e}");
         }
     }
@@ -142,7 +145,12 @@ impl OnMujoco {
         self.bodies.iter().enumerate().find_map(|(i, b)| {
             let (p, q) = self.sim.pose(b.joint);
             let (v, w) = self.sim.velocity(b.joint);
-            let finite = p.iter().chain(&q).chain(&v).chain(&w).all(|x| x.is_finite());
+            let finite = p
+                .iter()
+                .chain(&q)
+                .chain(&v)
+                .chain(&w)
+                .all(|x| x.is_finite());
             if !finite {
                 Some((i, "a non-finite state"))
             } else if p.iter().any(|x| x.abs() > MAX_POSITION) {
