@@ -988,6 +988,54 @@ mod tests {
         assert_eq!(world.step_count(), 10);
     }
 
+    /// Every built-in scene builds on both engines and steps a push with
+    /// the same command handling; a blow-up resets on MuJoCo as on ODE.
+    #[cfg(feature = "mujoco")]
+    #[test]
+    fn every_built_in_scene_runs_on_both_engines() {
+        for name in Scene::builtin_names() {
+            let scene = Scene::builtin(name).unwrap();
+            for engine in Engine::ALL {
+                let mut world = World::on(&scene, engine).unwrap();
+                assert_eq!(world.engine(), engine);
+                let start = world.snapshot();
+                world
+                    .apply(Command::Actuator {
+                        mode: ActuatorMode::Move,
+                        velocity: [0.0, 0.5, 0.0],
+                    })
+                    .unwrap();
+                for _ in 0..100 {
+                    world.step().unwrap();
+                }
+                let after = world.snapshot();
+                let actuator = |s: &Snapshot| s.body(ACTUATOR).unwrap().position;
+                // 0.1 s at 0.5 m/s, held at the z clamp.
+                let moved = actuator(&after)[1] - actuator(&start)[1];
+                assert!((moved - 0.05).abs() < 1e-6, "{name} on {engine}: {moved}");
+                assert_eq!(actuator(&after)[2], scene.drive.z_clamp);
+                world.provoke_blow_up("blockA").unwrap();
+                assert!(matches!(
+                    world.step(),
+                    Err(StepError::Diverged { body, .. }) if body == "blockA"
+                ));
+                assert_eq!(world.snapshot().bodies, start.bodies, "{name} on {engine}");
+            }
+        }
+    }
+
+    #[test]
+    fn engines_are_named_as_the_flag_and_the_hello_say() {
+        for engine in Engine::ALL {
+            assert_eq!(engine.as_str().parse::<Engine>(), Ok(engine));
+        }
+        assert!("bullet"
+            .parse::<Engine>()
+            .unwrap_err()
+            .contains("ode, mujoco"));
+        assert_eq!(Engine::default(), Engine::Ode);
+    }
+
     #[test]
     fn gazebo_softness_for_two_default_surfaces() {
         let s = combine((0.9, 0.9, 1e12, 1.0), (0.01, 0.02, 1e12, 1.0), 0.001, None).unwrap();
