@@ -24,6 +24,11 @@ done
 missing=()
 command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
 if ! pkg-config --atleast-version=0.16 ode 2>/dev/null; then missing+=(libode-dev); fi
+# The second engine (crates/mujoco-sys): MuJoCo 2.2. Debian ships no
+# pkg-config file for it, so the header is the sign it is there.
+if ! grep -qs '^#define mjVERSION_HEADER 22[0-9]' /usr/include/mujoco/mujoco.h; then
+  missing+=(libmujoco-dev)
+fi
 # bindgen loads libclang at build time.
 if ! ls /usr/lib/llvm-*/lib/libclang.so* /usr/lib/x86_64-linux-gnu/libclang*.so* >/dev/null 2>&1; then
   missing+=(libclang-dev)

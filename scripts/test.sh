@@ -11,6 +11,9 @@ cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --locked -- -D warnings
 # The learner daemon alone (no experiments, figures or viewer) still builds.
 cargo clippy -p pushlearn-cli --no-default-features --all-targets --locked -- -D warnings
+# The world daemon without MuJoCo (sim-plugin's default feature `mujoco`
+# off) still builds: it links libode alone (docs/world.md, "Two engines").
+cargo build -p sim-plugin --no-default-features --locked
 cargo test --workspace --locked
 # The committed results still match the code: a change that moves a number
 # cannot land without `pushlearn reproduce --quick` (docs/results.md).

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::scene::{Scene, ACTUATOR};
-use crate::world::{ActuatorMode, Command, CommandError, StepError, World, WorldError};
+use crate::world::{ActuatorMode, Command, CommandError, Engine, StepError, World, WorldError};
 
 /// The body whose motion the sweep reports (the blue block).
 pub const BLUE_BLOCK: &str = pushlearn_core::BLUE_NAME;
@@ -24,6 +24,8 @@ pub struct SweepOptions {
     /// block's start for every run while the blue block takes its place
     /// (the new objects of the `objects` scene).
     pub body: String,
+    /// The engine the world runs on.
+    pub engine: Engine,
 }
 
 impl SweepOptions {
@@ -42,6 +44,7 @@ impl Default for SweepOptions {
             messages: 150,
             rate_hz: 100,
             body: BLUE_BLOCK.to_owned(),
+            engine: Engine::Ode,
         }
     }
 }
@@ -76,9 +79,9 @@ pub enum SweepError {
     Step(#[from] StepError),
 }
 
-/// Runs the sweep on a fresh world of `scene`.
+/// Runs the sweep on a fresh world of `scene` on `options.engine`.
 pub fn sweep(scene: &Scene, options: &SweepOptions) -> Result<Vec<SweepRow>, SweepError> {
-    let mut world = World::new(scene)?;
+    let mut world = World::on(scene, options.engine)?;
     sweep_world(&mut world, options)
 }
 

@@ -2,8 +2,9 @@
 //!
 //! * [`scene`]: the world as data (TOML scene files, the embedded thesis
 //!   scenes);
-//! * [`world`]: the faithful thesis world on ODE — bodies, contacts, the
-//!   per-step actuator drive, commands, ghosts and publishing;
+//! * [`world`]: the faithful thesis world on ODE, or on MuJoCo (feature
+//!   `mujoco`, on by default) — bodies, contacts, the per-step actuator
+//!   drive, commands, ghosts and publishing;
 //! * [`calibration`]: the calibration sweep of `docs/spec/world.md` §10;
 //! * [`generate`]: objects drawn from seeded distributions, as scenes;
 //! * [`push_run`]: push-task runs as the experiment driver records them.
@@ -28,8 +29,8 @@ pub mod world;
 pub use calibration::{sweep, SweepOptions, SweepRow};
 pub use scene::Scene;
 pub use world::{
-    check_command, ActuatorMode, BodyState, Command, CommandError, Snapshot, StepError, World,
-    WorldError,
+    check_command, ActuatorMode, BodyState, Command, CommandError, Engine, Snapshot, StepError,
+    World, WorldError,
 };
 
 /// The top-level collision space kinds (for the hash-space regression test).

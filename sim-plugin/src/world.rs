@@ -1,4 +1,13 @@
-//! The thesis world (`docs/spec/world.md` §2–§7) on the `ode` wrapper.
+//! The thesis world (`docs/spec/world.md` §2–§7) on one of two engines: ODE
+//! (the `ode` wrapper, the thesis's engine) or MuJoCo (the `mujoco` wrapper,
+//! cargo feature `mujoco`; `docs/world.md`, "Two engines"). Commands,
+//! ghosts, publishing and the divergence check are the world's own; the
+//! engines only build the scene, drive the actuator, step and report.
+
+#[cfg(feature = "mujoco")]
+mod mjcf;
+#[cfg(feature = "mujoco")]
+mod on_mujoco;
 
 use ode::{
     BodyBuilder, BodyHandle, ContactMode, GeomBuilder, OdeError, SpaceKind, Surface, SurfaceParams,
@@ -21,6 +30,57 @@ pub use pushlearn::wire::MAX_POSITION;
 /// Distinct ghost names kept at once; a client cannot grow the world's
 /// memory without bound.
 pub const MAX_GHOSTS: usize = 64;
+
+/// The physics engine a world runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    /// The Open Dynamics Engine, as the thesis's Gazebo 2.x ran it: every
+    /// published number.
+    #[default]
+    Ode,
+    /// MuJoCo 2.2, the held-out engine (`docs/world.md`, "Two engines").
+    Mujoco,
+}
+
+impl Engine {
+    /// Both, ODE first.
+    pub const ALL: [Engine; 2] = [Engine::Ode, Engine::Mujoco];
+
+    /// The name flags and the Hello use: `ode` or `mujoco`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Engine::Ode => "ode",
+            Engine::Mujoco => "mujoco",
+        }
+    }
+
+    /// Whether this build carries the engine (MuJoCo is the `mujoco` cargo
+    /// feature, on by default).
+    pub fn is_available(self) -> bool {
+        match self {
+            Engine::Ode => true,
+            Engine::Mujoco => cfg!(feature = "mujoco"),
+        }
+    }
+}
+
+impl std::fmt::Display for Engine {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl std::str::FromStr for Engine {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Engine, String> {
+        Engine::ALL
+            .into_iter()
+            .find(|e| e.as_str() == s)
+            .ok_or_else(|| format!("unknown engine `{s}` (engines: ode, mujoco)"))
+    }
+}
 
 /// The actuator's stored command (`ActuatorCommand.cmd` of the protocol).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -94,6 +154,11 @@ pub enum WorldError {
     Scene(#[from] crate::scene::SceneError),
     #[error("physics engine: {0}")]
     Ode(#[from] OdeError),
+    #[cfg(feature = "mujoco")]
+    #[error("MuJoCo: {0}")]
+    Mujoco(#[from] mujoco::MujocoError),
+    #[error("this build has no {0} engine (sim-plugin was built without its `{0}` cargo feature)")]
+    EngineMissing(Engine),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -308,42 +373,19 @@ fn combine(
     .check()
 }
 
-/// The simulated thesis world: bodies from a [`Scene`], the actuator drive,
-/// commands, ghosts and publishing.
-pub struct World {
-    scene: Scene,
+/// The ODE side of a world: its bodies, contact surfaces and the pairs the
+/// collider reported.
+struct OnOde {
     ode: ode::World,
     bodies: Vec<SimBody>,
-    actuator: usize,
     surfaces: SurfaceTable,
-    mode: ActuatorMode,
-    direction: [f64; 3],
-    paused: bool,
-    step_count: u64,
-    publish_every: u32,
-    ghosts: Vec<BodyState>,
     /// Tag pairs (smaller first) the collider reported touching in the last
     /// step.
     touching: Vec<(u32, u32)>,
-    /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
-    #[cfg(feature = "testing")]
-    blow_up: Option<usize>,
-    /// How long the steps so far waited for other worlds of this process
-    /// to finish theirs (ODE's process-wide lock).
-    waited_for_ode: std::time::Duration,
 }
 
-impl World {
-    /// Builds the world of `scene` with the top-level simple space the thesis
-    /// world needs.
-    pub fn new(scene: &Scene) -> Result<World, WorldError> {
-        World::with_space(scene, SpaceKind::Simple)
-    }
-
-    /// Like [`World::new`] with a chosen top-level space. Only the libode 0.16
-    /// hash-space regression test wants anything but [`SpaceKind::Simple`].
-    pub fn with_space(scene: &Scene, space: SpaceKind) -> Result<World, WorldError> {
-        scene.validate()?;
+impl OnOde {
+    fn new(scene: &Scene, space: SpaceKind) -> Result<OnOde, WorldError> {
         let mut ode = ode::World::new(scene.step_params(), space)?;
         ode.insert_geom(GeomBuilder::plane([0.0, 0.0, 1.0], 0.0).tag(0))?;
         let mut bodies = Vec::with_capacity(scene.bodies.len());
@@ -383,6 +425,185 @@ impl World {
                 centre_of_mass,
             });
         }
+        Ok(OnOde {
+            surfaces: SurfaceTable::new(scene)?,
+            ode,
+            bodies,
+            touching: Vec::new(),
+        })
+    }
+
+    fn reset(&mut self) -> Result<(), OdeError> {
+        for b in &self.bodies {
+            let mut body = self.ode.body_mut(b.handle)?;
+            b.place(&mut body, b.start_position, b.start_orientation)?;
+            body.reset_dynamics();
+        }
+        // QuickStep's row shuffling draws from this stream: seeding it at
+        // every reset makes runs reproducible (`docs/spec/world.md` §12).
+        self.ode.set_rand_seed(0);
+        self.touching.clear();
+        Ok(())
+    }
+
+    fn set_pose(&mut self, i: usize, position: [f64; 3], orientation: [f64; 4]) {
+        let sim = &self.bodies[i];
+        let set = self.ode.body_mut(sim.handle).and_then(|mut b| {
+            sim.place(&mut b, position, orientation)?;
+            // A sleeping body moved into the air would otherwise hang there.
+            b.enable();
+            Ok(())
+        });
+        // Every value was checked by the world, so the engine cannot refuse it.
+        if let Err(e) = set {
+            tracing::error!("SetPose `{}` refused by the engine: {e}", sim.name);
+        }
+    }
+
+    /// `docs/spec/world.md` §5, steps 1–3, in that order.
+    fn drive_actuator(
+        &mut self,
+        actuator: usize,
+        drive: &crate::scene::Drive,
+        mode: ActuatorMode,
+        direction: &mut [f64; 3],
+    ) -> Result<(), OdeError> {
+        let mut body = self.ode.body_mut(self.bodies[actuator].handle)?;
+        // The explicit wake-up keeps auto-disable from freezing the actuator.
+        body.enable();
+        let p = body.position();
+        if beyond_bound(p, *direction, drive) {
+            *direction = [0.0; 3];
+            body.set_linear_velocity([0.0; 3])?;
+        }
+        body.set_angular_velocity([0.0; 3])?;
+        if mode == ActuatorMode::Move {
+            body.set_linear_velocity(*direction)?;
+            body.set_position([p[0], p[1], drive.z_clamp])?;
+        }
+        Ok(())
+    }
+
+    /// One step; how long it waited for other worlds of the process.
+    fn step(&mut self) -> Result<std::time::Duration, OdeError> {
+        let surfaces = &self.surfaces;
+        let touching = &mut self.touching;
+        touching.clear();
+        let report = self.ode.step(|pair| {
+            let (a, b) = (pair.first.tag, pair.second.tag);
+            let key = (a.min(b), a.max(b));
+            if !touching.contains(&key) {
+                touching.push(key);
+            }
+            surfaces.get(a, b)
+        })?;
+        Ok(report.waited_for_lock)
+    }
+
+    #[cfg(feature = "testing")]
+    fn poison(&mut self, i: usize) {
+        if let Ok(mut body) = self.ode.body_mut(self.bodies[i].handle) {
+            body.poison_for_test();
+        }
+    }
+
+    /// The first body whose state is lost, and how.
+    fn lost(&self) -> Option<(usize, &'static str)> {
+        self.bodies.iter().enumerate().find_map(|(i, b)| {
+            let Ok(body) = self.ode.body(b.handle) else {
+                return Some((i, "a non-finite state"));
+            };
+            let finite = (body.position().iter())
+                .chain(&body.orientation())
+                .chain(&body.linear_velocity())
+                .chain(&body.angular_velocity())
+                .all(|v| v.is_finite());
+            if !finite {
+                Some((i, "a non-finite state"))
+            } else if body.position().iter().any(|v| v.abs() > MAX_POSITION) {
+                Some((i, "a position beyond ±1000 m"))
+            } else {
+                None
+            }
+        })
+    }
+
+    fn states(&self) -> Vec<BodyState> {
+        self.bodies
+            .iter()
+            .filter_map(|b| Some(b.state(&self.ode.body(b.handle).ok()?)))
+            .collect()
+    }
+}
+
+/// Whether the actuator's next position, `p + direction` (the velocity read
+/// as one second's travel, as the thesis's plugin did), leaves the bound.
+fn beyond_bound(p: [f64; 3], direction: [f64; 3], drive: &crate::scene::Drive) -> bool {
+    let ahead: f64 = (0..3)
+        .map(|k| (p[k] + direction[k] - drive.bound_centre[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    ahead > drive.bound_radius
+}
+
+/// The engine a world runs on, with everything that engine keeps.
+enum Physics {
+    Ode(Box<OnOde>),
+    #[cfg(feature = "mujoco")]
+    Mujoco(Box<on_mujoco::OnMujoco>),
+}
+
+/// The simulated thesis world: bodies from a [`Scene`], the actuator drive,
+/// commands, ghosts and publishing.
+pub struct World {
+    scene: Scene,
+    physics: Physics,
+    actuator: usize,
+    mode: ActuatorMode,
+    direction: [f64; 3],
+    paused: bool,
+    step_count: u64,
+    publish_every: u32,
+    ghosts: Vec<BodyState>,
+    /// [`World::provoke_blow_up`]'s body, poisoned after the next step.
+    #[cfg(feature = "testing")]
+    blow_up: Option<usize>,
+    /// How long the steps so far waited for other worlds of this process
+    /// to finish theirs (ODE's process-wide lock).
+    waited_for_ode: std::time::Duration,
+}
+
+impl World {
+    /// Builds the world of `scene` on ODE with the top-level simple space the
+    /// thesis world needs.
+    pub fn new(scene: &Scene) -> Result<World, WorldError> {
+        World::with_space(scene, SpaceKind::Simple)
+    }
+
+    /// Builds the world of `scene` on `engine`.
+    pub fn on(scene: &Scene, engine: Engine) -> Result<World, WorldError> {
+        match engine {
+            Engine::Ode => World::new(scene),
+            #[cfg(feature = "mujoco")]
+            Engine::Mujoco => {
+                scene.validate()?;
+                let physics = Physics::Mujoco(Box::new(on_mujoco::OnMujoco::new(scene)?));
+                World::around(scene, physics)
+            }
+            #[cfg(not(feature = "mujoco"))]
+            Engine::Mujoco => Err(WorldError::EngineMissing(engine)),
+        }
+    }
+
+    /// Like [`World::new`] with a chosen top-level space. Only the libode 0.16
+    /// hash-space regression test wants anything but [`SpaceKind::Simple`].
+    pub fn with_space(scene: &Scene, space: SpaceKind) -> Result<World, WorldError> {
+        scene.validate()?;
+        let physics = Physics::Ode(Box::new(OnOde::new(scene, space)?));
+        World::around(scene, physics)
+    }
+
+    fn around(scene: &Scene, physics: Physics) -> Result<World, WorldError> {
         let actuator =
             scene
                 .body_index(ACTUATOR)
@@ -391,10 +612,8 @@ impl World {
                     problem: format!("no body named `{ACTUATOR}`"),
                 })?;
         let mut world = World {
-            surfaces: SurfaceTable::new(scene)?,
             scene: scene.clone(),
-            ode,
-            bodies,
+            physics,
             actuator,
             mode: ActuatorMode::Nothing,
             direction: [0.0; 3],
@@ -402,7 +621,6 @@ impl World {
             step_count: 0,
             publish_every: STEPS_PER_SECOND / scene.publish_rate_hz,
             ghosts: Vec::new(),
-            touching: Vec::new(),
             #[cfg(feature = "testing")]
             blow_up: None,
             waited_for_ode: std::time::Duration::ZERO,
@@ -411,6 +629,15 @@ impl World {
         // one agree bit for bit (including ODE's internal geom order).
         world.reset()?;
         Ok(world)
+    }
+
+    /// The engine this world runs on.
+    pub fn engine(&self) -> Engine {
+        match self.physics {
+            Physics::Ode(_) => Engine::Ode,
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(_) => Engine::Mujoco,
+        }
     }
 
     pub fn scene(&self) -> &Scene {
@@ -423,6 +650,7 @@ impl World {
 
     /// How long this world's steps have waited for other worlds of the
     /// process to finish theirs: ODE steps one world at a time per process.
+    /// Always zero on MuJoCo, whose worlds share nothing.
     pub fn waited_for_ode(&self) -> std::time::Duration {
         self.waited_for_ode
     }
@@ -454,7 +682,11 @@ impl World {
             return false;
         };
         let key = (ta.min(tb), ta.max(tb));
-        self.touching.contains(&key)
+        match &self.physics {
+            Physics::Ode(on) => on.touching.contains(&key),
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(on) => on.touched(key),
+        }
     }
 
     fn tag_of(&self, name: &str) -> Option<u32> {
@@ -508,16 +740,10 @@ impl World {
         let Some(i) = self.scene.body_index(&name) else {
             return Err(CommandError::UnknownBody(name));
         };
-        let sim = &self.bodies[i];
-        let set = self.ode.body_mut(sim.handle).and_then(|mut b| {
-            sim.place(&mut b, position, unit)?;
-            // A sleeping body moved into the air would otherwise hang there.
-            b.enable();
-            Ok(())
-        });
-        // Every value was checked above, so the engine cannot refuse it.
-        if let Err(e) = set {
-            tracing::error!("SetPose `{name}` refused by the engine: {e}");
+        match &mut self.physics {
+            Physics::Ode(on) => on.set_pose(i, position, unit),
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(on) => on.set_pose(i, position, unit),
         }
         Ok(())
     }
@@ -544,6 +770,7 @@ impl World {
         orientation: [f64; 4],
     ) -> Result<(), CommandError> {
         let id = self
+            .scene
             .bodies
             .iter()
             .find(|b| b.name == ghost.of)
@@ -567,18 +794,14 @@ impl World {
         Ok(())
     }
 
-    fn reset(&mut self) -> Result<(), OdeError> {
-        for b in &self.bodies {
-            let mut body = self.ode.body_mut(b.handle)?;
-            b.place(&mut body, b.start_position, b.start_orientation)?;
-            body.reset_dynamics();
+    fn reset(&mut self) -> Result<(), WorldError> {
+        match &mut self.physics {
+            Physics::Ode(on) => on.reset()?,
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(on) => on.reset()?,
         }
-        // QuickStep's row shuffling draws from this stream: seeding it at
-        // every reset makes runs reproducible (`docs/spec/world.md` §12).
-        self.ode.set_rand_seed(0);
         self.step_count = 0;
         self.ghosts.clear();
-        self.touching.clear();
         Ok(())
     }
 
@@ -588,54 +811,53 @@ impl World {
         if self.paused {
             return Ok(None);
         }
-        self.drive_actuator()?;
-        let surfaces = &self.surfaces;
-        let touching = &mut self.touching;
-        touching.clear();
-        let report = self.ode.step(|pair| {
-            let (a, b) = (pair.first.tag, pair.second.tag);
-            let key = (a.min(b), a.max(b));
-            if !touching.contains(&key) {
-                touching.push(key);
+        let drive = &self.scene.drive;
+        let lost = match &mut self.physics {
+            Physics::Ode(on) => {
+                on.drive_actuator(self.actuator, drive, self.mode, &mut self.direction)?;
+                self.waited_for_ode += on.step()?;
+                None
             }
-            surfaces.get(a, b)
-        })?;
-        self.waited_for_ode += report.waited_for_lock;
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(on) => {
+                on.drive_actuator(self.actuator, drive, self.mode, &mut self.direction);
+                // MuJoCo resets its data itself when a state goes bad, so
+                // which body it was is no longer known.
+                on.step()
+                    .err()
+                    .map(|reason| ("the MuJoCo model".to_owned(), reason))
+            }
+        };
         self.step_count += 1;
         #[cfg(feature = "testing")]
         if let Some(i) = self.blow_up.take() {
-            if let Ok(mut body) = self.ode.body_mut(self.bodies[i].handle) {
-                body.poison_for_test();
+            match &mut self.physics {
+                Physics::Ode(on) => on.poison(i),
+                #[cfg(feature = "mujoco")]
+                Physics::Mujoco(on) => on.poison(i),
             }
         }
         // A body beyond the bounds a SetPose may reach (bodies placed
         // overlapping are shot apart, and reached 1130 m) is as lost as a
         // non-finite one: the world resets rather than publish it.
-        let lost = self.bodies.iter().find_map(|b| {
-            let Ok(body) = self.ode.body(b.handle) else {
-                return Some((b, "a non-finite state"));
+        let lost = lost.or_else(|| {
+            let found = match &self.physics {
+                Physics::Ode(on) => on.lost(),
+                #[cfg(feature = "mujoco")]
+                Physics::Mujoco(on) => on.lost(),
             };
-            let finite = (body.position().iter())
-                .chain(&body.orientation())
-                .chain(&body.linear_velocity())
-                .chain(&body.angular_velocity())
-                .all(|v| v.is_finite());
-            if !finite {
-                Some((b, "a non-finite state"))
-            } else if body.position().iter().any(|v| v.abs() > MAX_POSITION) {
-                Some((b, "a position beyond ±1000 m"))
-            } else {
-                None
-            }
+            found.map(|(i, what)| (self.scene.bodies[i].name.clone(), what))
         });
-        if let Some((bad, what)) = lost {
+        if let Some((body, what)) = lost {
             let err = StepError::Diverged {
                 step: self.step_count,
-                body: bad.name.clone(),
+                body,
                 what,
             };
             tracing::error!("{err}");
-            self.reset()?;
+            if let Err(e) = self.reset() {
+                tracing::error!("reset after the blow-up failed: {e}");
+            }
             return Err(err);
         }
         if self
@@ -648,36 +870,13 @@ impl World {
         }
     }
 
-    /// `docs/spec/world.md` §5, steps 1–3, in that order.
-    fn drive_actuator(&mut self) -> Result<(), OdeError> {
-        let drive = &self.scene.drive;
-        let mut body = self.ode.body_mut(self.bodies[self.actuator].handle)?;
-        // The explicit wake-up keeps auto-disable from freezing the actuator.
-        body.enable();
-        let p = body.position();
-        let ahead: f64 = (0..3)
-            .map(|k| (p[k] + self.direction[k] - drive.bound_centre[k]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if ahead > drive.bound_radius {
-            self.direction = [0.0; 3];
-            body.set_linear_velocity([0.0; 3])?;
-        }
-        body.set_angular_velocity([0.0; 3])?;
-        if self.mode == ActuatorMode::Move {
-            body.set_linear_velocity(self.direction)?;
-            body.set_position([p[0], p[1], drive.z_clamp])?;
-        }
-        Ok(())
-    }
-
     /// The current state of every dynamic body and ghost.
     pub fn snapshot(&self) -> Snapshot {
-        let bodies = self
-            .bodies
-            .iter()
-            .filter_map(|b| Some(b.state(&self.ode.body(b.handle).ok()?)))
-            .collect();
+        let bodies = match &self.physics {
+            Physics::Ode(on) => on.states(),
+            #[cfg(feature = "mujoco")]
+            Physics::Mujoco(on) => on.states(&self.scene),
+        };
         Snapshot {
             step: self.step_count,
             sim_time: self.sim_time(),
@@ -787,6 +986,54 @@ mod tests {
             world.step().unwrap();
         }
         assert_eq!(world.step_count(), 10);
+    }
+
+    /// Every built-in scene builds on both engines and steps a push with
+    /// the same command handling; a blow-up resets on MuJoCo as on ODE.
+    #[cfg(feature = "mujoco")]
+    #[test]
+    fn every_built_in_scene_runs_on_both_engines() {
+        for name in Scene::builtin_names() {
+            let scene = Scene::builtin(name).unwrap();
+            for engine in Engine::ALL {
+                let mut world = World::on(&scene, engine).unwrap();
+                assert_eq!(world.engine(), engine);
+                let start = world.snapshot();
+                world
+                    .apply(Command::Actuator {
+                        mode: ActuatorMode::Move,
+                        velocity: [0.0, 0.5, 0.0],
+                    })
+                    .unwrap();
+                for _ in 0..100 {
+                    world.step().unwrap();
+                }
+                let after = world.snapshot();
+                let actuator = |s: &Snapshot| s.body(ACTUATOR).unwrap().position;
+                // 0.1 s at 0.5 m/s, held at the z clamp.
+                let moved = actuator(&after)[1] - actuator(&start)[1];
+                assert!((moved - 0.05).abs() < 1e-6, "{name} on {engine}: {moved}");
+                assert_eq!(actuator(&after)[2], scene.drive.z_clamp);
+                world.provoke_blow_up("blockA").unwrap();
+                assert!(matches!(
+                    world.step(),
+                    Err(StepError::Diverged { body, .. }) if body == "blockA"
+                ));
+                assert_eq!(world.snapshot().bodies, start.bodies, "{name} on {engine}");
+            }
+        }
+    }
+
+    #[test]
+    fn engines_are_named_as_the_flag_and_the_hello_say() {
+        for engine in Engine::ALL {
+            assert_eq!(engine.as_str().parse::<Engine>(), Ok(engine));
+        }
+        assert!("bullet"
+            .parse::<Engine>()
+            .unwrap_err()
+            .contains("ode, mujoco"));
+        assert_eq!(Engine::default(), Engine::Ode);
     }
 
     #[test]

@@ -17,10 +17,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("pushlearn-core", &[]),
     ("ode-sys", &[]),
     ("ode", &["ode-sys"]),
+    ("mujoco-sys", &[]),
+    ("mujoco", &["mujoco-sys"]),
     ("pushlearn", &["pushlearn-core"]),
     ("memories", &[]),
     ("learner", &["memories", "pushlearn-core"]),
-    ("sim-plugin", &["ode", "pushlearn", "pushlearn-core"]),
+    (
+        "sim-plugin",
+        &["mujoco", "ode", "pushlearn", "pushlearn-core"],
+    ),
     (
         "pushlearn-python",
         &[

@@ -20,6 +20,7 @@ use sim_plugin::server::{
     Config, Latency, Server, Timing, DEFAULT_CLIENT_QUEUE, DEFAULT_MAX_CLIENTS, DEFAULT_PORT,
     DEFAULT_REAL_TIME_RATE,
 };
+use sim_plugin::world::Engine;
 use sim_plugin::{Scene, SweepOptions, SweepRow};
 
 #[derive(Debug, Parser)]
@@ -54,7 +55,8 @@ enum Cmd {
         after_help = "Examples:\n  \
             pushlearn-sim                                   realtime, 127.0.0.1:11345\n  \
             pushlearn-sim serve --mode lockstep --port 0    lock-step on a free port\n  \
-            pushlearn-sim serve --mode lockstep --latency-max 2 --latency-seed 7"
+            pushlearn-sim serve --mode lockstep --latency-max 2 --latency-seed 7\n  \
+            pushlearn-sim serve --mode lockstep --engine mujoco"
     )]
     Serve(ServeArgs),
     /// Run the calibration sweep: the push (0, 0.5) m/s from 21 starts x0 = -0.35 … 0.35,
@@ -229,6 +231,10 @@ struct ServeArgs {
     /// it is killed with SIGKILL and cannot stop it.
     #[arg(long)]
     stop_with_stdin: bool,
+    /// Physics engine: `ode` (the thesis's, every published number) or `mujoco` (the
+    /// held-out engine, docs/world.md "Two engines"; the Hello names it).
+    #[arg(long, value_name = "ENGINE", default_value_t = Engine::Ode)]
+    engine: Engine,
 }
 
 fn parse_seconds(text: &str) -> Result<Duration, String> {
@@ -250,6 +256,10 @@ struct SweepArgs {
     /// --body cylinder`, docs/world.md "New objects").
     #[arg(long, value_name = "NAME", default_value = sim_plugin::calibration::BLUE_BLOCK)]
     body: String,
+    /// Physics engine: `ode` (the thesis's, every published number) or `mujoco` (the
+    /// held-out engine, docs/world.md "Two engines").
+    #[arg(long, value_name = "ENGINE", default_value_t = Engine::Ode)]
+    engine: Engine,
 }
 
 fn main() -> ExitCode {
@@ -310,6 +320,7 @@ fn serve_config(args: &ServeArgs) -> anyhow::Result<Config> {
         client_queue: args.client_queue,
         slow_client_limit: args.slow_client_timeout,
         idle_limit: args.idle_timeout,
+        engine: args.engine,
         ..Config::new(scene)
     })
 }
@@ -498,6 +509,7 @@ fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {
     tracing::info!(scene = %scene.name, "running the calibration sweep");
     let options = SweepOptions {
         body: args.body.clone(),
+        engine: args.engine,
         ..SweepOptions::default()
     };
     let rows = sim_plugin::sweep(&scene, &options).context("running the sweep")?;
@@ -506,7 +518,7 @@ fn run_sweep(args: &SweepArgs) -> anyhow::Result<()> {
         serde_json::to_writer_pretty(&mut out, &rows)?;
         writeln!(out)?;
     } else {
-        write_table(&mut out, &scene.name, &args.body, &rows)?;
+        write_table(&mut out, &scene.name, &args.body, args.engine, &rows)?;
     }
     Ok(())
 }
@@ -515,11 +527,12 @@ fn write_table(
     out: &mut impl Write,
     scene: &str,
     body: &str,
+    engine: Engine,
     rows: &[SweepRow],
 ) -> std::io::Result<()> {
     writeln!(
         out,
-        "calibration sweep, scene {scene}: push (0, 0.5) m/s, 150 messages at 100 Hz; body {body}"
+        "calibration sweep, scene {scene}: push (0, 0.5) m/s, 150 messages at 100 Hz; body {body}; engine {engine}"
     )?;
     writeln!(
         out,

@@ -7,7 +7,7 @@ use pushlearn::wire::{BodyName, InvalidCommand, TimingMode};
 
 use super::gate::{Op, Refusal};
 use crate::scene::{BodySpec, Scene, ShapeSpec};
-use crate::world::{check_command, ActuatorMode, BodyState, Command, Snapshot};
+use crate::world::{check_command, ActuatorMode, BodyState, Command, Engine, Snapshot};
 
 /// `ModelState.scale`: the original always sent (1, 1, 1).
 const UNIT_SCALE: pb::Vector3d = pb::Vector3d {
@@ -123,6 +123,7 @@ pub(super) fn hello(
     publish_rate: u32,
     timing: TimingMode,
     latency_max_steps: Option<u32>,
+    engine: Engine,
 ) -> pb::Hello {
     pb::Hello {
         scene: scene.name.clone(),
@@ -145,6 +146,7 @@ pub(super) fn hello(
         shapes: shapes(scene),
         latency_max_steps,
         max_speed: Some(scene.drive.max_speed),
+        engine: engine.as_str().into(),
     }
 }
 
@@ -251,7 +253,7 @@ mod tests {
     #[test]
     fn hello_gives_every_body_its_size() {
         let scene = Scene::builtin("two_blocks").expect("embedded scene");
-        let hello = hello(&scene, 100, TimingMode::Realtime, None);
+        let hello = hello(&scene, 100, TimingMode::Realtime, None, Engine::Ode);
         let shapes: Vec<_> = hello
             .shapes
             .iter()

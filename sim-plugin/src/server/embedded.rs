@@ -14,7 +14,7 @@ use super::gate::{operation, Admission, Refusal};
 use super::{convert, state_message, Latency, ServerError, Timing, MAX_QUEUED_COMMANDS};
 use crate::lockstep::{Accepted, Event, Op, Stepper};
 use crate::scene::Scene;
-use crate::world::{Command, StepError, World};
+use crate::world::{Command, Engine, StepError, World};
 
 /// The client id of the one client.
 const CLIENT: u64 = 1;
@@ -51,6 +51,7 @@ pub fn hold_for_fork() -> ForkHold {
 pub struct EmbeddedWorld {
     stepper: Stepper,
     scene: Scene,
+    engine: Engine,
     timing: Timing,
     publish_rate_hz: u32,
     admission: Admission,
@@ -83,7 +84,22 @@ impl EmbeddedWorld {
         publish_rate_hz: Option<u32>,
         latency: Option<Latency>,
     ) -> Result<EmbeddedWorld, ServerError> {
-        let mut world = World::new(&scene)?;
+        EmbeddedWorld::on(scene, Engine::Ode, publish_rate_hz, latency)
+    }
+
+    /// Like [`EmbeddedWorld::new`] on `engine`, as `pushlearn-sim serve
+    /// --mode lockstep --engine ENGINE` would start it.
+    ///
+    /// # Errors
+    /// The world cannot be built (or this build lacks the engine), or the
+    /// rate does not divide 1000.
+    pub fn on(
+        scene: Scene,
+        engine: Engine,
+        publish_rate_hz: Option<u32>,
+        latency: Option<Latency>,
+    ) -> Result<EmbeddedWorld, ServerError> {
+        let mut world = World::on(&scene, engine)?;
         if let Some(hz) = publish_rate_hz {
             world
                 .apply(Command::SetPublishRate(hz))
@@ -93,6 +109,7 @@ impl EmbeddedWorld {
             stepper: Stepper::new(world, latency),
             publish_rate_hz: publish_rate_hz.unwrap_or(scene.publish_rate_hz),
             scene,
+            engine,
             timing: Timing::Lockstep { latency },
             admission: Admission::default(),
             outbox: VecDeque::new(),
@@ -108,6 +125,7 @@ impl EmbeddedWorld {
             self.publish_rate_hz,
             self.timing.mode(),
             self.timing.latency().map(|latency| latency.max_steps),
+            self.engine,
         )
     }
 

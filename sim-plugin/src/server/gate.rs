@@ -25,7 +25,7 @@ use pushlearn::wire::{validate, BodyName, Ghost, InvalidCommand};
 
 use super::{convert, Config, Timing, MAX_QUEUED_COMMANDS};
 use crate::scene::Scene;
-use crate::world::{Command, CommandError, MAX_GHOSTS};
+use crate::world::{Command, CommandError, Engine, MAX_GHOSTS};
 
 pub(crate) use crate::lockstep::{Accepted, ClientId, Op};
 
@@ -99,6 +99,7 @@ struct Mirror {
 #[derive(Debug)]
 pub(crate) struct Gate {
     scene: Scene,
+    engine: Engine,
     timing: Timing,
     /// Current publish rate, for the Hello of new connections.
     publish_rate: AtomicU32,
@@ -111,6 +112,7 @@ impl Gate {
     pub fn new(config: &Config, physics: Sender<ToPhysics>) -> Gate {
         Gate {
             scene: config.scene.clone(),
+            engine: config.engine,
             timing: config.timing,
             publish_rate: AtomicU32::new(
                 config
@@ -138,6 +140,7 @@ impl Gate {
             self.publish_rate.load(Ordering::Relaxed),
             self.timing.mode(),
             self.timing.latency().map(|latency| latency.max_steps),
+            self.engine,
         )
     }
 

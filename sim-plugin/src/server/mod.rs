@@ -43,7 +43,7 @@ use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 
 use crate::scene::Scene;
-use crate::world::{CommandError, WorldError};
+use crate::world::{CommandError, Engine, WorldError};
 
 /// The port of the original Gazebo world, kept as the default.
 pub const DEFAULT_PORT: u16 = 11345;
@@ -127,6 +127,8 @@ pub struct Config {
     /// A client over which nothing passed this long, no frame read from it
     /// and none written to it, is disconnected.
     pub idle_limit: Duration,
+    /// The physics engine (`--engine`).
+    pub engine: Engine,
 }
 
 impl Config {
@@ -142,6 +144,7 @@ impl Config {
             client_queue: DEFAULT_CLIENT_QUEUE,
             slow_client_limit: DEFAULT_SLOW_CLIENT_LIMIT,
             idle_limit: DEFAULT_IDLE_LIMIT,
+            engine: Engine::Ode,
         }
     }
 

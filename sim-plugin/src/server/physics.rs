@@ -104,7 +104,7 @@ impl Physics {
         inbox: Receiver<ToPhysics>,
         shared: Arc<Shared>,
     ) -> Result<Physics, ServerError> {
-        let mut world = World::new(&config.scene)?;
+        let mut world = World::on(&config.scene, config.engine)?;
         if let Some(hz) = config.publish_rate_hz {
             world
                 .apply(Command::SetPublishRate(hz))

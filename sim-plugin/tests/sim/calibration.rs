@@ -264,3 +264,40 @@ fn the_new_objects_calibrate_like_the_blue_block() {
     };
     assert!(sweep(&scene, &unknown).is_err());
 }
+
+/// The second engine against the first (`docs/world.md`, "Two engines"):
+/// the same first contacts, the centred push's distance within 10 %, and
+/// every start's rotation of the same sign where both move the block. A
+/// MuJoCo model that breaks these is mis-mapped from the scene (sizes,
+/// masses, friction pairs, the drive), never a reason to tune it.
+#[cfg(feature = "mujoco")]
+#[test]
+fn mujoco_agrees_with_ode_on_the_calibration_targets() {
+    let scene = Scene::builtin("one_block").expect("embedded scene parses");
+    let options = SweepOptions {
+        engine: sim_plugin::Engine::Mujoco,
+        ..SweepOptions::default()
+    };
+    let mujoco = sweep(&scene, &options).expect("sweep runs on MuJoCo");
+    for (o, m) in grid().iter().zip(&mujoco) {
+        assert_eq!(
+            o.first_contact_message, m.first_contact_message,
+            "x0 = {}",
+            o.x0
+        );
+        let moved = |r: &SweepRow| r.translation > 1e-3;
+        assert_eq!(moved(o), moved(m), "x0 = {}", o.x0);
+        if moved(o) && o.rotation.abs() > 1e-3 {
+            assert_eq!(o.rotation.signum(), m.rotation.signum(), "x0 = {}", o.x0);
+        }
+    }
+    let (o, m) = (&grid()[10], &mujoco[10]);
+    assert_eq!(o.x0, 0.0);
+    let gap = (m.translation - o.translation).abs() / o.translation;
+    assert!(
+        gap < 0.1,
+        "centred push: ODE {} m, MuJoCo {} m",
+        o.translation,
+        m.translation
+    );
+}

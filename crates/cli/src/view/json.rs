@@ -338,6 +338,7 @@ mod tests {
             }],
             latency_max_steps: None,
             max_speed: None,
+            engine: String::new(),
         };
         let got = value(&Outgoing::hello("127.0.0.1:1", &hello));
         assert_eq!(got["type"], "hello");

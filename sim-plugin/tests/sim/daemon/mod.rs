@@ -8,3 +8,5 @@ mod binary;
 mod clients;
 mod commands;
 mod lockstep;
+#[cfg(feature = "mujoco")]
+mod mujoco;
