@@ -140,6 +140,9 @@ const CRATES: &[(&str, Table)] = &[
         &[
             ("process", &[]),
             ("output", &[]),
+            // Argument values several command lines share (clap's side of
+            // the model registry).
+            ("cli_args", &[]),
             ("frame", &[]),
             ("latency", &[]),
             ("scene", &[]),
@@ -170,6 +173,9 @@ const CRATES: &[(&str, Table)] = &[
             // the report's pieces.
             ("experiments", &["report"]),
             ("spec", &["experiments", "report"]),
+            // The experiments' arguments, lowered onto a spec: the command
+            // line's, a sweep's and `pushlearn.bench`'s.
+            ("args", &["spec"]),
             ("sweep", &["report"]),
             ("reproduce", &["experiments", "report", "spec", "sweep"]),
         ],

@@ -112,7 +112,8 @@ impl Spec {
     }
 
     /// The task's name in the learner protocol's Start.
-    fn task(&self) -> &'static str {
+    #[must_use]
+    pub fn task(&self) -> &'static str {
         match self {
             Spec::PushTask { .. } | Spec::DraftTables { .. } => "push-task",
             Spec::ConstantFeedback { .. } => "constant-feedback",
@@ -198,15 +199,60 @@ impl Spec {
         Ok(())
     }
 
+    /// The spec, checked ([`validate`](Self::validate)): what runs take, so
+    /// that a run checks its spec once, whoever made it.
+    ///
+    /// # Errors
+    /// As [`validate`](Self::validate).
+    pub fn validated(self) -> Result<Valid, SpecError> {
+        self.validate()?;
+        Ok(Valid(self))
+    }
+
+    /// The rate its learner is published world states at (the push
+    /// protocol's, 10 Hz for constant feedback); `None` for the draft's
+    /// tables, which run their own models.
+    #[must_use]
+    pub fn publish_rate_hz(&self) -> Option<u32> {
+        self.learner().map(|(_, _, rate_hz)| rate_hz)
+    }
+
+    /// An experiment's learner, its model options and the learner's
+    /// publish rate (the push protocol's, 10 Hz for constant feedback);
+    /// `None` for the draft's tables, which run their own models.
+    fn learner(&self) -> Option<(&LearnerChoice, &ModelOptions, u32)> {
+        match self {
+            Spec::PushTask { model, options, .. } => {
+                Some((model, options, self.push_protocol()?.rate_hz))
+            }
+            Spec::ConstantFeedback { model, options } => Some((model, options, LOW_RATE_HZ)),
+            Spec::MoveToTarget { model, options, .. } => Some((model, options, RATE_HZ)),
+            Spec::DraftTables { .. } => None,
+        }
+    }
+}
+
+/// A [`Spec`] that [`Spec::validate`] accepted ([`Spec::validated`]); it
+/// runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Valid(Spec);
+
+impl std::ops::Deref for Valid {
+    type Target = Spec;
+    fn deref(&self) -> &Spec {
+        &self.0
+    }
+}
+
+impl Valid {
     /// Runs the experiment on `plan` (whose model name is replaced by this
     /// spec's), calling `progress` with the number of jobs done.
     ///
     /// # Errors
-    /// Invalid options or configuration, or the first failing job.
+    /// Options that do not fit the model, or the first failing job.
     pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
-        self.validate()?;
         let Some((model, options, rate_hz)) = self.learner() else {
-            return match self {
+            return match &self.0 {
                 Spec::DraftTables { folds } => {
                     Ok(Document::Draft(draft_tables(*folds, plan, progress)?))
                 }
@@ -250,8 +296,7 @@ impl Spec {
         untrained: M,
         progress: impl Fn(usize),
     ) -> Result<Document, SpecError> {
-        self.validate()?;
-        Ok(match self {
+        Ok(match &self.0 {
             Spec::PushTask {
                 train_runs, folds, ..
             } => {
@@ -289,52 +334,6 @@ impl Spec {
         })
     }
 
-    /// An experiment's learner, its model options and the learner's
-    /// publish rate (the push protocol's, 10 Hz for constant feedback);
-    /// `None` for the draft's tables, which run their own models.
-    fn learner(&self) -> Option<(&LearnerChoice, &ModelOptions, u32)> {
-        match self {
-            Spec::PushTask { model, options, .. } => {
-                Some((model, options, self.push_protocol()?.rate_hz))
-            }
-            Spec::ConstantFeedback { model, options } => Some((model, options, LOW_RATE_HZ)),
-            Spec::MoveToTarget { model, options, .. } => Some((model, options, RATE_HZ)),
-            Spec::DraftTables { .. } => None,
-        }
-    }
-}
-
-/// A whole experiment of a spec with the model [`Ready::dispatch`] makes.
-struct Whole<'a> {
-    spec: &'a Spec,
-    plan: &'a Plan,
-    progress: &'a dyn Fn(usize),
-}
-
-impl WithModel for Whole<'_> {
-    type Output = Result<Document, SpecError>;
-    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
-        self.spec.run_with(self.plan, untrained, self.progress)
-    }
-}
-
-impl Spec {
-    /// The push-task protocol of a [`Spec::PushTask`] (else `None`).
-    #[must_use]
-    pub fn push_protocol(&self) -> Option<Protocol> {
-        match self {
-            Spec::PushTask {
-                options,
-                variant,
-                transfer,
-                ..
-            } => Some(
-                Protocol::new(*variant, options.config_number()).with_transfer(transfer.clone()),
-            ),
-            _ => None,
-        }
-    }
-
     /// Runs only the jobs `wanted` — (N_train, fold) pairs — of a
     /// [`Spec::PushTask`] on `plan`, calling `done` with the report's setup
     /// and each job's result as it finishes (`pushlearn sweep`: one fold of
@@ -343,7 +342,7 @@ impl Spec {
     /// experiment would have given it.
     ///
     /// # Errors
-    /// Not a push task, invalid options, the first failing job or the first
+    /// Not a push task, options that do not fit the model, the first failing job or the first
     /// error of `done`.
     pub fn run_push_jobs(
         &self,
@@ -352,8 +351,8 @@ impl Spec {
         done: impl Fn(&Setup, &PushJobResult) -> Result<(), ExperimentError> + Sync,
         progress: impl Fn(usize),
     ) -> Result<(), SpecError> {
-        self.validate()?;
-        let (Spec::PushTask { model, options, .. }, Some(protocol)) = (self, self.push_protocol())
+        let (Spec::PushTask { model, options, .. }, Some(protocol)) =
+            (&self.0, self.push_protocol())
         else {
             return Err(SpecError::Invalid(format!(
                 "a sweep job is one fold of a push task, not of {}",
@@ -389,6 +388,38 @@ impl Spec {
             },
         )??;
         Ok(())
+    }
+}
+
+/// A whole experiment of a spec with the model [`Ready::dispatch`] makes.
+struct Whole<'a> {
+    spec: &'a Valid,
+    plan: &'a Plan,
+    progress: &'a dyn Fn(usize),
+}
+
+impl WithModel for Whole<'_> {
+    type Output = Result<Document, SpecError>;
+    fn run<M: Model + 'static>(self, untrained: M) -> Self::Output {
+        self.spec.run_with(self.plan, untrained, self.progress)
+    }
+}
+
+impl Spec {
+    /// The push-task protocol of a [`Spec::PushTask`] (else `None`).
+    #[must_use]
+    pub fn push_protocol(&self) -> Option<Protocol> {
+        match self {
+            Spec::PushTask {
+                options,
+                variant,
+                transfer,
+                ..
+            } => Some(
+                Protocol::new(*variant, options.config_number()).with_transfer(transfer.clone()),
+            ),
+            _ => None,
+        }
     }
 
     /// The report of a [`Spec::PushTask`] from its jobs' results (as

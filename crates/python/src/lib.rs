@@ -167,8 +167,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<world::PyWorld>()?;
     m.add_class::<world::PyWorlds>()?;
     m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
-    m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
-    m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::run_experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::experiment_options, m)?)?;
     m.add_function(wrap_pyfunction!(bench::without_timing, m)?)?;
     m.add_class::<bench::Report>()?;
     m.add_class::<bench::Table>()?;

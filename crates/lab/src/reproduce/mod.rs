@@ -402,6 +402,12 @@ pub fn run(
         });
         let document = entry
             .spec
+            .clone()
+            .validated()
+            .map_err(|source| ReproduceError::Experiment {
+                name: entry.name.clone(),
+                source,
+            })?
             .run(&plan, |done| progress(Progress::Jobs { entry, done }))
             .map_err(|source| ReproduceError::Experiment {
                 name: entry.name.clone(),
