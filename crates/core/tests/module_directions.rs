@@ -177,7 +177,10 @@ const CRATES: &[(&str, Table)] = &[
             // line's, a sweep's and `pushlearn.bench`'s.
             ("args", &["spec"]),
             ("sweep", &["report"]),
-            ("reproduce", &["experiments", "report", "spec", "sweep"]),
+            (
+                "reproduce",
+                &["args", "experiments", "report", "spec", "sweep"],
+            ),
         ],
     ),
     // The application, on the engine and the experiments (whose modules it

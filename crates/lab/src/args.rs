@@ -549,9 +549,10 @@ pub fn options(command: &str) -> Option<Vec<OptionInfo>> {
 
 impl WorldArgs {
     /// The run's plan for worlds of `scene`: the one place where a run
-    /// decides where its worlds are and how many work at once. `processes`
+    /// decides where its worlds are and how many work at once (the command
+    /// line's, a sweep's, the bench's and the reproduction's). `processes`
     /// gives the worker processes for `workers` embedded worlds, if the
-    /// caller has any to start (the application re-runs itself; a Python
+    /// caller has any (the application re-runs itself; a Python
     /// interpreter has none).
     ///
     /// # Errors
@@ -560,7 +561,7 @@ impl WorldArgs {
     pub fn plan(
         &self,
         scene: &str,
-        processes: Option<&dyn Fn(usize) -> Result<Arc<Processes>, ArgsError>>,
+        processes: &dyn Fn(usize) -> Result<Option<Arc<Processes>>, ArgsError>,
     ) -> Result<Plan, ArgsError> {
         let worlds = choose_worlds(
             self.world,
@@ -575,8 +576,8 @@ impl WorldArgs {
         };
         let cpus = std::thread::available_parallelism().map_or(1, usize::from);
         let workers = self.workers.map_or(cpus, |n| n as usize);
-        let processes = match (&source, processes) {
-            (WorldSource::Embedded { .. }, Some(start)) => Some(start(workers)?),
+        let processes = match &source {
+            WorldSource::Embedded { .. } => processes(workers)?,
             _ => None,
         };
         Ok(Plan {

@@ -270,6 +270,25 @@ impl Valid {
             rate_hz,
             &mut plan,
         )?;
+        if let (
+            Ready::Builtin(kind),
+            Spec::PushTask {
+                train_runs, folds, ..
+            },
+            Some(protocol),
+        ) = (&ready, &self.0, self.push_protocol())
+        {
+            // Worker processes build the model from the plan's recipe:
+            // here its options are only checked.
+            if plan.runs_in_workers(rate_hz) {
+                kind.check(options, rate_hz)?;
+                if let Some(report) =
+                    run::push_task_in_workers(&protocol, train_runs, *folds, &plan, &progress)
+                {
+                    return Ok(Document::Push(report?));
+                }
+            }
+        }
         ready.dispatch(
             options,
             rate_hz,
@@ -375,6 +394,19 @@ impl Valid {
                     .into_iter()
                     .filter(|job| job.fold == fold),
             );
+        }
+        if let Ready::Builtin(kind) = &ready {
+            // As in `run`: worker processes build the model themselves.
+            if plan.runs_in_workers(protocol.rate_hz) {
+                kind.check(options, protocol.rate_hz)?;
+                let done = |result: &PushJobResult| done(&setup, result);
+                if let Some(results) =
+                    run::push_jobs_in_workers(protocol.rate_hz, &all, &plan, done, &progress)
+                {
+                    results?;
+                    return Ok(());
+                }
+            }
         }
         ready.dispatch(
             options,
@@ -493,17 +525,28 @@ fn draft_tables(
             options: row.options.clone(),
             publish_rate_hz: protocol.rate_hz,
         });
-        let report = row.model.dispatch(
-            &row.options,
-            protocol.rate_hz,
-            Push {
-                protocol: &protocol,
-                train_runs: &[row.train_runs],
-                folds,
-                plan: &plan,
-                progress: &|done| progress(i * folds + done),
-            },
-        )??;
+        let in_workers = if plan.runs_in_workers(protocol.rate_hz) {
+            row.model.check(&row.options, protocol.rate_hz)?;
+            run::push_task_in_workers(&protocol, &[row.train_runs], folds, &plan, &|done| {
+                progress(i * folds + done)
+            })
+        } else {
+            None
+        };
+        let report = match in_workers {
+            Some(report) => report?,
+            None => row.model.dispatch(
+                &row.options,
+                protocol.rate_hz,
+                Push {
+                    protocol: &protocol,
+                    train_runs: &[row.train_runs],
+                    folds,
+                    plan: &plan,
+                    progress: &|done| progress(i * folds + done),
+                },
+            )??,
+        };
         let entry = report
             .results
             .first()

@@ -876,7 +876,7 @@ pub fn run_experiment(
     world.check_outputs().map_err(refused)?;
     // No worker processes: they are the `pushlearn` program re-started,
     // which an interpreter is not.
-    let mut plan = world.plan(spec.scene(), None).map_err(refused)?;
+    let mut plan = world.plan(spec.scene(), &|_| Ok(None)).map_err(refused)?;
     if learner.is_some() {
         // One learner object: its folds one after the other.
         plan.workers = 1;

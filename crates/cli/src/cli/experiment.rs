@@ -103,8 +103,10 @@ pub(crate) fn end_worlds_on_signal() {
 
 /// This program's worker processes, as [`lab::args::WorldArgs::plan`]
 /// takes them.
-pub(crate) fn start_workers(workers: usize) -> Result<Arc<Processes>, ArgsError> {
-    worker_processes(workers).map_err(|err| ArgsError::Refused(format!("{err:#}")))
+pub(crate) fn start_workers(workers: usize) -> Result<Option<Arc<Processes>>, ArgsError> {
+    worker_processes(workers)
+        .map(Some)
+        .map_err(|err| ArgsError::Refused(format!("{err:#}")))
 }
 
 /// Runs `pushlearn experiment`.
@@ -112,7 +114,7 @@ pub fn run(args: ExperimentArgs) -> Result<()> {
     end_worlds_on_signal();
     let lab::args::Lowered { spec, world } = args.lower()?;
     world.check_outputs()?;
-    let plan = world.plan(spec.scene(), Some(&start_workers))?;
+    let plan = world.plan(spec.scene(), &start_workers)?;
     let bar = progress(spec.jobs(), spec.title());
     let document = spec.run(&plan, |done| bar.set_position(done as u64))?;
     bar.finish_and_clear();
@@ -178,9 +180,6 @@ impl PushTaskLine {
     /// # Errors
     /// No world binary, or options that do not fit the mode.
     pub(crate) fn plan(&self) -> Result<Plan> {
-        Ok(self
-            .args
-            .world()
-            .plan(self.spec.scene(), Some(&start_workers))?)
+        Ok(self.args.world().plan(self.spec.scene(), &start_workers)?)
     }
 }
