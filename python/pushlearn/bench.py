@@ -139,8 +139,9 @@ def push_task(
     """Push Task Simulation: train on N pushes, then predict 150 messages of each test push.
 
     Every keyword is an option of ``pushlearn experiment push-task``,
-    spelled with ``_`` for ``-`` (``train_runs=[1, 3]`` is ``--train-runs
-    1,3``; ``no_reuse=True`` is ``--no-reuse``; a list repeats its option),
+    spelled with ``_`` for ``-`` (``train_runs=[1, 3]`` is
+    ``--train-runs=1 --train-runs=3``: a list repeats its option;
+    ``no_reuse=True`` is ``--no-reuse``),
     and goes through that command's own parser: the same defaults, checks
     and messages. ``None`` leaves an option at the command's default.
     Named here: ``train_runs`` (default: the variant's, 1,2,3,5,10,20,30
@@ -227,9 +228,10 @@ _LEARNER_OPTIONS = ("model", "learner", "learner_connect", "oracle")
 
 def arguments(options: dict[str, Option]) -> list[str]:
     """``options`` as ``pushlearn experiment``'s arguments: ``{"train_runs": [1, 3],
-    "no_reuse": True, "eta": 0.1}`` is ``--train-runs 1 --train-runs 3 --no-reuse
-    --eta 0.1``; ``None`` and ``False`` give nothing (the command's default), a
-    pose's ``(x, y, theta)`` is ``x,y,theta``."""
+    "no_reuse": True, "eta": 0.1}`` is ``--train-runs=1 --train-runs=3 --no-reuse
+    --eta=0.1`` (with ``=``, so that a value may start with ``-``); ``None`` and
+    ``False`` give nothing (the command's default), a pose's ``(x, y, theta)`` is
+    ``x,y,theta``."""
     words: list[str] = []
     for key, value in options.items():
         flag = "--" + key.replace("_", "-")
@@ -238,10 +240,9 @@ def arguments(options: dict[str, Option]) -> list[str]:
         if value is True:
             words.append(flag)
         elif isinstance(value, str | int | float):
-            words += [flag, _word(value)]
+            words.append(f"{flag}={_word(value)}")
         else:
-            for item in value:
-                words += [flag, _word(item)]
+            words += [f"{flag}={_word(item)}" for item in value]
     return words
 
 

@@ -2,7 +2,7 @@
 //! [`Spec`] (ripgrep's low-level arguments into high-level ones): the
 //! command line, a sweep's configurations (`pushlearn sweep`) and
 //! `pushlearn.bench`'s keyword arguments (which the Python side spells as
-//! these options, `train_runs=[1, 3]` as `--train-runs 1 --train-runs 3`)
+//! these options, `train_runs=[1, 3]` as `--train-runs=1 --train-runs=3`)
 //! go through [`parse`] and [`ExperimentArgs::lower`], so that they accept
 //! the same options, refuse the same combinations with the same messages,
 //! and give the same spec. The spec is validated here, once: what runs it

@@ -1,7 +1,9 @@
 //! An experiment as data: which experiment, which model and options, how
-//! many folds ([`Spec`]), run on a [`Plan`] into its report document
-//! ([`Document`]). `pushlearn experiment` builds one from its flags,
-//! `pushlearn reproduce` has a list of them (`crate::reproduce`).
+//! many folds ([`Spec`]), checked once into a [`Valid`] and run on a
+//! [`Plan`] into its report document ([`Document`]). `pushlearn
+//! experiment`, sweeps and `pushlearn.bench` build one from the command's
+//! options (`crate::args`), `pushlearn reproduce` has a list of them
+//! (`crate::reproduce`).
 
 use learner::{Model, ObjectState};
 
@@ -455,7 +457,7 @@ impl Spec {
     }
 
     /// The report of a [`Spec::PushTask`] from its jobs' results (as
-    /// [`Spec::run_push_jobs`] gave them) and the `setup` they ran under,
+    /// [`Valid::run_push_jobs`] gave them) and the `setup` they ran under,
     /// without timing: what `pushlearn experiment` writes for the spec, less
     /// its machine-dependent part.
     ///
@@ -483,7 +485,7 @@ impl Spec {
     }
 }
 
-/// Some jobs of a push task, for [`Spec::run_push_jobs`].
+/// Some jobs of a push task, for [`Valid::run_push_jobs`].
 struct PushSome<'a> {
     rate_hz: u32,
     jobs: &'a [PushJob],
@@ -784,7 +786,7 @@ impl Ready {
             }
             LearnerChoice::InProcess => {
                 return Err(SpecError::Invalid(
-                    "a learner object runs through Spec::run_with, which is handed the object"
+                    "a learner object runs through Valid::run_with, which is handed the object"
                         .into(),
                 ))
             }

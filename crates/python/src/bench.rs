@@ -1,7 +1,9 @@
 //! `pushlearn.bench`'s engine: the thesis's experiments run from Python on
-//! the same embedded worlds, seeds, driver and reports as `pushlearn
-//! experiment` (`lab::spec::Spec`), with a built-in model or a Python
-//! `Learner` object called directly.
+//! the same worlds, seeds, driver and reports as `pushlearn experiment`,
+//! from the same arguments: `pushlearn.bench` spells its keywords as the
+//! command's options, and they go through the command's own parser and
+//! lowering (`lab::args`) to the same validated spec and plan, run with
+//! the options' learner or a Python `Learner` object called directly.
 //!
 //! A Python learner reaches the driver as [`PyLearner`], a
 //! [`learner::Model`] whose calls go to `pushlearn.bench._Direct`, the

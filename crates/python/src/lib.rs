@@ -11,9 +11,10 @@
 //! * `Aitm`: the memory-based regressor and classifier (`aitm.rs`);
 //! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
 //!   the process (`world.rs`);
-//! * `run_push_task`, `run_move_to_target`, `without_timing`: the
-//!   experiments of `pushlearn experiment` with a built-in model or a Python
-//!   learner object, for `pushlearn.bench` (`bench.rs`).
+//! * `run_experiment`, `experiment_options`, `without_timing`: the
+//!   experiments of `pushlearn experiment`, their arguments parsed by the
+//!   command's own parser (`lab::args`), with the options' learner or a
+//!   Python learner object, for `pushlearn.bench` (`bench.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
 //! `unsafe_code = "forbid"` and needs no exception. The FFI stays inside pyo3
