@@ -894,13 +894,14 @@ pub fn run_experiment(
     Ok(report)
 }
 
+/// One option as `experiment_options` gives it: `(name, switch, values,
+/// default)`, the name without `--`.
+type OptionTuple = (String, bool, Vec<String>, Vec<String>);
+
 /// The experiment options of `pushlearn experiment COMMAND`, from the
-/// command's definition: `(name, switch, values, default)` each, the name
-/// without `--`. For `pushlearn.bench`'s tests and documentation.
+/// command's definition. For `pushlearn.bench`'s tests and documentation.
 #[pyfunction]
-pub fn experiment_options(
-    command: &str,
-) -> PyResult<Vec<(String, bool, Vec<String>, Vec<String>)>> {
+pub fn experiment_options(command: &str) -> PyResult<Vec<OptionTuple>> {
     let options = lab::args::options(command).ok_or_else(|| {
         PyValueError::new_err(format!(
             "unknown experiment '{command}'; expected push-task or move-to-target"
