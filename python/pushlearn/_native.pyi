@@ -118,38 +118,24 @@ class Report:
     def text(self) -> str:
         """What ``pushlearn experiment`` prints for the experiment."""
 
-def run_push_task(
-    learner: Any,
+def run_experiment(
+    command: str,
+    words: list[str],
     *,
-    variant: str,
-    train_runs: list[int] | None,
-    folds: int,
-    train_on: list[str] | None,
-    test_on: str | None,
-    mode: str,
-    latency_max: int,
-    seed: int,
+    learner: Any | None,
     progress: Callable[[int, int], None] | None,
     timeout: float,
 ) -> Report:
-    """The push task with a built-in model's name or a ``pushlearn.bench._Direct``
-    (``pushlearn.bench.push_task``); ``progress(done, jobs)`` after each job; each
-    learner call made on the calling thread, given ``timeout`` seconds."""
+    """``pushlearn experiment COMMAND WORDS…`` in this process: the words parsed and
+    lowered by the command's own parser (ValueError with its message, naming the
+    option), run with ``learner`` (a ``pushlearn.bench._Direct``) in place of the
+    options' learner when given; ``progress(done, jobs)`` after each job; each
+    learner call made on the calling thread, given ``timeout`` seconds. Writes the
+    outputs the words ask for (``--json``, ``--plots``, ``--csv``)."""
 
-def run_move_to_target(
-    learner: Any,
-    *,
-    targets: list[tuple[float, float, float]] | None,
-    sample_targets: int | None,
-    repetitions: int | None,
-    max_steps: int,
-    mode: str,
-    latency_max: int,
-    seed: int,
-    progress: Callable[[int, int], None] | None,
-    timeout: float,
-) -> Report:
-    """Move to Target, as :func:`run_push_task` (``pushlearn.bench.move_to_target``)."""
+def experiment_options(command: str) -> list[tuple[str, bool, list[str], list[str]]]:
+    """Every option of ``pushlearn experiment COMMAND``, from the command's
+    definition: ``(name without --, switch, values it takes by name, default)``."""
 
 def without_timing(document: str) -> str:
     """A report document's JSON without its machine-dependent part."""

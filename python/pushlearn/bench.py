@@ -34,6 +34,11 @@ the same order; its report equals the one through ``--learner`` bit for bit
 (the report's ``learner.source`` says where it ran). Folds run one after the
 other in this process: one learner object, one world at a time.
 
+The keywords are ``pushlearn experiment``'s options, every one of them
+(``-`` spelled ``_``), turned into its arguments (:func:`arguments`) and
+parsed and lowered by the command's own parser: the same defaults, the same
+refusals with the same messages, the same experiment.
+
 An exception in learner code ends the experiment with a ``RuntimeError``
 naming the job, the exception as its cause (with its traceback);
 ``KeyboardInterrupt`` and ``SystemExit`` end it as themselves. Each learner
@@ -86,8 +91,10 @@ from .learner import (
 
 __all__ = [
     "LearnerLike",
+    "Option",
     "Report",
     "Table",
+    "arguments",
     "move_to_target",
     "push_task",
     "without_timing",
@@ -108,54 +115,66 @@ DEFAULT_TIMEOUT = 30.0
 """Seconds a learner call may take: ``pushlearn experiment --learner-timeout``'s default."""
 
 
+Option: TypeAlias = (
+    bool | int | float | str | Sequence[int | float | str | Sequence[float]] | None
+)
+"""A value of ``pushlearn experiment``'s options, as :func:`push_task` takes it."""
+
+
 def push_task(
     learner: LearnerLike,
     train_runs: Sequence[int] | None = None,
-    folds: int = 20,
+    folds: int | None = None,
     *,
-    variant: str = "random",
+    variant: str | None = None,
     train_on: Sequence[str] | None = None,
     test_on: str | None = None,
-    mode: str = "lockstep-jitter",
-    latency_max: int = 2,
-    seed: int = 1,
+    mode: str | None = None,
+    latency_max: int | None = None,
+    seed: int | None = None,
     progress: bool | Callable[[int, int], None] = True,
     timeout: float = DEFAULT_TIMEOUT,
+    **options: Option,
 ) -> Report:
     """Push Task Simulation: train on N pushes, then predict 150 messages of each test push.
 
-    The arguments are ``pushlearn experiment push-task``'s options:
-    ``train_runs`` (default: the variant's, 1,2,3,5,10,20,30 for
-    ``random``), ``folds`` (each with a fresh model), ``variant``
-    (``random``, ``fixed-three``, ``two-objects``, ``draft``), the new
-    objects ``train_on`` / ``test_on`` (``blue``, ``red``, ``cylinder``),
-    the world's timing ``mode`` (``lockstep-jitter`` with ``latency_max``
-    steps, or ``lockstep``) and the ``seed`` of every random choice.
+    Every keyword is an option of ``pushlearn experiment push-task``,
+    spelled with ``_`` for ``-`` (``train_runs=[1, 3]`` is
+    ``--train-runs=1 --train-runs=3``: a list repeats its option;
+    ``no_reuse=True`` is ``--no-reuse``),
+    and goes through that command's own parser: the same defaults, checks
+    and messages. ``None`` leaves an option at the command's default.
+    Named here: ``train_runs`` (default: the variant's, 1,2,3,5,10,20,30
+    for ``random``), ``folds`` (each with a fresh model; default 20, 1 for
+    ``variant="draft"``), ``variant`` (``random``, ``fixed-three``,
+    ``two-objects``, ``constant-feedback``, ``draft``), the new objects
+    ``train_on`` / ``test_on`` (``blue``, ``red``, ``cylinder``), the
+    world's timing ``mode`` (``lockstep-jitter`` with ``latency_max``
+    steps, ``lockstep`` or ``realtime``) and the ``seed`` of every random
+    choice; through ``options`` every other one, the model options among
+    them (``eta=0.1``, ``improve=["unrounded"]``, ``parts="identified"``,
+    ``selector="tree"``, …) and the outputs (``json=``, ``plots=``,
+    ``csv=``), written as the command writes them.
     ``progress``: a bar on stderr (``True``), none (``False``), or a
     function called with ``(jobs done, jobs)``. ``timeout``: seconds each
-    learner call may take.
+    call of a learner object may take.
 
-    Raises ``ValueError`` naming a bad argument, ``RuntimeError`` when a job
-    fails (a learner's exception is its cause).
+    Raises ``ValueError`` naming a bad argument (the command's message),
+    ``RuntimeError`` when a job fails (a learner's exception is its cause).
     """
-    native, learner_arg = _prepare(learner)
-    # The report comes from the native run as it is: no function of this
-    # module is looked up after learner code has run.
-    with _Progress(progress, "push task") as bar, _deadlines(learner_arg, timeout):
-        report: Report = native.run_push_task(
-            learner_arg,
-            variant=variant,
-            train_runs=None if train_runs is None else [int(n) for n in train_runs],
-            folds=int(folds),
-            train_on=None if train_on is None else list(train_on),
-            test_on=test_on,
-            mode=mode,
-            latency_max=int(latency_max),
-            seed=int(seed),
-            progress=bar.callback,
-            timeout=float(timeout),
-        )
-    return report
+    given: dict[str, Option] = {
+        "train_runs": train_runs,
+        "folds": folds,
+        "variant": variant,
+        "train_on": train_on,
+        "test_on": test_on,
+        "mode": mode,
+        "latency_max": latency_max,
+        "seed": seed,
+    }
+    return _experiment(
+        "push-task", learner, {**given, **options}, progress, timeout, "push task"
+    )
 
 
 def move_to_target(
@@ -163,37 +182,115 @@ def move_to_target(
     targets: Sequence[tuple[float, float, float]] | None = None,
     *,
     sample_targets: int | None = None,
-    repetitions: int = 5,
-    max_steps: int = 3000,
-    mode: str = "lockstep-jitter",
-    latency_max: int = 2,
-    seed: int = 1,
+    repetitions: int | None = None,
+    max_steps: int | None = None,
+    mode: str | None = None,
+    latency_max: int | None = None,
+    seed: int | None = None,
     progress: bool | Callable[[int, int], None] = True,
     timeout: float = DEFAULT_TIMEOUT,
+    **options: Option,
 ) -> Report:
     """Move to Target: train on 8 fixed pushes, then push the blue block to each target pose.
 
-    ``targets`` are ``(x, y, theta)`` poses of the blue block (default: the
-    thesis's four), or ``sample_targets`` draws that many from the reachable
-    region (seeded by ``seed``); ``repetitions`` test runs per target, each
-    with a freshly trained model, of at most ``max_steps`` messages. Success
-    is judged from the world's state, not the learner's word. The other
-    arguments are :func:`push_task`'s. The learner must declare
-    ``Capability.INVERSE`` and implement ``act``.
+    The options of ``pushlearn experiment move-to-target``, as
+    :func:`push_task` takes its command's: ``targets`` are ``(x, y, theta)``
+    poses of the blue block (``--target``, one each; default: the thesis's
+    four), or ``sample_targets`` draws that many from the reachable region
+    (seeded by ``seed``); ``repetitions`` test runs per target (default 5),
+    each with a freshly trained model, of at most ``max_steps`` messages
+    (default 3000). Success is judged from the world's state, not the
+    learner's word. A learner object must declare ``Capability.INVERSE``
+    and implement ``act``.
     """
-    native, learner_arg = _prepare(learner)
-    with _Progress(progress, "move to target") as bar, _deadlines(learner_arg, timeout):
-        report: Report = native.run_move_to_target(
-            learner_arg,
-            targets=None
-            if targets is None
-            else [tuple(map(float, t)) for t in targets],
-            sample_targets=sample_targets,
-            repetitions=int(repetitions),
-            max_steps=int(max_steps),
-            mode=mode,
-            latency_max=int(latency_max),
-            seed=int(seed),
+    given: dict[str, Option] = {
+        "target": targets,
+        "sample_targets": sample_targets,
+        "repetitions": repetitions,
+        "max_steps": max_steps,
+        "mode": mode,
+        "latency_max": latency_max,
+        "seed": seed,
+    }
+    return _experiment(
+        "move-to-target",
+        learner,
+        {**given, **options},
+        progress,
+        timeout,
+        "move to target",
+    )
+
+
+_LEARNER_OPTIONS = ("model", "learner", "learner_connect", "oracle")
+"""The options that choose the learner, which a learner object replaces."""
+
+
+def arguments(options: dict[str, Option]) -> list[str]:
+    """``options`` as ``pushlearn experiment``'s arguments: ``{"train_runs": [1, 3],
+    "no_reuse": True, "eta": 0.1}`` is ``--train-runs=1 --train-runs=3 --no-reuse
+    --eta=0.1`` (with ``=``, so that a value may start with ``-``); ``None`` and
+    ``False`` give nothing (the command's default), a pose's ``(x, y, theta)`` is
+    ``x,y,theta``."""
+    words: list[str] = []
+    for key, value in options.items():
+        flag = "--" + key.replace("_", "-")
+        if value is None or value is False:
+            continue
+        if value is True:
+            words.append(flag)
+        elif isinstance(value, str | int | float):
+            words.append(f"{flag}={_word(value)}")
+        else:
+            words += [f"{flag}={_word(item)}" for item in value]
+    return words
+
+
+def _word(value: float | str | Sequence[float]) -> str:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int | float):
+        return repr(value)
+    return ",".join(repr(v) for v in value)
+
+
+def _experiment(
+    command: str,
+    learner: LearnerLike,
+    options: dict[str, Option],
+    progress: bool | Callable[[int, int], None],
+    timeout: float,
+    what: str,
+) -> Report:
+    """Runs ``pushlearn experiment COMMAND`` with ``options`` in this process."""
+    from . import native
+
+    module = native()
+    direct = None
+    if isinstance(learner, str):
+        oracle = learner.removeprefix("oracle-")
+        chosen = {"oracle": oracle} if oracle != learner else {"model": learner}
+        options = {**chosen, **options}
+    elif isinstance(learner, Learner) or callable(learner):
+        given = [k for k in _LEARNER_OPTIONS if options.get(k) is not None]
+        if given:
+            raise ValueError(
+                f"the learner is the object given; drop {', '.join(given)}"
+            )
+        direct = _Direct(learner)
+    else:
+        raise TypeError(
+            f"learner is {type(learner).__name__}: expected a pushlearn.Learner, "
+            "a class or function that makes one, or a built-in model's name"
+        )
+    words = arguments(options)
+    # The report comes from the native run as it is: no function of this
+    # module is looked up after learner code has run.
+    with _Progress(progress, what) as bar, _deadlines(direct, timeout):
+        report: Report = module.run_experiment(
+            command,
+            words,
+            learner=direct,
             progress=bar.callback,
             timeout=float(timeout),
         )
@@ -207,21 +304,6 @@ def without_timing(document: dict[str, Any]) -> dict[str, Any]:
 
     result: dict[str, Any] = json.loads(native().without_timing(json.dumps(document)))
     return result
-
-
-def _prepare(learner: LearnerLike) -> tuple[Any, Any]:
-    """The native module and what it takes for ``learner``: a name, or a :class:`_Direct`."""
-    from . import native
-
-    module = native()
-    if isinstance(learner, str):
-        return module, learner
-    if not (isinstance(learner, Learner) or callable(learner)):
-        raise TypeError(
-            f"learner is {type(learner).__name__}: expected a pushlearn.Learner, "
-            "a class or function that makes one, or a built-in model's name"
-        )
-    return module, _Direct(learner)
 
 
 @contextlib.contextmanager

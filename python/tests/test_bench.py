@@ -13,7 +13,13 @@ from typing import Any, ClassVar
 import pytest
 from conftest import LIMIT, TESTS_DIR, python_env, run_python
 from pushlearn import Capability, Learner, Prediction, StateLike, Target
-from pushlearn.bench import Report, move_to_target, push_task, without_timing
+from pushlearn.bench import (
+    Report,
+    arguments,
+    move_to_target,
+    push_task,
+    without_timing,
+)
 
 pytest.importorskip("pushlearn._native")
 
@@ -223,15 +229,27 @@ def test_a_wrong_prediction_is_named() -> None:
     [
         (
             lambda: push_task("no-such-model", progress=False),
-            "unknown model 'no-such-model'",
+            "invalid value 'no-such-model' for '--model",
         ),
         (
             lambda: push_task("gate", variant="sideways", progress=False),
-            "unknown variant",
+            "invalid value 'sideways' for '--variant",
         ),
-        (lambda: push_task("gate", folds=0, progress=False), "at least 1"),
-        (lambda: push_task("gate", mode="realtime", progress=False), "realtime"),
-        (lambda: push_task("gate", test_on="teapot", progress=False), "unknown object"),
+        (lambda: push_task("gate", folds=0, progress=False), "'0' for '--folds"),
+        (
+            lambda: push_task("gate", test_on="teapot", progress=False),
+            "invalid value 'teapot' for '--test-on",
+        ),
+        (
+            lambda: push_task("gate", mode="lockstep", latency_max=5, progress=False),
+            "--latency-max",
+        ),
+        (
+            lambda: push_task(Exploding, model="gate", progress=False),
+            "drop model",
+        ),
+        (lambda: push_task("gate", eta=-1, progress=False), "'-1' for '--eta"),
+        (lambda: push_task("gate", turbo=True, progress=False), "'--turbo'"),
         (lambda: move_to_target(ForwardOnly, progress=False), "INVERSE"),
         (
             lambda: move_to_target(
@@ -240,7 +258,7 @@ def test_a_wrong_prediction_is_named() -> None:
             "finite",
         ),
         (lambda: move_to_target("oracle-unknown", progress=False), "does not plan"),
-        (lambda: push_task("floor", progress=False), "unknown model 'floor'"),
+        (lambda: push_task("floor", progress=False), "'floor' for '--model"),
         (lambda: push_task(42, progress=False), "expected a pushlearn.Learner"),  # type: ignore[arg-type]
     ],
 )
@@ -390,3 +408,99 @@ def test_keyboardinterrupt_and_systemexit_from_learner_code_keep_their_type(
     Quitting.error = error
     with pytest.raises(error, match="asked to stop"):
         push_task(Quitting, train_runs=[1], folds=1, progress=False)
+
+
+# A value for each option of ``pushlearn experiment`` that has neither a
+# default nor names to choose from (as the command's own test,
+# ``lab::args``): a new option of that kind fails the next test until it
+# has one here.
+SAMPLES: dict[str, str] = {
+    "train-runs": "2",
+    "folds": "2",
+    "workers": "2",
+    "sim-bin": "pushlearn-sim",
+    "sim": "127.0.0.1:9",
+    "json": "out.json",
+    "plots": "figures",
+    "csv": "tables",
+    "learner": "true",
+    "learner-connect": "127.0.0.1:9",
+    "target": "0.6,0.7,0.75",
+    "sample-targets": "3",
+}
+
+
+def _sample(name: str, switch: bool, values: list[str], default: list[str]) -> Any:
+    """A value of option ``name`` as a keyword of ``pushlearn.bench`` takes it: a
+    name other than the default where there are names, else the default or the
+    sample."""
+    if switch:
+        return True
+    other = [v for v in values if v not in default]
+    if other:
+        return other[0]
+    if default:
+        return default[0]
+    assert name in SAMPLES, f"--{name}: add a sample value to SAMPLES"
+    return SAMPLES[name]
+
+
+@pytest.mark.parametrize("command", ["push-task", "move-to-target"])
+def test_every_option_of_the_command_reaches_the_bench(
+    tmp_path: Path, command: str
+) -> None:
+    """Every option, listed from the command's own definition, spelled as a
+    keyword (``-`` as ``_``) goes through the bench's spelling and the native
+    parser to the end of the lowering: the run stops at the first thing after
+    it, the check of a ``--json`` file in a missing directory, or is refused
+    naming that option (an oracle has no Move to Target)."""
+    from pushlearn import native
+
+    module = native()
+    missing = str(tmp_path / "missing" / "out.json")
+    listed = module.experiment_options(command)
+    assert len(listed) > 20
+    for name, switch, values, default in listed:
+        keyword = name.replace("-", "_")
+        value = missing if name == "json" else _sample(name, switch, values, default)
+        words = arguments(
+            {keyword: value, "json": missing} if name != "json" else {keyword: value}
+        )
+        assert f"--{name}" in words or any(w.startswith(f"--{name}=") for w in words)
+        with pytest.raises(ValueError) as refused:
+            module.run_experiment(
+                command, words, learner=None, progress=None, timeout=30.0
+            )
+        message = str(refused.value)
+        assert "--json" in message or f"--{name}" in message, (name, message)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        {"model": "gate", "improve": ["unrounded"], "eta": 0.1, "mode": "lockstep"},
+        {"model": "hybrid", "parts": "identified", "seed": 3},
+        {"model": "interaction", "selector": "tree", "eta": 0.2, "no_reuse": True},
+    ],
+    ids=["gate-improve-eta", "hybrid-parts", "interaction-selector"],
+)
+def test_the_bench_gives_the_commands_report_with_the_same_options(
+    driver_bin: Path, tmp_path: Path, options: dict[str, Any]
+) -> None:
+    """One small push task run by ``pushlearn experiment … --json`` and by
+    ``pushlearn.bench`` with the same options (the model's among them): equal
+    documents apart from timing; the bench writes its ``json`` as the command."""
+    options = {**options, "train_runs": [1], "folds": 1}
+    model = options.pop("model")
+    written = tmp_path / "bench.json"
+    here = push_task(model, progress=False, json=str(written), **options)
+    there = cli_document(
+        driver_bin,
+        tmp_path,
+        "push-task",
+        "--model",
+        model,
+        *arguments(options),
+    )
+    assert comparable(here.document) == comparable(there)
+    assert json.loads(written.read_text()) == here.document

@@ -145,6 +145,9 @@ const CRATES: &[(&str, Table)] = &[
         &[
             ("process", &[]),
             ("output", &[]),
+            // Argument values several command lines share (clap's side of
+            // the model registry).
+            ("cli_args", &[]),
             ("frame", &[]),
             ("latency", &[]),
             ("scene", &[]),
@@ -175,8 +178,14 @@ const CRATES: &[(&str, Table)] = &[
             // the report's pieces.
             ("experiments", &["report"]),
             ("spec", &["experiments", "report"]),
+            // The experiments' arguments, lowered onto a spec: the command
+            // line's, a sweep's and `pushlearn.bench`'s.
+            ("args", &["spec"]),
             ("sweep", &["report"]),
-            ("reproduce", &["experiments", "report", "spec", "sweep"]),
+            (
+                "reproduce",
+                &["args", "experiments", "report", "spec", "sweep"],
+            ),
         ],
     ),
     // The application, on the engine and the experiments (whose modules it

@@ -13,14 +13,20 @@
 //! * [`latency`]: per-message work times in bounded memory and the budget
 //!   they are held to;
 //! * [`process`]: child processes and their groups;
+//! * [`cli_args`]: argument values several command lines take (the
+//!   built-in models' options, clap's side of the model registry; names,
+//!   poses, actions);
 //! * [`output`]: output paths checked before the work that fills them, and
 //!   files written whole (temporary name, rename), for the experiments'
 //!   documents and figures and the learner daemon's files alike.
 //!
-//! No clap, no figures, no sockets of its own beyond the worlds' and the
-//! learners': the application (`crates/cli`) parses arguments into what this
-//! crate runs, and renders what it returns.
+//! No figures, no sockets of its own beyond the worlds' and the learners',
+//! and of clap only the shared argument values ([`cli_args`], which the
+//! application's learner daemon and the experiments' arguments in `lab`
+//! share): the experiments' arguments are lowered onto what this crate runs
+//! by `lab::args`, and the application renders what it returns.
 
+pub mod cli_args;
 pub mod experiment;
 pub mod external;
 pub mod frame;

@@ -1,8 +1,12 @@
 //! pushlearn's experiments as a library, on the experiment engine
 //! (`drive`): what an experiment is as data, what it reports, and the
-//! reproduction of the results page. It parses no command line (the
-//! application maps its flags onto [`spec::Spec`]) and runs no daemon.
+//! reproduction of the results page. It holds the experiments' arguments
+//! and their one lowering onto [`spec::Spec`] ([`args`]), which the
+//! application's command line, sweeps and `pushlearn.bench` share; it runs
+//! no daemon.
 //!
+//! * [`args`]: `pushlearn experiment`'s options, parsed and lowered onto a
+//!   validated spec and a run's plan;
 //! * [`spec`]: an experiment as data, run into its report document;
 //! * [`experiments`]: one folder per experiment, each with its tables
 //!   beside the thesis's numbers and its figures, behind one
@@ -18,6 +22,7 @@
 //! Its files are written whole through the engine's
 //! [`drive::output`], which the learner daemon shares.
 
+pub mod args;
 pub mod experiments;
 pub mod report;
 pub mod reproduce;

@@ -1,7 +1,9 @@
 //! An experiment as data: which experiment, which model and options, how
-//! many folds ([`Spec`]), run on a [`Plan`] into its report document
-//! ([`Document`]). `pushlearn experiment` builds one from its flags,
-//! `pushlearn reproduce` has a list of them (`crate::reproduce`).
+//! many folds ([`Spec`]), checked once into a [`Valid`] and run on a
+//! [`Plan`] into its report document ([`Document`]). `pushlearn
+//! experiment`, sweeps and `pushlearn.bench` build one from the command's
+//! options (`crate::args`), `pushlearn reproduce` has a list of them
+//! (`crate::reproduce`).
 
 use learner::{Model, ObjectState};
 
@@ -112,7 +114,8 @@ impl Spec {
     }
 
     /// The task's name in the learner protocol's Start.
-    fn task(&self) -> &'static str {
+    #[must_use]
+    pub fn task(&self) -> &'static str {
         match self {
             Spec::PushTask { .. } | Spec::DraftTables { .. } => "push-task",
             Spec::ConstantFeedback { .. } => "constant-feedback",
@@ -198,15 +201,60 @@ impl Spec {
         Ok(())
     }
 
+    /// The spec, checked ([`validate`](Self::validate)): what runs take, so
+    /// that a run checks its spec once, whoever made it.
+    ///
+    /// # Errors
+    /// As [`validate`](Self::validate).
+    pub fn validated(self) -> Result<Valid, SpecError> {
+        self.validate()?;
+        Ok(Valid(self))
+    }
+
+    /// The rate its learner is published world states at (the push
+    /// protocol's, 10 Hz for constant feedback); `None` for the draft's
+    /// tables, which run their own models.
+    #[must_use]
+    pub fn publish_rate_hz(&self) -> Option<u32> {
+        self.learner().map(|(_, _, rate_hz)| rate_hz)
+    }
+
+    /// An experiment's learner, its model options and the learner's
+    /// publish rate (the push protocol's, 10 Hz for constant feedback);
+    /// `None` for the draft's tables, which run their own models.
+    fn learner(&self) -> Option<(&LearnerChoice, &ModelOptions, u32)> {
+        match self {
+            Spec::PushTask { model, options, .. } => {
+                Some((model, options, self.push_protocol()?.rate_hz))
+            }
+            Spec::ConstantFeedback { model, options } => Some((model, options, LOW_RATE_HZ)),
+            Spec::MoveToTarget { model, options, .. } => Some((model, options, RATE_HZ)),
+            Spec::DraftTables { .. } => None,
+        }
+    }
+}
+
+/// A [`Spec`] that [`Spec::validate`] accepted ([`Spec::validated`]); it
+/// runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Valid(Spec);
+
+impl std::ops::Deref for Valid {
+    type Target = Spec;
+    fn deref(&self) -> &Spec {
+        &self.0
+    }
+}
+
+impl Valid {
     /// Runs the experiment on `plan` (whose model name is replaced by this
     /// spec's), calling `progress` with the number of jobs done.
     ///
     /// # Errors
-    /// Invalid options or configuration, or the first failing job.
+    /// Options that do not fit the model, or the first failing job.
     pub fn run(&self, plan: &Plan, progress: impl Fn(usize)) -> Result<Document, SpecError> {
-        self.validate()?;
         let Some((model, options, rate_hz)) = self.learner() else {
-            return match self {
+            return match &self.0 {
                 Spec::DraftTables { folds } => {
                     Ok(Document::Draft(draft_tables(*folds, plan, progress)?))
                 }
@@ -224,6 +272,25 @@ impl Spec {
             rate_hz,
             &mut plan,
         )?;
+        if let (
+            Ready::Builtin(kind),
+            Spec::PushTask {
+                train_runs, folds, ..
+            },
+            Some(protocol),
+        ) = (&ready, &self.0, self.push_protocol())
+        {
+            // Worker processes build the model from the plan's recipe:
+            // here its options are only checked.
+            if plan.runs_in_workers(rate_hz) {
+                kind.check(options, rate_hz)?;
+                if let Some(report) =
+                    run::push_task_in_workers(&protocol, train_runs, *folds, &plan, &progress)
+                {
+                    return Ok(Document::Push(report?));
+                }
+            }
+        }
         ready.dispatch(
             options,
             rate_hz,
@@ -250,8 +317,7 @@ impl Spec {
         untrained: M,
         progress: impl Fn(usize),
     ) -> Result<Document, SpecError> {
-        self.validate()?;
-        Ok(match self {
+        Ok(match &self.0 {
             Spec::PushTask {
                 train_runs, folds, ..
             } => {
@@ -289,24 +355,79 @@ impl Spec {
         })
     }
 
-    /// An experiment's learner, its model options and the learner's
-    /// publish rate (the push protocol's, 10 Hz for constant feedback);
-    /// `None` for the draft's tables, which run their own models.
-    fn learner(&self) -> Option<(&LearnerChoice, &ModelOptions, u32)> {
-        match self {
-            Spec::PushTask { model, options, .. } => {
-                Some((model, options, self.push_protocol()?.rate_hz))
-            }
-            Spec::ConstantFeedback { model, options } => Some((model, options, LOW_RATE_HZ)),
-            Spec::MoveToTarget { model, options, .. } => Some((model, options, RATE_HZ)),
-            Spec::DraftTables { .. } => None,
+    /// Runs only the jobs `wanted` — (N_train, fold) pairs — of a
+    /// [`Spec::PushTask`] on `plan`, calling `done` with the report's setup
+    /// and each job's result as it finishes (`pushlearn sweep`: one fold of
+    /// one configuration is a job). A job's seeds depend only on the plan's
+    /// seed and its own (N_train, fold), so its result is the one the whole
+    /// experiment would have given it.
+    ///
+    /// # Errors
+    /// Not a push task, options that do not fit the model, the first failing job or the first
+    /// error of `done`.
+    pub fn run_push_jobs(
+        &self,
+        plan: &Plan,
+        wanted: &[(usize, usize)],
+        done: impl Fn(&Setup, &PushJobResult) -> Result<(), ExperimentError> + Sync,
+        progress: impl Fn(usize),
+    ) -> Result<(), SpecError> {
+        let (Spec::PushTask { model, options, .. }, Some(protocol)) =
+            (&self.0, self.push_protocol())
+        else {
+            return Err(SpecError::Invalid(format!(
+                "a sweep job is one fold of a push task, not of {}",
+                self.title()
+            )));
+        };
+        let mut plan = plan.clone();
+        let ready = Ready::new(
+            model,
+            options,
+            (self.task(), self.scene()),
+            protocol.rate_hz,
+            &mut plan,
+        )?;
+        let setup = plan.setup(drive::results::push_task::EXPERIMENT);
+        let mut all = PushJob::all(protocol.clone(), &[], 0, plan.seed);
+        for &(n_train, fold) in wanted {
+            all.extend(
+                PushJob::all(protocol.clone(), &[n_train], fold + 1, plan.seed)
+                    .into_iter()
+                    .filter(|job| job.fold == fold),
+            );
         }
+        if let Ready::Builtin(kind) = &ready {
+            // As in `run`: worker processes build the model themselves.
+            if plan.runs_in_workers(protocol.rate_hz) {
+                kind.check(options, protocol.rate_hz)?;
+                let done = |result: &PushJobResult| done(&setup, result);
+                if let Some(results) =
+                    run::push_jobs_in_workers(protocol.rate_hz, &all, &plan, done, &progress)
+                {
+                    results?;
+                    return Ok(());
+                }
+            }
+        }
+        ready.dispatch(
+            options,
+            protocol.rate_hz,
+            PushSome {
+                rate_hz: protocol.rate_hz,
+                jobs: &all,
+                plan: &plan,
+                done: &|result: &PushJobResult| done(&setup, result),
+                progress: &progress,
+            },
+        )??;
+        Ok(())
     }
 }
 
 /// A whole experiment of a spec with the model [`Ready::dispatch`] makes.
 struct Whole<'a> {
-    spec: &'a Spec,
+    spec: &'a Valid,
     plan: &'a Plan,
     progress: &'a dyn Fn(usize),
 }
@@ -335,64 +456,8 @@ impl Spec {
         }
     }
 
-    /// Runs only the jobs `wanted` — (N_train, fold) pairs — of a
-    /// [`Spec::PushTask`] on `plan`, calling `done` with the report's setup
-    /// and each job's result as it finishes (`pushlearn sweep`: one fold of
-    /// one configuration is a job). A job's seeds depend only on the plan's
-    /// seed and its own (N_train, fold), so its result is the one the whole
-    /// experiment would have given it.
-    ///
-    /// # Errors
-    /// Not a push task, invalid options, the first failing job or the first
-    /// error of `done`.
-    pub fn run_push_jobs(
-        &self,
-        plan: &Plan,
-        wanted: &[(usize, usize)],
-        done: impl Fn(&Setup, &PushJobResult) -> Result<(), ExperimentError> + Sync,
-        progress: impl Fn(usize),
-    ) -> Result<(), SpecError> {
-        self.validate()?;
-        let (Spec::PushTask { model, options, .. }, Some(protocol)) = (self, self.push_protocol())
-        else {
-            return Err(SpecError::Invalid(format!(
-                "a sweep job is one fold of a push task, not of {}",
-                self.title()
-            )));
-        };
-        let mut plan = plan.clone();
-        let ready = Ready::new(
-            model,
-            options,
-            (self.task(), self.scene()),
-            protocol.rate_hz,
-            &mut plan,
-        )?;
-        let setup = plan.setup(drive::results::push_task::EXPERIMENT);
-        let mut all = PushJob::all(protocol.clone(), &[], 0, plan.seed);
-        for &(n_train, fold) in wanted {
-            all.extend(
-                PushJob::all(protocol.clone(), &[n_train], fold + 1, plan.seed)
-                    .into_iter()
-                    .filter(|job| job.fold == fold),
-            );
-        }
-        ready.dispatch(
-            options,
-            protocol.rate_hz,
-            PushSome {
-                rate_hz: protocol.rate_hz,
-                jobs: &all,
-                plan: &plan,
-                done: &|result: &PushJobResult| done(&setup, result),
-                progress: &progress,
-            },
-        )??;
-        Ok(())
-    }
-
     /// The report of a [`Spec::PushTask`] from its jobs' results (as
-    /// [`Spec::run_push_jobs`] gave them) and the `setup` they ran under,
+    /// [`Valid::run_push_jobs`] gave them) and the `setup` they ran under,
     /// without timing: what `pushlearn experiment` writes for the spec, less
     /// its machine-dependent part.
     ///
@@ -420,7 +485,7 @@ impl Spec {
     }
 }
 
-/// Some jobs of a push task, for [`Spec::run_push_jobs`].
+/// Some jobs of a push task, for [`Valid::run_push_jobs`].
 struct PushSome<'a> {
     rate_hz: u32,
     jobs: &'a [PushJob],
@@ -462,17 +527,28 @@ fn draft_tables(
             options: row.options.clone(),
             publish_rate_hz: protocol.rate_hz,
         });
-        let report = row.model.dispatch(
-            &row.options,
-            protocol.rate_hz,
-            Push {
-                protocol: &protocol,
-                train_runs: &[row.train_runs],
-                folds,
-                plan: &plan,
-                progress: &|done| progress(i * folds + done),
-            },
-        )??;
+        let in_workers = if plan.runs_in_workers(protocol.rate_hz) {
+            row.model.check(&row.options, protocol.rate_hz)?;
+            run::push_task_in_workers(&protocol, &[row.train_runs], folds, &plan, &|done| {
+                progress(i * folds + done)
+            })
+        } else {
+            None
+        };
+        let report = match in_workers {
+            Some(report) => report?,
+            None => row.model.dispatch(
+                &row.options,
+                protocol.rate_hz,
+                Push {
+                    protocol: &protocol,
+                    train_runs: &[row.train_runs],
+                    folds,
+                    plan: &plan,
+                    progress: &|done| progress(i * folds + done),
+                },
+            )??,
+        };
         let entry = report
             .results
             .first()
@@ -710,7 +786,7 @@ impl Ready {
             }
             LearnerChoice::InProcess => {
                 return Err(SpecError::Invalid(
-                    "a learner object runs through Spec::run_with, which is handed the object"
+                    "a learner object runs through Valid::run_with, which is handed the object"
                         .into(),
                 ))
             }

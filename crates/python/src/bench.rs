@@ -1,7 +1,9 @@
 //! `pushlearn.bench`'s engine: the thesis's experiments run from Python on
-//! the same embedded worlds, seeds, driver and reports as `pushlearn
-//! experiment` (`lab::spec::Spec`), with a built-in model or a Python
-//! `Learner` object called directly.
+//! the same worlds, seeds, driver and reports as `pushlearn experiment`,
+//! from the same arguments: `pushlearn.bench` spells its keywords as the
+//! command's options, and they go through the command's own parser and
+//! lowering (`lab::args`) to the same validated spec and plan, run with
+//! the options' learner or a Python `Learner` object called directly.
 //!
 //! A Python learner reaches the driver as [`PyLearner`], a
 //! [`learner::Model`] whose calls go to `pushlearn.bench._Direct`, the
@@ -29,27 +31,19 @@ use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 use std::time::{Duration, Instant};
 
-use drive::experiment::move_to_target::sampled_targets;
-use drive::experiment::push_task::protocol::Variant;
 use drive::experiment::run::Plan;
-use drive::experiment::run_cache::RunCache;
-use drive::experiment::workers::WorldSource;
-use drive::experiment::Mode;
 use drive::external::{predicted_poses, stats_of, LearnerChoice};
-use drive::oracle::OracleLatency;
-use drive::results::move_to_target::{REPETITIONS, TARGETS};
 use drive::results::LearnerRecord;
-use drive::scene::{Object, Transfer};
-use lab::spec::{Document, Spec, SpecError};
+use lab::args::{ArgsError, Lowered};
+use lab::report::layout::Printout;
+use lab::spec::{Document, SpecError, Valid};
 use learner::features::{parse_frame, ActuatorYaw, ParseError};
-use learner::registry::{ModelKind, ModelOptions};
-use learner::{
-    Action, BodyShape, Frame, Model, ModelStats, ObjectState, Poses, Target, TargetError,
-};
+use learner::{Action, BodyShape, Frame, Model, ModelStats, Poses, Target, TargetError};
 use prost::Message;
 use pushlearn::wire::pb::learner as lp;
-use pushlearn_core::Named;
-use pyo3::exceptions::{PyException, PyKeyError, PyRuntimeError, PyTimeoutError, PyValueError};
+use pyo3::exceptions::{
+    PyException, PyKeyError, PyOSError, PyRuntimeError, PyTimeoutError, PyValueError,
+};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use serde::{Deserialize, Serialize};
@@ -479,87 +473,21 @@ impl Model for PyLearner {
     }
 }
 
-/// Where and how the experiment's worlds run: embedded worlds in this
-/// process, one job at a time (a Python learner is one object; the worker
-/// processes of `pushlearn experiment` are that program re-started, which
-/// an interpreter is not), the run cache of the lock-step modes.
-fn plan(mode: &str, latency_max: u32, seed: u64, scene: &str) -> PyResult<Plan> {
-    let mode = named::<Mode>(mode, "mode")?;
-    if mode == Mode::Realtime {
-        return Err(PyValueError::new_err(
-            "mode 'realtime' needs a world daemon stepping on its own; the Python benchmark \
-             steps embedded worlds: use 'lockstep-jitter' (the default) or 'lockstep'",
-        ));
-    }
-    if !mode.jitter() && latency_max != drive::experiment::LATENCY_MAX_STEPS {
-        return Err(PyValueError::new_err(
-            "latency_max sets the latency emulation of mode 'lockstep-jitter'; drop it or use that mode",
-        ));
-    }
-    let source = WorldSource::embedded(mode, scene, latency_max)
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
-    Ok(Plan {
-        mode,
-        latency_max,
-        workers: 1,
-        source,
-        seed,
-        model: String::new(),
-        learner: None,
-        runs: mode.reuses_runs().then(|| Arc::new(RunCache::new())),
-        processes: None,
-        recipe: None,
-    })
-}
-
-/// `T` by its name, or `ValueError` listing the names there are.
-fn named<T: Named>(name: &str, what: &str) -> PyResult<T> {
-    T::from_name(name).ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "unknown {what} '{name}'; expected one of {}",
-            T::names()
-        ))
-    })
-}
-
-/// The built-in learner a name chooses: a model kind, or an oracle by its
-/// report name (`oracle-known`, `oracle-unknown`).
-fn builtin(name: &str) -> PyResult<LearnerChoice> {
-    if let Some(latency) = OracleLatency::of_report_name(name) {
-        return Ok(LearnerChoice::Oracle(latency));
-    }
-    ModelKind::from_name(name)
-        .map(LearnerChoice::Builtin)
-        .ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "unknown model '{name}'; expected one of {}, oracle-known, oracle-unknown, or a \
-                 pushlearn.Learner",
-                ModelKind::names()
-            ))
-        })
-}
-
 /// How often the calling thread looks for signals (Ctrl-C) while the
 /// driver steps worlds: a run stops within this of the signal.
 const SIGNAL_POLL: Duration = Duration::from_millis(50);
 
-/// Runs `spec` with `learner`: the `pushlearn.bench._Direct` of a learner
-/// object when the spec's choice is [`LearnerChoice::InProcess`] (see
-/// [`learner_choice`]), else the spec's built-in; `progress(done, jobs)`
-/// is called after each job; each learner call may take `timeout`.
-#[allow(clippy::too_many_arguments)] // the run's parts, each once
+/// Runs `spec` with `learner` (a `pushlearn.bench._Direct` of a learner
+/// object) when given, else with the spec's own learner; `progress(done,
+/// jobs)` is called after each job; each learner call may take `timeout`.
 fn run(
     py: Python<'_>,
-    spec: Spec,
-    learner: &Bound<'_, PyAny>,
+    spec: Valid,
+    learner: Option<&Bound<'_, PyAny>>,
     mut plan: Plan,
-    task: &str,
-    rate_hz: u32,
     progress: Option<Py<PyAny>>,
     timeout: f64,
-) -> PyResult<Report> {
-    spec.validate()
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+) -> PyResult<Document> {
     if !(timeout.is_finite() && timeout > 0.0) {
         return Err(PyValueError::new_err(format!(
             "timeout must be a positive number of seconds, not {timeout}"
@@ -570,23 +498,24 @@ fn run(
     let stopped = Arc::new(AtomicBool::new(false));
     // Behind a lock only so that the wait can release the GIL.
     let from_driver = Mutex::new(from_driver);
-    let direct = if spec.model() != Some(&LearnerChoice::InProcess) {
-        None
-    } else {
-        let model = PyLearner::start(
-            py,
-            learner.clone().unbind(),
-            task,
-            rate_hz,
-            to_caller.clone(),
-            Arc::clone(&stopped),
-        )?;
-        model.shared.info.name.clone_into(&mut plan.model);
-        plan.learner = Some(LearnerRecord {
-            version: model.shared.info.version.clone(),
-            source: "pushlearn.bench, in-process".to_owned(),
-        });
-        Some(model)
+    let direct = match learner {
+        None => None,
+        Some(learner) => {
+            let model = PyLearner::start(
+                py,
+                learner.clone().unbind(),
+                spec.task(),
+                spec.publish_rate_hz().unwrap_or(drive::scene::RATE_HZ),
+                to_caller.clone(),
+                Arc::clone(&stopped),
+            )?;
+            model.shared.info.name.clone_into(&mut plan.model);
+            plan.learner = Some(LearnerRecord {
+                version: model.shared.info.version.clone(),
+                source: "pushlearn.bench, in-process".to_owned(),
+            });
+            Some(model)
+        }
     };
     // The first exception of the progress callback ends the run once the
     // job under way is done.
@@ -687,7 +616,7 @@ fn run(
             return Err(error);
         }
     };
-    Report::of(&document)
+    Ok(document)
 }
 
 /// Makes one learner call on this thread: `_Direct.call(method, args,
@@ -838,13 +767,10 @@ pub struct Report {
 }
 
 impl Report {
-    fn of(document: &Document) -> PyResult<Report> {
+    fn of(document: &Document, printout: &Printout) -> PyResult<Report> {
         let json = document
             .to_json()
             .map_err(|e| PyRuntimeError::new_err(format!("cannot serialise the report: {e}")))?;
-        let printout = document
-            .printout()
-            .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
         let mut text = Vec::new();
         printout
             .write_text(&mut text)
@@ -929,158 +855,62 @@ impl Report {
     }
 }
 
-/// The push task (`pushlearn experiment push-task`); see
-/// `pushlearn.bench.push_task`.
+/// `pushlearn experiment COMMAND WORDS…` run in this process (see
+/// `pushlearn.bench`): `words` are the command's options, parsed and
+/// lowered by the command's own parser (`lab::args`), so the bench takes
+/// every option the command takes and refuses what it refuses, with its
+/// messages. `learner` is a `pushlearn.bench._Direct` around a learner
+/// object, run in place of the options' learner, or `None`.
 #[pyfunction]
-#[pyo3(signature = (learner, *, variant, train_runs, folds, train_on, test_on, mode, latency_max, seed, progress, timeout))]
-#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
-pub fn run_push_task(
+#[pyo3(signature = (command, words, *, learner, progress, timeout))]
+pub fn run_experiment(
     py: Python<'_>,
-    learner: &Bound<'_, PyAny>,
-    variant: &str,
-    train_runs: Option<Vec<usize>>,
-    folds: usize,
-    train_on: Option<Vec<String>>,
-    test_on: Option<String>,
-    mode: &str,
-    latency_max: u32,
-    seed: u64,
+    command: &str,
+    words: Vec<String>,
+    learner: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
     timeout: f64,
 ) -> PyResult<Report> {
-    let variant = named::<Variant>(variant, "variant")?;
-    if variant == Variant::ConstantFeedback {
-        return Err(PyValueError::new_err(
-            "variant 'constant-feedback' has no training runs or folds; run `pushlearn \
-             experiment push-task --variant constant-feedback`",
-        ));
+    let refused = |err: ArgsError| PyValueError::new_err(err.to_string());
+    let args = lab::args::parse(command, &words).map_err(refused)?;
+    let given = learner.map(|_| LearnerChoice::InProcess);
+    let Lowered { spec, world } = args.lower_with(given.as_ref()).map_err(refused)?;
+    world.check_outputs().map_err(refused)?;
+    // No worker processes: they are the `pushlearn` program re-started,
+    // which an interpreter is not.
+    let mut plan = world.plan(spec.scene(), &|_| Ok(None)).map_err(refused)?;
+    if learner.is_some() {
+        // One learner object: its folds one after the other.
+        plan.workers = 1;
     }
-    if folds == 0
-        || train_runs
-            .as_ref()
-            .is_some_and(|r| r.is_empty() || r.contains(&0))
-    {
-        return Err(PyValueError::new_err(
-            "folds and every number of training runs must be at least 1",
-        ));
-    }
-    let objects = |names: Vec<String>| -> PyResult<Vec<Object>> {
-        names.iter().map(|n| named::<Object>(n, "object")).collect()
-    };
-    let transfer = match (train_on, test_on) {
-        (None, None) => None,
-        (train, test) => Some(
-            Transfer::new(
-                train.map_or_else(|| Ok(vec![Object::Blue]), objects)?,
-                test.map_or(Ok(Object::Blue), |t| named::<Object>(&t, "object"))?,
-            )
-            .map_err(|e| PyValueError::new_err(e.to_string()))?,
-        ),
-    };
-    let model = learner_choice(learner)?;
-    let spec = Spec::PushTask {
-        model,
-        options: ModelOptions::default(),
-        variant,
-        transfer,
-        train_runs: train_runs.unwrap_or_else(|| variant.default_train_runs()),
-        folds,
-    };
-    let rate_hz = spec
-        .push_protocol()
-        .map_or(drive::scene::RATE_HZ, |p| p.rate_hz);
-    let plan = plan(mode, latency_max, seed, spec.scene())?;
-    run(
-        py,
-        spec,
-        learner,
-        plan,
-        "push-task",
-        rate_hz,
-        progress,
-        timeout,
-    )
+    let document = run(py, spec, learner, plan, progress, timeout)?;
+    let printout = document
+        .printout()
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let report = Report::of(&document, &printout)?;
+    world
+        .write_outputs(&document, &printout)
+        .map_err(|e| PyOSError::new_err(e.to_string()))?;
+    Ok(report)
 }
 
-/// Move to Target (`pushlearn experiment move-to-target`); see
-/// `pushlearn.bench.move_to_target`.
+/// One option as `experiment_options` gives it: `(name, switch, values,
+/// default)`, the name without `--`.
+type OptionTuple = (String, bool, Vec<String>, Vec<String>);
+
+/// The experiment options of `pushlearn experiment COMMAND`, from the
+/// command's definition. For `pushlearn.bench`'s tests and documentation.
 #[pyfunction]
-#[pyo3(signature = (learner, *, targets, sample_targets, repetitions, max_steps, mode, latency_max, seed, progress, timeout))]
-#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
-pub fn run_move_to_target(
-    py: Python<'_>,
-    learner: &Bound<'_, PyAny>,
-    targets: Option<Vec<(f64, f64, f64)>>,
-    sample_targets: Option<usize>,
-    repetitions: Option<usize>,
-    max_steps: u64,
-    mode: &str,
-    latency_max: u32,
-    seed: u64,
-    progress: Option<Py<PyAny>>,
-    timeout: f64,
-) -> PyResult<Report> {
-    let targets = match (targets, sample_targets) {
-        (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err(
-                "give targets or sample_targets, not both",
-            ))
-        }
-        (None, Some(n)) if (1..=10_000).contains(&n) => sampled_targets(n, seed),
-        (None, Some(n)) => {
-            return Err(PyValueError::new_err(format!(
-                "sample_targets must be in 1..=10000, not {n}"
-            )))
-        }
-        (Some(list), None) if list.is_empty() => {
-            return Err(PyValueError::new_err("targets is empty"))
-        }
-        (Some(list), None) => {
-            let targets: Vec<ObjectState> = list
-                .into_iter()
-                .map(|(x, y, theta)| ObjectState::new(x, y, theta))
-                .collect();
-            if targets
-                .iter()
-                .any(|t| ![t.x, t.y, t.theta].iter().all(|v| v.is_finite()))
-            {
-                return Err(PyValueError::new_err("a target pose is not finite"));
-            }
-            targets
-        }
-        (None, None) => TARGETS.to_vec(),
-    };
-    let repetitions = repetitions.unwrap_or(REPETITIONS);
-    if repetitions == 0 || max_steps == 0 {
-        return Err(PyValueError::new_err(
-            "repetitions and max_steps must be at least 1",
-        ));
-    }
-    let spec = Spec::MoveToTarget {
-        model: learner_choice(learner)?,
-        options: ModelOptions::default(),
-        targets,
-        repetitions,
-        max_steps,
-    };
-    let plan = plan(mode, latency_max, seed, spec.scene())?;
-    run(
-        py,
-        spec,
-        learner,
-        plan,
-        "move-to-target",
-        drive::scene::RATE_HZ,
-        progress,
-        timeout,
-    )
-}
-
-fn learner_choice(learner: &Bound<'_, PyAny>) -> PyResult<LearnerChoice> {
-    match learner.extract::<String>() {
-        Ok(name) => builtin(&name),
-        Err(_) => Ok(LearnerChoice::InProcess),
-    }
+pub fn experiment_options(command: &str) -> PyResult<Vec<OptionTuple>> {
+    let options = lab::args::options(command).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "unknown experiment '{command}'; expected push-task or move-to-target"
+        ))
+    })?;
+    Ok(options
+        .into_iter()
+        .map(|o| (o.long, o.switch, o.values, o.default))
+        .collect())
 }
 
 /// A report document without its machine-dependent part (wall time,

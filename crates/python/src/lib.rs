@@ -12,9 +12,10 @@
 //! * `World`, `Worlds`, `step_messages`: the world of `pushlearn-sim` in
 //!   the process (`world.rs`);
 //! * `GoalTask`: the Gymnasium environments' step (`task.rs`);
-//! * `run_push_task`, `run_move_to_target`, `without_timing`: the
-//!   experiments of `pushlearn experiment` with a built-in model or a Python
-//!   learner object, for `pushlearn.bench` (`bench.rs`).
+//! * `run_experiment`, `experiment_options`, `without_timing`: the
+//!   experiments of `pushlearn experiment`, their arguments parsed by the
+//!   command's own parser (`lab::args`), with the options' learner or a
+//!   Python learner object, for `pushlearn.bench` (`bench.rs`).
 //!
 //! Nothing here is `unsafe`: the crate inherits the workspace's
 //! `unsafe_code = "forbid"` and needs no exception. The FFI stays inside pyo3
@@ -175,8 +176,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<world::PyWorlds>()?;
     m.add_class::<task::PyGoalTask>()?;
     m.add_function(wrap_pyfunction!(world::step_messages, m)?)?;
-    m.add_function(wrap_pyfunction!(bench::run_push_task, m)?)?;
-    m.add_function(wrap_pyfunction!(bench::run_move_to_target, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::run_experiment, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::experiment_options, m)?)?;
     m.add_function(wrap_pyfunction!(bench::without_timing, m)?)?;
     m.add_class::<bench::Report>()?;
     m.add_class::<bench::Table>()?;

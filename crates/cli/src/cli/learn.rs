@@ -19,7 +19,7 @@ use pushlearn_cli::learn::{
 };
 use pushlearn_cli::models::{named, ModelArgs, ModelKind, WithModel};
 
-use super::parse::{parse_action, parse_pose};
+use drive::cli_args::{parse_action, parse_pose};
 
 /// Attach a learner to a running world (pushlearn-sim): learn from every
 /// state it publishes and drive the actuator.

@@ -5,7 +5,6 @@ pub mod ctl;
 pub mod experiment;
 pub mod learn;
 pub mod learner_check;
-pub mod parse;
 #[cfg(feature = "lab")]
 pub mod report;
 #[cfg(feature = "lab")]

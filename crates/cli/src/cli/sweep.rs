@@ -21,7 +21,8 @@ use pushlearn_cli::sweep::output::{self, JobOutput, JOBS, MERGED, PLAN, SLURM, T
 use pushlearn_cli::sweep::summary::Summary;
 use pushlearn_cli::sweep::{slurm, Job, Sweep};
 
-use super::experiment::{choose_worlds, end_worlds_on_signal, progress, PushTaskLine};
+use super::experiment::{end_worlds_on_signal, progress, PushTaskLine};
+use lab::args::choose_worlds;
 
 /// Run a grid of push-task configurations — models, configuration bits,
 /// selectors, η, any option of `pushlearn experiment push-task` — over

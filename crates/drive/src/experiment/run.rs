@@ -151,11 +151,26 @@ impl Plan {
         (workers > 1).then_some((processes.as_ref(), recipe, workers))
     }
 
+    /// [`worker_processes`](Self::worker_processes) when its recipe's
+    /// learner runs at `rate_hz`.
+    fn worker_processes_for(&self, rate_hz: u32) -> Option<(&Processes, &Recipe, usize)> {
+        self.worker_processes()
+            .filter(|(_, recipe, _)| recipe.publish_rate_hz() == rate_hz)
+    }
+
+    /// Whether a built-in model's jobs at `rate_hz` run in worker
+    /// processes, which build the model from the recipe (so this process
+    /// need not build one).
+    #[must_use]
+    pub fn runs_in_workers(&self, rate_hz: u32) -> bool {
+        self.worker_processes_for(rate_hz).is_some()
+    }
+
     /// Workers for jobs of a model at `rate_hz`: processes or threads.
     fn job_workers(&self, rate_hz: u32) -> usize {
-        match self.worker_processes() {
-            Some((_, recipe, n)) if recipe.publish_rate_hz() == rate_hz => n,
-            _ => self.workers(),
+        match self.worker_processes_for(rate_hz) {
+            Some((_, _, n)) => n,
+            None => self.workers(),
         }
     }
 
@@ -272,16 +287,48 @@ pub fn push_task<M: Model>(
     plan: &Plan,
     progress: impl FnMut(usize),
 ) -> Result<PushReport, ExperimentError> {
+    push_task_of(protocol, train_runs, folds, plan, |jobs| {
+        push_jobs(
+            untrained,
+            protocol.rate_hz,
+            jobs,
+            plan,
+            |_| Ok(()),
+            progress,
+        )
+    })
+}
+
+/// [`push_task`] when the plan runs its jobs in worker processes, each
+/// building the model from the plan's recipe: no model is built in this
+/// process. `None` when the plan runs jobs of the protocol's rate here.
+///
+/// # Errors
+/// As [`push_task`].
+pub fn push_task_in_workers(
+    protocol: &Protocol,
+    train_runs: &[usize],
+    folds: usize,
+    plan: &Plan,
+    progress: impl FnMut(usize),
+) -> Option<Result<PushReport, ExperimentError>> {
+    let (processes, recipe, workers) = plan.worker_processes_for(protocol.rate_hz)?;
+    Some(push_task_of(protocol, train_runs, folds, plan, |jobs| {
+        processes.push_jobs(recipe, jobs, plan, workers, |_| Ok(()), progress)
+    }))
+}
+
+/// The push task's report, its jobs' results given by `run`.
+fn push_task_of(
+    protocol: &Protocol,
+    train_runs: &[usize],
+    folds: usize,
+    plan: &Plan,
+    run: impl FnOnce(&[PushJob]) -> Result<Vec<PushJobResult>, ExperimentError>,
+) -> Result<PushReport, ExperimentError> {
     let started = plan.started();
     let jobs = PushJob::all(protocol.clone(), train_runs, folds, plan.seed);
-    let results = push_jobs(
-        untrained,
-        protocol.rate_hz,
-        &jobs,
-        plan,
-        |_| Ok(()),
-        progress,
-    )?;
+    let results = run(&jobs)?;
     let mut report = push_report(
         plan.setup(crate::results::push_task::EXPERIMENT),
         protocol,
@@ -316,10 +363,9 @@ pub fn push_jobs<M: Model>(
     let Some(first) = jobs.first() else {
         return Ok(Vec::new());
     };
-    if let Some((processes, recipe, workers)) = plan.worker_processes() {
-        if recipe.publish_rate_hz() == rate_hz {
-            return processes.push_jobs(recipe, jobs, plan, workers, done, progress);
-        }
+    let mut progress = progress;
+    if let Some(results) = push_jobs_in_workers(rate_hz, jobs, plan, &done, &mut progress) {
+        return results;
     }
     let scene = first.protocol.scene();
     let untrained = Mutex::new(untrained);
@@ -334,6 +380,26 @@ pub fn push_jobs<M: Model>(
         },
         progress,
     )
+}
+
+/// [`push_jobs`] in the plan's worker processes, each building the model
+/// from the plan's recipe: no model is built in this process. `None` when
+/// the plan runs jobs of `rate_hz` here.
+///
+/// # Errors
+/// As [`push_jobs`].
+pub fn push_jobs_in_workers(
+    rate_hz: u32,
+    jobs: &[PushJob],
+    plan: &Plan,
+    done: impl Fn(&PushJobResult) -> Result<(), ExperimentError> + Sync,
+    progress: impl FnMut(usize),
+) -> Option<Result<Vec<PushJobResult>, ExperimentError>> {
+    let (processes, recipe, workers) = plan.worker_processes_for(rate_hz)?;
+    if jobs.is_empty() {
+        return Some(Ok(Vec::new()));
+    }
+    Some(processes.push_jobs(recipe, jobs, plan, workers, done, progress))
 }
 
 /// Runs one push-task job on `worker`'s world (retried once on a new world

@@ -55,7 +55,7 @@ pub enum LearnerChoice {
     /// learner, the reference at the other end of the scale from `still`.
     Oracle(crate::oracle::OracleLatency),
     /// A learner object the caller holds and hands to the experiment itself
-    /// (`lab::spec::Spec::run_with`): the Python API's `Learner` objects,
+    /// (`lab::spec::Valid::run_with`): the Python API's `Learner` objects,
     /// called directly in the caller's process.
     InProcess,
 }

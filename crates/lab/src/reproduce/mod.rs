@@ -23,11 +23,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
+use crate::args::{ArgsError, WorldArgs};
 use crate::spec::{Document, SpecError};
 use crate::sweep::summary::Summary;
 use calibration::CalibrationRow;
 use drive::experiment::processes::Processes;
-use drive::experiment::run::Plan;
 use drive::experiment::run_cache::RunCache;
 use drive::experiment::workers::Worlds;
 use drive::experiment::Mode;
@@ -376,32 +376,45 @@ pub fn run(
     let mut produced = Vec::new();
     for entry in entries {
         let cache = caches.entry(entry.world_key()).or_default();
-        let plan = Plan {
+        // The command line's plan for the entry's command, with this
+        // reproduction's worlds, workers and shared recorded runs.
+        let world = WorldArgs {
             mode: entry.mode,
             latency_max: entry.latency_max,
-            workers: settings.workers,
-            source: settings
-                .worlds
-                .source(entry.mode, entry.spec.scene(), entry.latency_max, || {
-                    Ok(settings.sim_bin.clone())
-                })
-                .map_err(|source| ReproduceError::Experiment {
-                    name: entry.name.clone(),
-                    source: source.into(),
-                })?,
+            world: Some(settings.worlds),
+            workers: Some(u32::try_from(settings.workers).unwrap_or(u32::MAX)),
+            sim_bin: (settings.worlds == Worlds::Spawn).then(|| settings.sim_bin.clone()),
+            sim: None,
+            no_reuse: false,
             seed: entry.seed,
-            model: String::new(),
-            learner: None,
-            runs: entry.mode.reuses_runs().then(|| Arc::clone(cache)),
-            processes: settings.processes.clone(),
-            recipe: None,
+            json: None,
+            plots: None,
+            csv: None,
         };
+        let processes = |_| Ok(settings.processes.clone());
+        let mut plan = world.plan(entry.spec.scene(), &processes).map_err(|err| {
+            ReproduceError::Experiment {
+                name: entry.name.clone(),
+                source: match err {
+                    ArgsError::Worlds(err) => err.into(),
+                    ArgsError::Spec(err) => err,
+                    other => SpecError::Invalid(other.to_string()),
+                },
+            }
+        })?;
+        plan.runs = entry.mode.reuses_runs().then(|| Arc::clone(cache));
         progress(Progress::Started {
             entry,
             jobs: entry.spec.jobs(),
         });
         let document = entry
             .spec
+            .clone()
+            .validated()
+            .map_err(|source| ReproduceError::Experiment {
+                name: entry.name.clone(),
+                source,
+            })?
             .run(&plan, |done| progress(Progress::Jobs { entry, done }))
             .map_err(|source| ReproduceError::Experiment {
                 name: entry.name.clone(),
