@@ -180,7 +180,7 @@ const CRATES: &[(&str, Table)] = &[
             ("spec", &["experiments", "report"]),
             // The experiments' arguments, lowered onto a spec: the command
             // line's, a sweep's and `pushlearn.bench`'s.
-            ("args", &["spec"]),
+            ("args", &["report", "spec"]),
             ("sweep", &["report"]),
             (
                 "reproduce",
