@@ -72,12 +72,12 @@ fn further(kind: ModelKind) -> &'static [&'static str] {
         // harness's pick, the typed classes.
         ModelKind::Gate => &[
             "crates/cli/examples/cost_growth.rs",
-            "crates/cli/src/cli/experiment.rs",
             "crates/cli/src/cli/learn.rs",
             "crates/cli/src/cli/serve_learner.rs",
             "crates/cli/src/learn/state/testing.rs",
             "crates/drive/src/external/untrusted.rs",
             "crates/drive/src/results/mod.rs",
+            "crates/lab/src/args.rs",
             "crates/lab/src/report/plot/cost.rs",
             "crates/learner/src/stats.rs",
             "crates/python/src/lib.rs",
