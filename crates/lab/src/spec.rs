@@ -740,7 +740,7 @@ impl From<AnyReport> for Document {
 enum Ready {
     Builtin(ModelKind),
     External(Box<ExternalModel>),
-    Oracle(Oracle),
+    Oracle(Box<Oracle>),
 }
 
 impl Ready {
@@ -772,7 +772,7 @@ impl Ready {
                     latency: *latency,
                     latency_max,
                 });
-                Ready::Oracle(oracle)
+                Ready::Oracle(Box::new(oracle))
             }
             LearnerChoice::Builtin(kind) => {
                 plan.model = options.report_name(*kind);
@@ -817,7 +817,7 @@ impl Ready {
         match self {
             Ready::Builtin(kind) => kind.dispatch(options, publish_rate_hz, job),
             Ready::External(model) => Ok(job.run(*model)),
-            Ready::Oracle(oracle) => Ok(job.run(oracle)),
+            Ready::Oracle(oracle) => Ok(job.run(*oracle)),
         }
     }
 }
