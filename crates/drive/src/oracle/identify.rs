@@ -501,24 +501,15 @@ impl Model for IdentificationOracle {
 
 #[cfg(test)]
 mod tests {
+    use super::super::tests::frame_of;
     use super::*;
     use sim_plugin::generate::{generate, Set};
     use sim_plugin::push_run::record_push_run;
-    use sim_plugin::world::{Command, Snapshot, World};
+    use sim_plugin::world::{Command, World};
 
     const RATE: u32 = 100;
     const PUSH: [f64; 2] = [0.0, 0.5];
     const MESSAGES: usize = 150;
-
-    fn frame_of(snapshot: &Snapshot) -> Frame {
-        Frame {
-            objects: snapshot
-                .bodies
-                .iter()
-                .map(sim_plugin::BodyState::observation)
-                .collect(),
-        }
-    }
 
     /// Push runs of the true object from actuator starts `xs`, as the
     /// driver hands them to a model in training.

@@ -663,7 +663,8 @@ mod tests {
     use super::*;
     use sim_plugin::push_run::record_push_run;
 
-    fn frame_of(snapshot: &Snapshot) -> Frame {
+    /// What the world publishes, as a model is handed it.
+    pub(super) fn frame_of(snapshot: &Snapshot) -> Frame {
         Frame {
             objects: snapshot
                 .bodies
