@@ -231,7 +231,7 @@ mod tests {
     }
 
     /// Drives a model through the trait only, the way the driver does.
-    fn drive<M: Model>(mut model: M) -> (M, Poses) {
+    fn run_through_trait<M: Model>(mut model: M) -> (M, Poses) {
         model.set_training(true);
         let mut last = None;
         for step in 0..4 {
@@ -252,7 +252,7 @@ mod tests {
 
     #[test]
     fn the_trait_supports_the_drivers_calling_pattern() {
-        let (mut model, predicted) = drive(Probe::default());
+        let (mut model, predicted) = run_through_trait(Probe::default());
         // Step 0 resynchronised, steps 1–3 were updates with training on.
         let probe = Probe::map(&model.stats()).unwrap();
         assert_eq!(probe.update_calls, 3);

@@ -10,7 +10,7 @@ use learner::Model;
 use serde::{Deserialize, Serialize};
 
 use crate::experiment::driver::Driver;
-use crate::experiment::link::{drive, Pacing};
+use crate::experiment::link::{run_driver, Pacing};
 use crate::experiment::move_to_target::{MttTask, TRAINING_RUNS};
 use crate::experiment::ExperimentError;
 use pushlearn::client::SimClient;
@@ -60,7 +60,7 @@ pub async fn pretrain<M: Model>(
         Pretrain::Thesis => MttTask::training_only(),
     };
     let mut driver = Driver::new(model, task, hello.publish_rate);
-    drive(client, pacing, &mut driver, Vec::new()).await?;
+    run_driver(client, pacing, &mut driver, Vec::new()).await?;
     let (task, model, counters) = driver.into_parts();
     if !task.trained() {
         return Err(ExperimentError::Incomplete(

@@ -347,13 +347,13 @@ impl WorldLink {
     ///
     /// # Errors
     /// Socket errors, and any command the world refuses.
-    pub fn drive<M: Model, T: Task<M>>(
+    pub fn run_driver<M: Model, T: Task<M>>(
         &mut self,
         driver: &mut Driver<M, T>,
         setup: Vec<Payload>,
     ) -> Result<Timing, ExperimentError> {
         match &mut self.conn {
-            Conn::Socket(client) => drive_link(
+            Conn::Socket(client) => run_on_link(
                 &self.runtime,
                 client.as_mut(),
                 self.pacing,
@@ -365,7 +365,7 @@ impl WorldLink {
             Conn::Embedded(world) => {
                 let (seconds, states) = world.physics();
                 let waited = world.world.waited_for_ode();
-                let mut timing = drive_link(
+                let mut timing = run_on_link(
                     &self.runtime,
                     world.as_mut(),
                     self.pacing,
@@ -401,8 +401,8 @@ impl WorldLink {
     }
 }
 
-/// [`WorldLink::drive`] on the link's world `wire`.
-fn drive_link<M: Model, T: Task<M>, W: Wire>(
+/// [`WorldLink::run_driver`] on the link's world `wire`.
+fn run_on_link<M: Model, T: Task<M>, W: Wire>(
     runtime: &tokio::runtime::Runtime,
     wire: &mut W,
     pacing: Pacing,
@@ -418,8 +418,7 @@ fn drive_link<M: Model, T: Task<M>, W: Wire>(
             // seed must end the job's first batch to start a root there.
             pending.extend(setup);
             cursor.start_job();
-            let driven =
-                runtime.block_on(drive_replaying(wire, cursor, pending, driver, &mut sent));
+            let driven = runtime.block_on(run_replaying(wire, cursor, pending, driver, &mut sent));
             if driven.is_err() {
                 // What this job recorded is not kept: a world that failed
                 // mid-job may have been wrong before it failed (ODE aborts
@@ -429,7 +428,7 @@ fn drive_link<M: Model, T: Task<M>, W: Wire>(
             }
             driven
         }
-        None => runtime.block_on(drive_tracked(wire, pacing, driver, setup, &mut sent)),
+        None => runtime.block_on(run_tracked(wire, pacing, driver, setup, &mut sent)),
     }
 }
 
@@ -438,14 +437,14 @@ fn drive_link<M: Model, T: Task<M>, W: Wire>(
 ///
 /// # Errors
 /// Socket errors, and any command the world refuses.
-pub async fn drive<M: Model, T: Task<M>>(
+pub async fn run_driver<M: Model, T: Task<M>>(
     client: &mut SimClient,
     pacing: Pacing,
     driver: &mut Driver<M, T>,
     setup: Vec<Payload>,
 ) -> Result<Timing, ExperimentError> {
     let mut last = Vec::new();
-    drive_tracked(client, pacing, driver, setup, &mut Sent(&mut last)).await
+    run_tracked(client, pacing, driver, setup, &mut Sent(&mut last)).await
 }
 
 /// The last batch written to a world.
@@ -504,8 +503,8 @@ fn describe(batch: &[Payload]) -> String {
         .join(" + ")
 }
 
-/// [`drive`], remembering the last batch sent in `sent`.
-async fn drive_tracked<M: Model, T: Task<M>, W: Wire>(
+/// [`run_driver`], remembering the last batch sent in `sent`.
+async fn run_tracked<M: Model, T: Task<M>, W: Wire>(
     client: &mut W,
     pacing: Pacing,
     driver: &mut Driver<M, T>,
@@ -548,11 +547,11 @@ async fn drive_tracked<M: Model, T: Task<M>, W: Wire>(
     Ok(timing)
 }
 
-/// [`drive`] in lock-step through a [`RunCache`]: states the cache holds
+/// [`run_driver`] in lock-step through a [`RunCache`]: states the cache holds
 /// are handed to the driver without touching the world. The driver's last
 /// commands stay in `pending` for the next job on this link, whose first
 /// state follows them as it would on the socket.
-async fn drive_replaying<M: Model, T: Task<M>, W: Wire>(
+async fn run_replaying<M: Model, T: Task<M>, W: Wire>(
     client: &mut W,
     cursor: &mut Cursor,
     pending: &mut Vec<Payload>,

@@ -227,7 +227,7 @@ struct JobSetup {
     latency: Option<Latency>,
 }
 
-/// Which job a driver runs, for [`drive`]: its seed and its name in errors.
+/// Which job a driver runs, for [`run_job`]: its seed and its name in errors.
 struct Fold {
     seed: u64,
     name: String,
@@ -235,7 +235,7 @@ struct Fold {
 
 /// Runs one job's driver to its end on `worker`'s world; a world process
 /// that died meanwhile is [`ExperimentError::WorldDied`].
-fn drive<M: Model, T: Task<M>>(
+fn run_job<M: Model, T: Task<M>>(
     worker: &mut Worker,
     untrained: &Mutex<M>,
     task: T,
@@ -250,7 +250,7 @@ fn drive<M: Model, T: Task<M>>(
         .clone();
     model.start_fold(fold.seed);
     let mut driver = Driver::new(model, task, rate_hz).knowing_latency(setup.latency);
-    let timing = match worker.link.drive(&mut driver, setup.commands) {
+    let timing = match worker.link.run_driver(&mut driver, setup.commands) {
         Ok(timing) => timing,
         Err(err) => {
             return Err(match worker.world_death() {
@@ -413,7 +413,7 @@ pub(crate) fn push_job<M: Model>(
 ) -> Result<PushJobResult, ExperimentError> {
     let scene = job.protocol.scene();
     let (task, timing, counters) = plan.retrying(worker, scene, |worker| {
-        drive(
+        run_job(
             worker,
             untrained,
             PushJobTask::new(job),
@@ -485,7 +485,7 @@ pub fn constant_feedback<M: Model>(
         || plan.start(Variant::ConstantFeedback.scene()),
         |&latency_seed, worker| {
             plan.retrying(worker, Variant::ConstantFeedback.scene(), |worker| {
-                drive(
+                run_job(
                     worker,
                     &untrained,
                     FeedbackTask::new(Variant::ConstantFeedback.test_positions()),
@@ -582,7 +582,7 @@ pub(crate) fn mtt_job<M: Model>(
     plan: &Plan,
 ) -> Result<MttJobResult, ExperimentError> {
     let (task, timing, counters) = plan.retrying(worker, "one_block", |worker| {
-        drive(
+        run_job(
             worker,
             untrained,
             MttTask::new(job),
