@@ -92,25 +92,7 @@ async fn move_and_set_pose_act_exactly_as_in_process() {
 async fn reset_restores_the_start_and_restarts_the_step_count_not_publish_seq() {
     let server = start(lockstep()).await;
     let mut client = connect(&server).await;
-    client
-        .command(Payload::move_(0.5, 0.0))
-        .await
-        .expect("move");
-    for _ in 0..3 {
-        client
-            .command_and_wait_applied(Payload::advance())
-            .await
-            .expect("advance");
-    }
-    client
-        .command(Payload::move_(0.0, 0.0))
-        .await
-        .expect("stop");
-    client.command(Payload::reset()).await.expect("reset");
-    let state = client
-        .command_and_wait_applied(Payload::advance())
-        .await
-        .expect("advance");
+    let state = pushed_stopped_and_reset(&mut client).await;
     assert_eq!((state.step, state.publish_seq), (10, 4));
     assert_eq!(state.sim_time, 0.01);
     assert_eq!(position(&state, "actuator"), [0.0, 0.0, 0.03]);

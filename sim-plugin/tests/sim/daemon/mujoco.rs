@@ -91,25 +91,7 @@ async fn reset_and_set_pose_act_as_in_process() {
     let server = start(on_mujoco(lockstep())).await;
     let mut client = connect(&server).await;
     let mut world = World::on(&scene("one_block"), Engine::Mujoco).expect("world");
-    client
-        .command(Payload::move_(0.5, 0.0))
-        .await
-        .expect("move");
-    for _ in 0..3 {
-        client
-            .command_and_wait_applied(Payload::advance())
-            .await
-            .expect("advance");
-    }
-    client
-        .command(Payload::move_(0.0, 0.0))
-        .await
-        .expect("stop");
-    client.command(Payload::reset()).await.expect("reset");
-    let state = client
-        .command_and_wait_applied(Payload::advance())
-        .await
-        .expect("advance");
+    let state = pushed_stopped_and_reset(&mut client).await;
     assert_eq!((state.step, state.publish_seq), (10, 4));
     world
         .apply(Command::Actuator {

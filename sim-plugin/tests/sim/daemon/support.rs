@@ -4,7 +4,7 @@ use std::future::Future;
 use std::time::Duration;
 
 use pushlearn::client::SimClient;
-use pushlearn::wire::pb::{self, server_message};
+use pushlearn::wire::pb::{self, client_message::Payload, server_message};
 use pushlearn::wire::{encode_frame, FrameReader};
 use sim_plugin::server::{Config, Latency, Server, ServerHandle, Timing};
 use sim_plugin::{Scene, Snapshot, World};
@@ -192,4 +192,28 @@ pub fn assert_near(actual: [f64; 3], expected: [f64; 3]) {
             .all(|(a, e)| (a - e).abs() < 1e-6),
         "{actual:?} is not {expected:?}"
     );
+}
+
+/// Pushes the actuator along x for three messages, stops it and resets the
+/// world, as a run boundary does: the first state after the Reset.
+pub async fn pushed_stopped_and_reset(client: &mut SimClient) -> pb::WorldState {
+    client
+        .command(Payload::move_(0.5, 0.0))
+        .await
+        .expect("move");
+    for _ in 0..3 {
+        client
+            .command_and_wait_applied(Payload::advance())
+            .await
+            .expect("advance");
+    }
+    client
+        .command(Payload::move_(0.0, 0.0))
+        .await
+        .expect("stop");
+    client.command(Payload::reset()).await.expect("reset");
+    client
+        .command_and_wait_applied(Payload::advance())
+        .await
+        .expect("advance")
 }
